@@ -1,0 +1,226 @@
+/* gf_math.h — the one vector / matrix / quaternion library of gfins_fmi.
+ *
+ * Plain fixed-size arrays, no heap, no state: every function is a pure static inline
+ * function so that hot loops inline it.
+ *
+ * Conventions (used by every module of the core):
+ *   - vectors are double[3]; matrices are gf_mat3 (a struct around double m[3][3],
+ *     row-major m[row][col]; the struct lets const matrices be passed in ISO C11);
+ *   - quaternions are double[4] = {q0, q1, q2, q3}, scalar first, Hamilton product
+ *     (i*j = k), as in Savage (Strapdown Analytics) and seed 002;
+ *   - a quaternion q_b^n rotates body-frame vectors into the navigation frame:
+ *     v^n = q (x) [0, v^b] (x) q*, and gf_quat_to_dcm(q) returns C_b^n.
+ *   - functions write their result through the last argument; outputs may alias
+ *     inputs except where stated.
+ */
+#ifndef GF_MATH_H
+#define GF_MATH_H
+
+#include <math.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---- 3-vectors ------------------------------------------------------------ */
+
+static inline void gf_v3_set(double x, double y, double z, double out[3])
+{
+    out[0] = x; out[1] = y; out[2] = z;
+}
+
+static inline void gf_v3_copy(const double a[3], double out[3])
+{
+    out[0] = a[0]; out[1] = a[1]; out[2] = a[2];
+}
+
+static inline void gf_v3_add(const double a[3], const double b[3], double out[3])
+{
+    out[0] = a[0] + b[0]; out[1] = a[1] + b[1]; out[2] = a[2] + b[2];
+}
+
+static inline void gf_v3_sub(const double a[3], const double b[3], double out[3])
+{
+    out[0] = a[0] - b[0]; out[1] = a[1] - b[1]; out[2] = a[2] - b[2];
+}
+
+static inline void gf_v3_scale(const double a[3], double s, double out[3])
+{
+    out[0] = s * a[0]; out[1] = s * a[1]; out[2] = s * a[2];
+}
+
+/* out = a + s * b */
+static inline void gf_v3_axpy(const double a[3], double s, const double b[3], double out[3])
+{
+    out[0] = a[0] + s * b[0]; out[1] = a[1] + s * b[1]; out[2] = a[2] + s * b[2];
+}
+
+static inline double gf_v3_dot(const double a[3], const double b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static inline double gf_v3_norm(const double a[3])
+{
+    return sqrt(gf_v3_dot(a, a));
+}
+
+/* out = a x b; out must not alias a or b. */
+static inline void gf_v3_cross(const double a[3], const double b[3], double out[3])
+{
+    out[0] = a[1] * b[2] - a[2] * b[1];
+    out[1] = a[2] * b[0] - a[0] * b[2];
+    out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+static inline int gf_v3_isfinite(const double a[3])
+{
+    return isfinite(a[0]) && isfinite(a[1]) && isfinite(a[2]);
+}
+
+/* ---- 3x3 matrices --------------------------------------------------------- */
+
+typedef struct gf_mat3 {
+    double m[3][3];
+} gf_mat3;
+
+static inline void gf_m3_identity(gf_mat3 *out)
+{
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            out->m[i][j] = (i == j) ? 1.0 : 0.0;
+}
+
+/* out = m * v; out must not alias v. */
+static inline void gf_m3_mul_v3(const gf_mat3 *a, const double v[3], double out[3])
+{
+    for (int i = 0; i < 3; ++i)
+        out[i] = a->m[i][0] * v[0] + a->m[i][1] * v[1] + a->m[i][2] * v[2];
+}
+
+/* out = m^T * v; out must not alias v. */
+static inline void gf_m3t_mul_v3(const gf_mat3 *a, const double v[3], double out[3])
+{
+    for (int i = 0; i < 3; ++i)
+        out[i] = a->m[0][i] * v[0] + a->m[1][i] * v[1] + a->m[2][i] * v[2];
+}
+
+/* out = a * b; out must not alias a or b. */
+static inline void gf_m3_mul(const gf_mat3 *a, const gf_mat3 *b, gf_mat3 *out)
+{
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            out->m[i][j] = a->m[i][0] * b->m[0][j] + a->m[i][1] * b->m[1][j] +
+                           a->m[i][2] * b->m[2][j];
+}
+
+/* out = a^T; out may alias a. */
+static inline void gf_m3_transpose(const gf_mat3 *a, gf_mat3 *out)
+{
+    gf_mat3 t;
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            t.m[i][j] = a->m[j][i];
+    *out = t;
+}
+
+/* Skew-symmetric (cross-product) matrix: skew(a) * b = a x b. */
+static inline void gf_m3_skew(const double a[3], gf_mat3 *out)
+{
+    out->m[0][0] = 0.0;   out->m[0][1] = -a[2]; out->m[0][2] = a[1];
+    out->m[1][0] = a[2];  out->m[1][1] = 0.0;   out->m[1][2] = -a[0];
+    out->m[2][0] = -a[1]; out->m[2][1] = a[0];  out->m[2][2] = 0.0;
+}
+
+/* ---- quaternions ---------------------------------------------------------- */
+
+static inline void gf_q_identity(double out[4])
+{
+    out[0] = 1.0; out[1] = 0.0; out[2] = 0.0; out[3] = 0.0;
+}
+
+/* Hamilton product out = p (x) q; out may alias p or q. */
+static inline void gf_q_mul(const double p[4], const double q[4], double out[4])
+{
+    const double w = p[0] * q[0] - p[1] * q[1] - p[2] * q[2] - p[3] * q[3];
+    const double x = p[0] * q[1] + p[1] * q[0] + p[2] * q[3] - p[3] * q[2];
+    const double y = p[0] * q[2] - p[1] * q[3] + p[2] * q[0] + p[3] * q[1];
+    const double z = p[0] * q[3] + p[1] * q[2] - p[2] * q[1] + p[3] * q[0];
+    out[0] = w; out[1] = x; out[2] = y; out[3] = z;
+}
+
+static inline void gf_q_conj(const double q[4], double out[4])
+{
+    out[0] = q[0]; out[1] = -q[1]; out[2] = -q[2]; out[3] = -q[3];
+}
+
+static inline double gf_q_norm(const double q[4])
+{
+    return sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+}
+
+/* Normalises q in place into out. Returns 0 (and leaves out untouched) when q cannot
+ * be normalised (zero or non-finite norm), 1 otherwise. */
+static inline int gf_q_normalize(const double q[4], double out[4])
+{
+    const double n = gf_q_norm(q);
+    if (!(n > 0.0) || !isfinite(n))
+        return 0;
+    const double s = 1.0 / n;
+    out[0] = q[0] * s; out[1] = q[1] * s; out[2] = q[2] * s; out[3] = q[3] * s;
+    return 1;
+}
+
+/* Quaternion of the rotation vector phi (axis * angle, rad): q = [cos|phi|/2,
+ * sin(|phi|/2) phi/|phi|]. Uses the Taylor series below 1e-4 rad so that the
+ * result is exact to round-off for tiny increments. */
+static inline void gf_q_from_rotvec(const double phi_rad[3], double out[4])
+{
+    const double a2 = gf_v3_dot(phi_rad, phi_rad);
+    double c, s; /* c = cos(a/2), s = sin(a/2)/a */
+    if (a2 < 1e-8) {
+        c = 1.0 - a2 / 8.0 + a2 * a2 / 384.0;
+        s = 0.5 - a2 / 48.0 + a2 * a2 / 3840.0;
+    } else {
+        const double a = sqrt(a2);
+        c = cos(0.5 * a);
+        s = sin(0.5 * a) / a;
+    }
+    out[0] = c; out[1] = s * phi_rad[0]; out[2] = s * phi_rad[1]; out[3] = s * phi_rad[2];
+}
+
+/* Rotates v by q: out = q (x) [0, v] (x) q*; out may alias v. */
+static inline void gf_q_rotate(const double q[4], const double v[3], double out[3])
+{
+    /* t = 2 q_v x v;  out = v + q0 t + q_v x t  (Rodrigues form, 15 mul) */
+    const double qv[3] = {q[1], q[2], q[3]};
+    double t[3], u[3];
+    gf_v3_cross(qv, v, t);
+    gf_v3_scale(t, 2.0, t);
+    gf_v3_cross(qv, t, u);
+    out[0] = v[0] + q[0] * t[0] + u[0];
+    out[1] = v[1] + q[0] * t[1] + u[1];
+    out[2] = v[2] + q[0] * t[2] + u[2];
+}
+
+/* Direction cosine matrix of a unit quaternion q_b^n: returns C_b^n. */
+static inline void gf_q_to_dcm(const double q[4], gf_mat3 *dcm)
+{
+    const double q0 = q[0], q1 = q[1], q2 = q[2], q3 = q[3];
+    double (*out)[3] = dcm->m;
+    out[0][0] = q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3;
+    out[0][1] = 2.0 * (q1 * q2 - q0 * q3);
+    out[0][2] = 2.0 * (q1 * q3 + q0 * q2);
+    out[1][0] = 2.0 * (q1 * q2 + q0 * q3);
+    out[1][1] = q0 * q0 - q1 * q1 + q2 * q2 - q3 * q3;
+    out[1][2] = 2.0 * (q2 * q3 - q0 * q1);
+    out[2][0] = 2.0 * (q1 * q3 - q0 * q2);
+    out[2][1] = 2.0 * (q2 * q3 + q0 * q1);
+    out[2][2] = q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3;
+}
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* GF_MATH_H */

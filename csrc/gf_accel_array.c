@@ -135,8 +135,7 @@ gf_status gf9_init(gf9_state *state, double lever_arm_m, const double *omega_ini
     memset(state, 0, sizeof *state);
     state->lever_arm_m = lever_arm_m;
     if (omega_init_rad_s)
-        gf_v3_copy(omega_init_rad_s, state->omega_init_rad_s);
-    gf_v3_copy(state->omega_init_rad_s, state->omega_rad_s);
+        gf_v3_copy(omega_init_rad_s, state->omega_ref_rad_s);
     return GF_OK;
 }
 
@@ -145,16 +144,14 @@ gf_status gf9_init(gf9_state *state, double lever_arm_m, const double *omega_ini
 static int state_is_valid(const gf9_state *s)
 {
     return s->lever_arm_m > 0.0 && isfinite(s->lever_arm_m) &&
-           all_finite(s->omega_rad_s, 3) && all_finite(s->omega_dot_rad_s2, 3) &&
-           all_finite(s->omega_init_rad_s, 3);
+           all_finite(s->omega_ref_rad_s, 3) && all_finite(s->omega_dot_rad_s2, 3);
 }
 
 /* The solver for one sample; used by gf9_step and inlined in the gf9_solve loop.
- * Reads A (already checked finite) and the previous rate / angular acceleration,
- * writes the solution. half_dt_s = 0 together with first = 1 on the first sample. */
+ * Reads A (already checked finite); advances the reference rate omega_ref (in/out) by
+ * the trapezoid of omega_dot over half_dt_s * 2 unless `first`; writes the solution. */
 static inline void gf9_solve_sample(const double A[9], double inv_4l, double minus_inv_2l,
-                                    int first, double half_dt_s,
-                                    const double omega_init[3], const double omega_prev[3],
+                                    int first, double half_dt_s, double omega_ref[3],
                                     const double omega_dot_prev[3], double f[3],
                                     double omega[3], double omega_dot[3], double omega_sq[3],
                                     uint32_t *flags)
@@ -174,14 +171,14 @@ static inline void gf9_solve_sample(const double A[9], double inv_4l, double min
     omega_dot[1] = minus_inv_2l * (-A[0] + A[5] + GF_SQRT2 * A[7]);
     omega_dot[2] = minus_inv_2l * (A[0] - A[4] - GF_SQRT2 * A[6]);
 
-    /* Rate: magnitude from omega^2, sign from omega_dot integrated (trapezoid) from
-     * the previous solved rate; on the first sample the sign comes from omega_init.
-     * Policy when noise makes omega_k^2 < 0: the magnitude is not measured, so the
-     * propagated rate is used and the sample is flagged. */
+    /* Rate: magnitude from omega^2 (eq. 4), sign from omega_ref = omega_init + the
+     * trapezoidal integral of omega_dot (eq. 6). Policy when noise makes omega_k^2 < 0:
+     * the magnitude is not measured, so omega_ref is used and the sample is flagged. */
     uint32_t fl = 0;
     for (int k = 0; k < 3; ++k) {
-        const double pred = first ? omega_init[k]
-                                  : omega_prev[k] + half_dt_s * (omega_dot_prev[k] + omega_dot[k]);
+        if (!first)
+            omega_ref[k] += half_dt_s * (omega_dot_prev[k] + omega_dot[k]);
+        const double pred = omega_ref[k];
         if (omega_sq[k] >= 0.0) {
             const double mag = sqrt(omega_sq[k]);
             if (pred < 0.0) {
@@ -212,10 +209,9 @@ gf_status gf9_step(gf9_state *state, const double *A_m_s2, double dt_s, gf9_outp
         return GF_ERR_NONFINITE_INPUT;
     const double l = state->lever_arm_m;
     gf9_solve_sample(A_m_s2, 0.25 / l, -0.5 / l, first, first ? 0.0 : 0.5 * dt_s,
-                     state->omega_init_rad_s, state->omega_rad_s, state->omega_dot_rad_s2,
-                     out->f_m_s2, out->omega_rad_s, out->omega_dot_rad_s2,
-                     out->omega_sq_rad2_s2, &out->flags);
-    gf_v3_copy(out->omega_rad_s, state->omega_rad_s);
+                     state->omega_ref_rad_s, state->omega_dot_rad_s2, out->f_m_s2,
+                     out->omega_rad_s, out->omega_dot_rad_s2, out->omega_sq_rad2_s2,
+                     &out->flags);
     gf_v3_copy(out->omega_dot_rad_s2, state->omega_dot_rad_s2);
     state->n_samples += 1;
     return GF_OK;
@@ -237,8 +233,8 @@ gf_status gf9_solve(gf9_state *state, size_t n_samples, const double *A_m_s2, do
 
     const double l = state->lever_arm_m, inv_4l = 0.25 / l, minus_inv_2l = -0.5 / l;
     const double half_dt_s = 0.5 * dt_s;
-    double omega_prev[3], omega_dot_prev[3];
-    gf_v3_copy(state->omega_rad_s, omega_prev);
+    double omega_ref[3], omega_dot_prev[3];
+    gf_v3_copy(state->omega_ref_rad_s, omega_ref);
     gf_v3_copy(state->omega_dot_rad_s2, omega_dot_prev);
     uint64_t n_before = state->n_samples;
     gf_status status = GF_OK;
@@ -249,17 +245,15 @@ gf_status gf9_solve(gf9_state *state, size_t n_samples, const double *A_m_s2, do
             status = GF_ERR_NONFINITE_INPUT;
             break;
         }
-        double *w = omega_rad_s + 3 * k, *wd = omega_dot_rad_s2 + 3 * k;
+        double *wd = omega_dot_rad_s2 + 3 * k;
         uint32_t fl;
         const int first = (n_before + k) == 0;
-        gf9_solve_sample(A, inv_4l, minus_inv_2l, first, half_dt_s, state->omega_init_rad_s,
-                         omega_prev, omega_dot_prev, f_m_s2 + 3 * k, w, wd,
-                         omega_sq_rad2_s2 + 3 * k, &fl);
+        gf9_solve_sample(A, inv_4l, minus_inv_2l, first, half_dt_s, omega_ref, omega_dot_prev,
+                         f_m_s2 + 3 * k, omega_rad_s + 3 * k, wd, omega_sq_rad2_s2 + 3 * k, &fl);
         flags[k] = (uint8_t)fl;
-        gf_v3_copy(w, omega_prev);
         gf_v3_copy(wd, omega_dot_prev);
     }
-    gf_v3_copy(omega_prev, state->omega_rad_s);
+    gf_v3_copy(omega_ref, state->omega_ref_rad_s);
     gf_v3_copy(omega_dot_prev, state->omega_dot_rad_s2);
     state->n_samples = n_before + k;
     if (n_done)

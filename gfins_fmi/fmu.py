@@ -10,7 +10,6 @@ shows the solution of sample k in its row k + 1.
 """
 from __future__ import annotations
 
-import ctypes
 import importlib.resources
 import pathlib
 import shutil
@@ -71,8 +70,11 @@ class _Log:
         self.messages: list[str] = []
         self.echo = echo
 
-    def add(self, status: int, category: bytes | None, message: bytes | None) -> None:
+    def add(self, status: int, category: bytes | None, message: bytes | None,
+            fmi2: bool = False) -> None:
         text = (message or b"").decode(errors="replace")
+        if fmi2:
+            text = text.replace("%%", "%")
         cat = (category or b"").decode(errors="replace")
         line = f"[{cat}] {text}" if cat else text
         self.messages.append(line)
@@ -98,7 +100,6 @@ class _Accel9Fmu:
             from fmpy.fmi2 import (FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE,
                                    fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE)
             from fmpy import calloc, free
-            from fmpy.logging import addLoggerProxy
             for name, n in (("l", 0), ("omega_init", 3), ("A", 9), ("f", 3), ("omega", 3),
                             ("omega_dot", 3), ("omega_sq", 3), ("flags", 0)):
                 names = [name] if n == 0 else [f"{name}[{i + 1}]" for i in range(n)]
@@ -108,13 +109,15 @@ class _Accel9Fmu:
                                    instanceName="accel9")
             cb = fmi2CallbackFunctions()
             self._logger = fmi2CallbackLoggerTYPE(
-                lambda env, name, status, cat, msg: log.add(status, cat, msg))
+                lambda env, name, status, cat, msg: log.add(status, cat, msg, fmi2=True))
             cb.logger = self._logger
             # the FMU declares canNotUseMemoryManagementFunctions; fmpy's C allocator
             # is passed anyway because the standard asks for non-NULL pointers
             cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
             cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-            addLoggerProxy(ctypes.byref(cb))  # formats the variadic message in C
+            # No fmpy.logging.addLoggerProxy: it keeps one global logger for the whole
+            # process, which would outlive this object. The FMU passes the formatted text
+            # as the format with '%' doubled (see fmi2_glue.c), undone in _Log.add.
             self._callbacks = cb
             self.slave.instantiate(callbacks=cb, loggingOn=logging_on)
             self.set_real, self.get_real = self.slave.setReal, self.slave.getReal

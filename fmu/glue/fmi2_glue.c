@@ -13,8 +13,8 @@
 static void send_log2(FmuInstance *instance, FmuStatus status, const char *category,
                       const char *message)
 {
-    const fmi2CallbackFunctions *cb = (const fmi2CallbackFunctions *)instance->log_callback;
-    if (!cb || !cb->logger)
+    const fmi2CallbackLogger logger = (fmi2CallbackLogger)instance->log_function;
+    if (!logger)
         return;
     char escaped[2048];
     size_t j = 0;
@@ -24,8 +24,8 @@ static void send_log2(FmuInstance *instance, FmuStatus status, const char *categ
         escaped[j++] = message[i];
     }
     escaped[j] = '\0';
-    cb->logger(cb->componentEnvironment, instance->instance_name, (fmi2Status)status, category,
-               escaped);
+    logger(instance->environment, instance->instance_name, (fmi2Status)status, category,
+           escaped);
 }
 
 #define INSTANCE ((FmuInstance *)c)
@@ -71,7 +71,9 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                           "logStatusError", "this FMU supports co-simulation only");
         return NULL;
     }
-    return fmu_instance_new(instanceName, fmuGUID, send_log2, functions,
+    /* the logger and environment are copied: the importer's struct need not outlive
+     * this call */
+    return fmu_instance_new(instanceName, fmuGUID, send_log2, (void (*)(void))functions->logger,
                             functions->componentEnvironment, loggingOn ? 1 : 0);
 }
 

@@ -20,7 +20,7 @@
 static void send_log3(FmuInstance *instance, FmuStatus status, const char *category,
                       const char *message)
 {
-    fmi3LogMessageCallback log = (fmi3LogMessageCallback)(uintptr_t)instance->log_callback;
+    fmi3LogMessageCallback log = (fmi3LogMessageCallback)instance->log_function;
     if (log)
         log(instance->environment, (fmi3Status)status, category, message);
 }
@@ -75,8 +75,7 @@ fmi3Instance fmi3InstantiateCoSimulation(
         return NULL;
     }
     return fmu_instance_new(instanceName, instantiationToken, send_log3,
-                            (const void *)(uintptr_t)logMessage, instanceEnvironment,
-                            loggingOn ? 1 : 0);
+                            (void (*)(void))logMessage, instanceEnvironment, loggingOn ? 1 : 0);
 }
 
 fmi3Instance fmi3InstantiateScheduledExecution(

@@ -77,13 +77,13 @@ static void set_start(FmuInstance *instance)
 }
 
 FmuInstance *fmu_instance_new(const char *instance_name, const char *token,
-                              FmuSendLog send_log, const void *log_callback,
+                              FmuSendLog send_log, void (*log_function)(void),
                               void *environment, int logging_on)
 {
     FmuInstance probe = {0};
     probe.instance_name = (char *)(instance_name ? instance_name : "?");
     probe.send_log = send_log;
-    probe.log_callback = log_callback;
+    probe.log_function = log_function;
     probe.environment = environment;
     if (!instance_name || !instance_name[0]) {
         fmu_log_error(&probe, "instantiate: the instance name must not be empty");
@@ -107,7 +107,7 @@ FmuInstance *fmu_instance_new(const char *instance_name, const char *token,
     strcpy(name, instance_name);
     instance->instance_name = name;
     instance->send_log = send_log;
-    instance->log_callback = log_callback;
+    instance->log_function = log_function;
     instance->environment = environment;
     instance->logging_on = logging_on;
     set_start(instance);
@@ -203,8 +203,8 @@ FmuStatus fmu_do_step(FmuInstance *instance, double t_s, double h_s, const char 
     }
     if (instance->s.stop_time_defined &&
         t_s + h_s > instance->s.stop_time_s + time_tolerance(instance->s.stop_time_s)) {
-        fmu_log_error(instance, "%s: a step from %.17g s by %g s would pass the stop time "
-                      "%.17g s", function, t_s, h_s, instance->s.stop_time_s);
+        fmu_log_error(instance, "%s: a step from %.9g s by %g s would pass the stop time "
+                      "%.9g s", function, t_s, h_s, instance->s.stop_time_s);
         return FMU_ERROR;
     }
     FmuStatus status = model_do_step(instance, &instance->s.data, t_s, h_s);

@@ -42,13 +42,13 @@ struct FmuInstance {
     char *instance_name;
     int logging_on;
     FmuSendLog send_log;
-    const void *log_callback;  /* the importer's logger, interpreted by send_log */
-    void *environment;         /* the importer's environment pointer */
+    void (*log_function)(void); /* the importer's logger (copied), cast back by send_log */
+    void *environment;          /* the importer's environment pointer */
     FmuSnapshot s;
 };
 
 FmuInstance *fmu_instance_new(const char *instance_name, const char *token,
-                              FmuSendLog send_log, const void *log_callback,
+                              FmuSendLog send_log, void (*log_function)(void),
                               void *environment, int logging_on);
 void fmu_instance_free(FmuInstance *instance);
 

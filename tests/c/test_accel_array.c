@@ -140,8 +140,9 @@ static void test_solver_recovers_truth(void)
             independent_output(g.u_m[i], g.theta[i], F + 3 * k, W + 3 * k, WD + 3 * k, &A[9 * k + i]);
     }
     gf9_state st;
-    /* first sample: w_x = 0 exactly, so its sign is irrelevant; give the others' signs */
-    const double w0[3] = {0.0, 1.0, -1.0};
+    /* omega_init = the true rate at t = 0 (w_x = 0 there: its sign is irrelevant) */
+    double w0[3], f0[3], wd0[3];
+    motion(0.0, f0, w0, wd0);
     CHECK(gf9_init(&st, l, w0) == GF_OK, "init");
     size_t done = 0;
     CHECK(gf9_solve(&st, SAMPLES, A, dt, f, w, wd, wsq, flags, &done) == GF_OK && done == SAMPLES,
@@ -270,7 +271,7 @@ static void test_solver_errors(void)
 
     /* a corrupted state is refused rather than propagated */
     gf9_state bad = before;
-    bad.omega_rad_s[1] = NAN;
+    bad.omega_ref_rad_s[1] = NAN;
     CHECK(gf9_step(&bad, A, 0.01, &o) == GF_ERR_BAD_PARAMETER, "corrupt state refused");
 }
 
@@ -290,7 +291,8 @@ static void test_two_instances_independent(void)
             independent_output(g2.u_m[i], g2.theta[i], F, WD, W, &A2[9 * k + i]);
         }
     }
-    const double w0[3] = {0.0, 1.0, -1.0};
+    double w0[3], f0[3], wd0[3];
+    motion(0.0, f0, w0, wd0);
     gf9_state a, b, a_alone, b_alone;
     gf9_init(&a, l1, w0); gf9_init(&b, l2, w0);
     gf9_init(&a_alone, l1, w0); gf9_init(&b_alone, l2, w0);

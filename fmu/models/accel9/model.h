@@ -19,7 +19,7 @@ typedef struct ModelData {
     double omega_sq_rad2_s2[3];
     int32_t flags;
     /* internal */
-    double last_sample_time_s;
+    double previous_step_s;   /* communication step that led to this sample = its dt */
     gf9_state solver;
 } ModelData;
 

@@ -22,7 +22,8 @@ MODEL = dict(
              description="Lever arm l of the array (distance of sensors 1-6 from the centre), > 0"),
         dict(name="omega_init", causality="parameter", variability="fixed", type="Float64",
              shape=(3,), unit="rad/s", start=0.0, field="omega_init_rad_s",
-             description="Angular rate before the first sample; gives the first signs"),
+             description="Angular rate at the first sample: first signs, and the start of "
+                         "the omega_dot integral that gives the signs"),
         dict(name="A", causality="input", variability="continuous", type="Float64",
              shape=(9,), unit="m/s2", start=0.0, field="A_m_s2",
              description="Outputs of accelerometers 1..9 (layout of seed 000)"),
@@ -31,7 +32,8 @@ MODEL = dict(
              description="Specific force at the array centre, body axes (eq. 3)"),
         dict(name="omega", causality="output", variability="discrete", type="Float64",
              shape=(3,), unit="rad/s", field="omega_rad_s",
-             description="Angular rate, body axes: magnitude from eq. 4, sign from eq. 6"),
+             description="Angular rate, body axes: magnitude from eq. 4, sign from eq. 6 "
+                         "integrated from omega_init"),
         dict(name="omega_dot", causality="output", variability="discrete", type="Float64",
              shape=(3,), unit="rad/s2", field="omega_dot_rad_s2",
              description="Angular acceleration, body axes (eq. 6)"),
@@ -40,7 +42,8 @@ MODEL = dict(
              description="Squared angular rates as measured (eq. 4); < 0 under noise"),
         dict(name="flags", causality="output", variability="discrete", type="Int32",
              shape=(), field="flags",
-             description="Per-sample flags: 1,2,4 = omega_x,y,z^2 < 0 (rate propagated); "
+             description="Per-sample flags: 1,2,4 = omega_x,y,z^2 < 0 (rate = integrated "
+                         "reference); "
                          "8,16,32 = sign of omega_x,y,z unknown (taken positive)"),
     ],
 )

@@ -1,0 +1,57 @@
+"""Shared test fixtures: truth that does not come from the code under test.
+
+The sensor outputs of a motion are computed here with numpy from the output equation
+(seed 000, eq. 1-2) written with the identity omega x (omega x u) = omega (omega.u) -
+|omega|^2 u, and the 9-accelerometer layout is typed in from the paper's table.
+"""
+from __future__ import annotations
+
+import pathlib
+import sys
+
+import numpy as np
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+# Tests exercise the installed package (with its compiled core and FMUs), never the
+# source folder: `python -m pytest` from the root would otherwise import ./gfins_fmi.
+sys.path[:] = [p for p in sys.path if pathlib.Path(p or ".").resolve() != ROOT]
+
+EPS = np.finfo(float).eps
+S2 = np.sqrt(0.5)
+
+
+def paper_layout(l_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """(u, theta) of seed 000 section 1, with u_7..u_9 = l[...] (not sqrt(l))."""
+    u = l_m * np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1], [-1, 0, 0], [0, -1, 0], [0, 0, -1],
+                        [1, -1, 0], [1, 0, -1], [0, 1, -1]], float)
+    th = np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1], [-1, 0, 0], [0, -1, 0], [0, 0, -1],
+                   [S2, S2, 0], [S2, 0, S2], [0, S2, S2]])
+    return u, th
+
+
+def numpy_outputs(u, th, f, w, wd) -> np.ndarray:
+    """A[k, i] = th_i . (f_k + wd_k x u_i + w_k (w_k . u_i) - |w_k|^2 u_i), in numpy."""
+    wdxu = np.cross(wd[:, None, :], u[None, :, :])                  # (n, N, 3)
+    centripetal = w[:, None, :] * (w @ u.T)[:, :, None] - (w * w).sum(1)[:, None, None] * u[None]
+    a = f[:, None, :] + wdxu + centripetal
+    return np.einsum("nij,ij->ni", a, th)
+
+
+#: rate of smooth_motion at t = 0 (rad/s): the omega_init its solutions start from
+W0 = [0.0, 1.8, -2.0]
+
+
+def smooth_motion(n: int, dt: float):
+    """Closed-form f (m/s^2), omega (rad/s), omega_dot (rad/s^2) with zero crossings of
+    omega_x (at t = 2 pi k) and omega_z (at t = 20 s)."""
+    t = np.arange(n) * dt
+    f = np.c_[1 + np.sin(0.7 * t), -2 + 0.5 * np.cos(1.3 * t), 9.8 + 0.2 * np.sin(0.3 * t)]
+    w = np.c_[0.8 * np.sin(0.5 * t), 1.5 + 0.3 * np.cos(0.9 * t), -2 + 0.1 * t]
+    wd = np.c_[0.4 * np.cos(0.5 * t), -0.27 * np.sin(0.9 * t), np.full(n, 0.1)]
+    return t, f, w, wd
+
+
+@pytest.fixture
+def rng():
+    return np.random.default_rng(20261122)

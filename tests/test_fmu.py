@@ -1,0 +1,185 @@
+"""The accel9 FMUs (FMI 2.0 and 3.0) through fmpy: validity, equality with the cffi
+path, FMU state round trips, and errors for bad input and bad call sequences."""
+from __future__ import annotations
+
+import shutil
+
+import numpy as np
+import pytest
+from fmpy import extract, read_model_description, simulate_fmu
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import FMU2Slave
+from fmpy.fmi3 import FMU3Slave
+from fmpy.validation import validate_fmu
+
+import gfins_fmi as gf
+from conftest import W0, numpy_outputs, paper_layout, smooth_motion
+
+L, DT = 0.1, 0.01
+
+
+@pytest.fixture(scope="module")
+def record():
+    u, th = paper_layout(L)
+    _, f, w, wd = smooth_motion(1500, DT)
+    A = numpy_outputs(u, th, f, w, wd)
+    # noise so that the negative-omega^2 policy and its flags take part in the comparison
+    A += np.random.default_rng(7).normal(0, 2e-3, A.shape)
+    return A
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_installed_fmu_is_valid(version):
+    path = gf.fmu_path("accel9", version)
+    assert path.is_file() and path.suffix == ".fmu"
+    assert validate_fmu(str(path)) == []
+    md = read_model_description(str(path))
+    assert md.fmiVersion.startswith(str(version))
+    assert md.coSimulation.canGetAndSetFMUstate and md.coSimulation.canSerializeFMUstate
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_fmu_equals_cffi(record, version):
+    """Same C core, same inputs: the results must agree to 1e-12 relative. They are
+    bitwise equal except where a rate is propagated from omega_dot (flagged samples):
+    the FMU's dt is a difference of communication points, t_k - t_(k-1), which can
+    differ from DT by an ulp."""
+    ref = gf.solve_accel9(record, DT, L, W0)
+    out = gf.run_accel9_fmu(record, DT, L, W0, fmi_version=version)
+    assert ref.flag_counts()["neg_omega_sq_x"] > 0  # the policy path is exercised
+    for name in ("f_m_s2", "omega_rad_s", "omega_dot_rad_s2", "omega_sq_rad2_s2"):
+        a, b = getattr(out, name), getattr(ref, name)
+        assert np.all(np.abs(a - b) <= 1e-12 * np.maximum(np.abs(b), 1e-300)), name
+    assert np.array_equal(out.flags, ref.flags)
+
+
+def test_fmi2_simulate_fmu_rows_lag_one_sample(record):
+    """fmpy's own master: it records outputs after each doStep, so row k+1 holds the
+    solution of the sample applied at t_k (the documented sampling convention)."""
+    n = 200
+    t = np.arange(n) * DT
+    signals = np.zeros(n, dtype=[("time", float)] + [(f"A[{i + 1}]", float) for i in range(9)])
+    signals["time"] = t
+    for i in range(9):
+        signals[f"A[{i + 1}]"] = record[:n, i]
+    res = simulate_fmu(str(gf.fmu_path("accel9", 2)), start_time=0.0, stop_time=t[-1],
+                       output_interval=DT, input=signals,
+                       start_values={"l": L, "omega_init[1]": W0[0], "omega_init[2]": W0[1],
+                                     "omega_init[3]": W0[2]},
+                       output=["omega[1]", "omega[2]", "omega[3]", "f[3]"])
+    ref = gf.solve_accel9(record[:n], DT, L, W0)
+    # fmpy interpolates the input linearly; at the sample times the interpolant is
+    # the sample itself up to rounding of t, hence the tolerance
+    got = np.c_[res["omega[1]"], res["omega[2]"], res["omega[3]"]][1:n]
+    np.testing.assert_allclose(got, ref.omega_rad_s[:n - 1], rtol=1e-9, atol=1e-9)
+
+
+def _slave(version, path):
+    md = read_model_description(str(path))
+    unzip = extract(str(path))
+    vars_ = {v.name: v.valueReference for v in md.modelVariables}
+    log = []
+    if version == 2:
+        s = FMU2Slave(guid=md.guid, unzipDirectory=unzip,
+                      modelIdentifier=md.coSimulation.modelIdentifier, instanceName="t")
+        s.instantiate(loggingOn=False)
+    else:
+        s = FMU3Slave(guid=md.instantiationToken, unzipDirectory=unzip,
+                      modelIdentifier=md.coSimulation.modelIdentifier, instanceName="t")
+        s.instantiate(loggingOn=False, logMessage=lambda env, st, cat, msg: log.append(msg.decode()))
+    return s, vars_, unzip, log
+
+
+def _init(s, version, vars_, stop):
+    if version == 2:
+        s.setupExperiment(startTime=0.0, stopTime=stop)
+        s.enterInitializationMode()
+        s.setReal([vars_["l"]], [L])
+        s.setReal([vars_[f"omega_init[{i}]"] for i in (1, 2, 3)], W0)
+    else:
+        s.enterInitializationMode(startTime=0.0, stopTime=stop)
+        s.setFloat64([vars_["l"]], [L])
+        s.setFloat64([vars_["omega_init"]], W0)
+    s.exitInitializationMode()
+
+
+def _run(s, version, vars_, A, k0, k1):
+    out = []
+    for k in range(k0, k1):
+        if version == 2:
+            s.setReal([vars_[f"A[{i + 1}]"] for i in range(9)], A[k].tolist())
+        else:
+            s.setFloat64([vars_["A"]], A[k].tolist())
+        s.doStep(currentCommunicationPoint=k * DT, communicationStepSize=DT)
+        if version == 2:
+            out.append(s.getReal([vars_[f"omega[{i}]"] for i in (1, 2, 3)]))
+        else:
+            out.append(s.getFloat64([vars_["omega"]], 3))
+    return np.array(out)
+
+
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("serialize", [False, True])
+def test_fmu_state_restore_reproduces_continuation(record, version, serialize):
+    path = gf.fmu_path("accel9", version)
+    s, vars_, unzip, _ = _slave(version, path)
+    try:
+        n, mid = 600, 250
+        _init(s, version, vars_, n * DT)
+        _run(s, version, vars_, record, 0, mid)
+        state = s.getFMUState() if version == 3 else s.getFMUstate()
+        if serialize:
+            blob = s.serializeFMUState(state) if version == 3 else s.serializeFMUstate(state)
+            (s.freeFMUState if version == 3 else s.freeFMUstate)(state)
+            state = (s.deserializeFMUState if version == 3 else s.deSerializeFMUstate)(blob)
+        first = _run(s, version, vars_, record, mid, n)
+        (s.setFMUState if version == 3 else s.setFMUstate)(state)
+        again = _run(s, version, vars_, record, mid, n)
+        assert np.array_equal(first, again)  # exactly: same bytes in, same code
+        (s.freeFMUState if version == 3 else s.freeFMUstate)(state)
+    finally:
+        s.terminate()
+        s.freeInstance()
+        shutil.rmtree(unzip, ignore_errors=True)
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_fmu_rejects_nonfinite_input_keeps_outputs(record, version):
+    A = record[:100].copy()
+    A[60, 2] = np.nan
+    with pytest.raises(gf.FmuRunError, match=r"A\[3\] = nan at t = 0.6") as exc:
+        gf.run_accel9_fmu(A, DT, L, W0, fmi_version=version)
+    ref = gf.solve_accel9(record[:60], DT, L, W0)
+    got = exc.value.partial.omega_rad_s
+    assert got.shape == (60, 3)
+    assert np.all(np.abs(got - ref.omega_rad_s) <= 1e-12 * np.abs(ref.omega_rad_s))
+
+
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("l", [0.0, -0.1, float("nan")])
+def test_fmu_rejects_bad_lever_arm(record, version, l):
+    with pytest.raises(gf.FmuRunError, match=r"ExitInitializationMode.*parameter l = .* > 0"):
+        gf.run_accel9_fmu(record[:5], DT, l, W0, fmi_version=version)
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_fmu_call_sequence_and_stop_time(record, version):
+    path = gf.fmu_path("accel9", version)
+    s, vars_, unzip, log = _slave(version, path)
+    try:
+        with pytest.raises(FMICallException):  # doStep before initialization
+            s.doStep(currentCommunicationPoint=0.0, communicationStepSize=DT)
+        _init(s, version, vars_, 10 * DT)
+        with pytest.raises(FMICallException):  # fixed parameter in step mode
+            (s.setReal if version == 2 else s.setFloat64)([vars_["l"]], [0.2])
+        _run(s, version, vars_, record, 0, 10)
+        with pytest.raises(FMICallException):  # past the stop time
+            s.doStep(currentCommunicationPoint=10 * DT, communicationStepSize=DT)
+        if version == 3:
+            text = " ".join(log)
+            assert "must not be called in mode Instantiated" in text
+            assert "fixed parameter" in text and "would pass the stop time" in text
+    finally:
+        s.terminate()
+        s.freeInstance()
+        shutil.rmtree(unzip, ignore_errors=True)

@@ -1,0 +1,90 @@
+"""The gfins command (as installed) and the noise analysis."""
+from __future__ import annotations
+
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+import gfins_fmi as gf
+from gfins_fmi.analysis import accel9_noise_gains
+from conftest import W0, numpy_outputs, paper_layout, smooth_motion
+
+
+def run(*args, check=True):
+    exe = shutil.which("gfins")
+    assert exe, "the console script 'gfins' is not installed"
+    proc = subprocess.run([exe, *args], capture_output=True, text=True, timeout=600)
+    if check:
+        assert proc.returncode == 0, proc.stdout + proc.stderr
+    return proc
+
+
+def test_help_lists_commands():
+    out = run("--help").stdout
+    for cmd in ("demo", "solve9", "validate", "info"):
+        assert cmd in out
+
+
+def test_demo_runs_and_writes_figure(tmp_path):
+    proc = run("demo", "--duration", "5", "--out", str(tmp_path))
+    assert "demo passed" in proc.stdout
+    assert "fmpy validate: 0 problems" in proc.stdout
+    png = tmp_path / "gfins_demo.png"
+    assert png.is_file() and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_validate_command():
+    assert "0 problems" in run("validate").stdout
+
+
+def test_solve9_csv_roundtrip_and_bad_sample(tmp_path):
+    l, dt, n = 0.1, 0.01, 300
+    u, th = paper_layout(l)
+    t, f, w, wd = smooth_motion(n, dt)
+    A = numpy_outputs(u, th, f, w, wd)
+    src, dst = tmp_path / "a.csv", tmp_path / "sol.csv"
+    np.savetxt(src, np.c_[t, A], delimiter=",", header="t,A1,...,A9", fmt="%.17g")
+    run("solve9", str(src), str(dst), "--dt", str(dt), "--lever-arm", str(l),
+        "--omega-init", ",".join(map(str, W0)))
+    sol = np.loadtxt(dst, delimiter=",", skiprows=1)
+    ref = gf.solve_accel9(A, dt, l, W0)
+    assert np.array_equal(sol[:, 4:7], ref.omega_rad_s)  # %.17g round-trips doubles
+    A[120, 4] = np.nan
+    np.savetxt(src, A, delimiter=",", fmt="%.17g")
+    proc = run("solve9", str(src), str(dst), "--dt", str(dt), "--lever-arm", str(l), check=False)
+    assert proc.returncode == 1 and "A_m_s2[120, 4]" in proc.stderr
+    assert np.loadtxt(dst, delimiter=",", skiprows=1).shape[0] == 120  # nothing lost
+
+
+def test_solve9_bad_arguments(tmp_path):
+    src = tmp_path / "a.csv"
+    np.savetxt(src, np.zeros((3, 9)), delimiter=",")
+    proc = run("solve9", str(src), str(tmp_path / "o.csv"), "--dt", "0", "--lever-arm", "0.1",
+               check=False)
+    assert proc.returncode == 2 and "dt_s" in proc.stderr
+
+
+@pytest.mark.parametrize("l", [0.05, 0.1, 0.3])
+def test_noise_gains_closed_form(l):
+    """Row norms of eq. 3, 4, 6 worked by hand: f_x = (A1 - A4)/2 -> 1/sqrt(2);
+    w_x^2 = (A1 - A2 - A3 + A4 - A5 - A6)/(4l) -> sqrt(6)/(4l);
+    wd_x = -(A2 - A6 - sqrt2 A9)/(2l) -> sqrt(1 + 1 + 2)/(2l) = 1/l."""
+    g = accel9_noise_gains(l)
+    np.testing.assert_allclose(g.f, np.full(3, np.sqrt(0.5)), rtol=1e-15)
+    np.testing.assert_allclose(g.omega_sq, np.full(3, np.sqrt(6) / (4 * l)), rtol=1e-15)
+    np.testing.assert_allclose(g.omega_dot, np.full(3, 1 / l), rtol=1e-15)
+
+
+def test_noise_gains_match_monte_carlo():
+    """Predicted std vs 200 000 noisy samples: the sample std of a Gaussian has a
+    relative standard error 1/sqrt(2N) = 0.16%; allow 1.5% (about 9 sigma)."""
+    l, sigma, n = 0.1, 1e-3, 200_000
+    rng = np.random.default_rng(3)
+    noise = rng.normal(0, sigma, (n, 9))
+    sol = gf.solve_accel9(noise, 0.01, l)  # zero motion: the solution is pure noise
+    g = accel9_noise_gains(l)
+    np.testing.assert_allclose(sol.f_m_s2.std(axis=0), sigma * g.f, rtol=0.015)
+    np.testing.assert_allclose(sol.omega_sq_rad2_s2.std(axis=0), sigma * g.omega_sq, rtol=0.015)
+    np.testing.assert_allclose(sol.omega_dot_rad_s2.std(axis=0), sigma * g.omega_dot, rtol=0.015)

@@ -6,6 +6,7 @@ from __future__ import annotations
 import os
 import shutil
 import subprocess
+import sys
 
 import pytest
 
@@ -21,7 +22,8 @@ def _cmake_build_and_test(build_dir, *defines: str) -> str:
     env = dict(os.environ, ASAN_OPTIONS="detect_leaks=1:abort_on_error=1",
                UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1")
     steps = [
-        [cmake, "-S", str(ROOT), "-B", str(build_dir), *gen, *defines],
+        [cmake, "-S", str(ROOT), "-B", str(build_dir), *gen, *defines,
+         f"-DPython_EXECUTABLE={sys.executable}"],  # fmugen.py runs with this Python
         [cmake, "--build", str(build_dir), "-j", "2"],
         [ctest, "--test-dir", str(build_dir), "--output-on-failure"],
     ]

@@ -36,6 +36,9 @@ def test_installed_fmu_is_valid(version):
     md = read_model_description(str(path))
     assert md.fmiVersion.startswith(str(version))
     assert md.coSimulation.canGetAndSetFMUstate and md.coSimulation.canSerializeFMUstate
+    # the validator does not require these; a generator slip once dropped them in FMI 3
+    assert md.defaultExperiment is not None and float(md.defaultExperiment.stepSize) == 0.01
+    assert {c.name for c in md.logCategories} >= {"logStatusError", "logEvents"}
 
 
 @pytest.mark.parametrize("version", [2, 3])

@@ -195,14 +195,15 @@ FmuStatus fmu_do_step(FmuInstance *instance, double t_s, double h_s, const char 
                       "finite and the step size > 0", function, t_s, h_s);
         return FMU_ERROR;
     }
-    if (fabs(t_s - instance->s.time_s) > time_tolerance(t_s)) {
+    /* comparisons are written so that a NaN anywhere fails them */
+    if (!(fabs(t_s - instance->s.time_s) <= time_tolerance(t_s))) {
         fmu_log_error(instance, "%s: communication point %.17g s differs from the FMU's time "
                       "%.17g s; to go back, restore an FMU state first", function, t_s,
                       instance->s.time_s);
         return FMU_ERROR;
     }
     if (instance->s.stop_time_defined &&
-        t_s + h_s > instance->s.stop_time_s + time_tolerance(instance->s.stop_time_s)) {
+        !(t_s + h_s <= instance->s.stop_time_s + time_tolerance(instance->s.stop_time_s))) {
         fmu_log_error(instance, "%s: a step from %.9g s by %g s would pass the stop time "
                       "%.9g s", function, t_s, h_s, instance->s.stop_time_s);
         return FMU_ERROR;
@@ -421,6 +422,11 @@ FmuStatus fmu_state_deserialize(FmuInstance *instance, const uint8_t *buffer, si
     if (snapshot.mode == 0 || (snapshot.mode & ~FMU_MODE_ANY) ||
         (snapshot.mode & (snapshot.mode - 1))) {
         fmu_log_error(instance, "deserializeFMUState: the state holds an invalid mode");
+        return FMU_ERROR;
+    }
+    if (!isfinite(snapshot.time_s) || !isfinite(snapshot.start_time_s) ||
+        (snapshot.stop_time_defined && !isfinite(snapshot.stop_time_s))) {
+        fmu_log_error(instance, "deserializeFMUState: the state holds a non-finite time");
         return FMU_ERROR;
     }
     FmuStatus status = fmu_state_get(instance, state);

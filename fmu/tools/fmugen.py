@@ -160,7 +160,8 @@ def fmi3_description(model: dict, token: str) -> tuple[str, list[tuple]]:
            ' canHandleVariableCommunicationStepSize="true" canGetAndSetFMUState="true"'
            ' canSerializeFMUState="true" providesIntermediateUpdate="false"'
            ' hasEventMode="false" canReturnEarlyAfterIntermediateUpdate="false"/>',
-           _unit_definitions(model["variables"], extra=("s",)),  # unit of "time" _log_categories(), _default_experiment(model),
+           _unit_definitions(model["variables"], extra=("s",)),  # "s": the unit of time
+           _log_categories(), _default_experiment(model),
            "  <ModelVariables>",
            '    <Float64 name="time" valueReference="0" causality="independent"'
            ' variability="continuous" unit="s" description="Simulation time"/>']

@@ -18,7 +18,10 @@ typedef enum gf_status {
     GF_ERR_NONFINITE_INPUT = 2,  /* a sample contained NaN or +-Inf */
     GF_ERR_BAD_PARAMETER = 3,    /* a parameter is out of its physical/legal range */
     GF_ERR_SINGULAR_GEOMETRY = 4,/* a sensor geometry cannot be used (zero axis, ...) */
-    GF_ERR_BAD_SIZE = 5          /* an array size is zero or above a fixed maximum */
+    GF_ERR_BAD_SIZE = 5,         /* an array size is zero or above a fixed maximum */
+    GF_ERR_OUT_OF_RANGE = 6,     /* a sample is beyond a stated physical limit */
+    GF_ERR_BAD_TIME = 7,         /* sample times are not strictly increasing */
+    GF_ERR_DIVERGED = 8          /* the state left its domain (pole reached, absurd height) */
 } gf_status;
 
 /* A static, human-readable description of a status code (never NULL). */

@@ -55,3 +55,27 @@ def smooth_motion(n: int, dt: float):
 @pytest.fixture
 def rng():
     return np.random.default_rng(20261122)
+
+
+def attitude_error_rad(q_est, q_true) -> np.ndarray:
+    """Rotation vector (n, 3), in the navigation frame, of q_est (x) q_true^*: the
+    attitude error. atan2 form, accurate for small angles (arccos of the dot product
+    is not: it bottoms out at ~1e-8 rad)."""
+    qe, qt = np.atleast_2d(q_est), np.atleast_2d(q_true)
+    # d = qe (x) conj(qt)
+    w = np.sum(qe * qt, axis=1)
+    v = (qt[:, :1] * qe[:, 1:] - qe[:, :1] * qt[:, 1:]
+         - np.cross(qe[:, 1:], qt[:, 1:]))
+    s = np.sign(w)[:, None]
+    norm_v = np.linalg.norm(v, axis=1)
+    angle = 2 * np.arctan2(norm_v, np.abs(w))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        axis = np.where(norm_v[:, None] > 0, v / norm_v[:, None], 0.0)
+    return s * axis * angle[:, None]
+
+
+def horizontal_error_m(lat, lon, lat_true, lon_true) -> np.ndarray:
+    """Horizontal position error (m), small-difference approximation with the mean
+    Earth radius (ample for errors below kilometres)."""
+    R = 6371000.0
+    return np.hypot((lat - lat_true) * R, (lon - lon_true) * R * np.cos(lat_true))

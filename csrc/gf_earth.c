@@ -1,0 +1,89 @@
+/* gf_earth.c — WGS-84 Earth model; see gf_earth.h. */
+#include "gf_earth.h"
+
+#include <math.h>
+#include <stddef.h>
+
+#define GF_WGS84_F (1.0 / GF_WGS84_INV_F)
+#define GF_WGS84_E2 (GF_WGS84_F * (2.0 - GF_WGS84_F))
+#define GF_WGS84_B_M (GF_WGS84_A_M * (1.0 - GF_WGS84_F))
+/* m = w^2 a^2 b / GM (NIMA TR8350.2, table 3.1 derived constant) */
+#define GF_WGS84_M                                                                            \
+    (GF_WGS84_OMEGA_IE_RAD_S * GF_WGS84_OMEGA_IE_RAD_S * GF_WGS84_A_M * GF_WGS84_A_M *       \
+     GF_WGS84_B_M / GF_WGS84_GM_M3_S2)
+
+static double gravity_s2(double s2, double h_m)
+{
+    /* Somigliana, NIMA TR8350.2 eq. 4-1 */
+    const double g0 = GF_WGS84_GAMMA_E_M_S2 * (1.0 + GF_WGS84_K_SOMIGLIANA * s2) /
+                      sqrt(1.0 - GF_WGS84_E2 * s2);
+    /* height expansion, eq. 4-3 */
+    const double a = GF_WGS84_A_M, f = GF_WGS84_F, m = GF_WGS84_M;
+    return g0 * (1.0 - 2.0 / a * (1.0 + f + m - 2.0 * f * s2) * h_m + 3.0 / (a * a) * h_m * h_m);
+}
+
+double gf_earth_gravity(double lat_rad, double h_m)
+{
+    const double s = sin(lat_rad);
+    return gravity_s2(s * s, h_m);
+}
+
+gf_status gf_earth_update(gf_earth *earth, double lat_rad, double h_m, const double *v_n_m_s,
+                          double earth_rate_sign)
+{
+    if (!earth)
+        return GF_ERR_NULL_POINTER;
+    if (!isfinite(lat_rad) || !isfinite(h_m) || !isfinite(earth_rate_sign) ||
+        (v_n_m_s && !(isfinite(v_n_m_s[0]) && isfinite(v_n_m_s[1]) && isfinite(v_n_m_s[2]))))
+        return GF_ERR_NONFINITE_INPUT;
+    if (!(fabs(lat_rad) < 0.5 * 3.14159265358979323846))
+        return GF_ERR_BAD_PARAMETER;
+    const double s = sin(lat_rad), c = cos(lat_rad);
+    const double q = 1.0 - GF_WGS84_E2 * s * s;
+    const double sq = sqrt(q);
+    earth->sin_lat = s;
+    earth->cos_lat = c;
+    earth->tan_lat = s / c;
+    earth->R_N_m = GF_WGS84_A_M / sq;
+    earth->R_M_m = earth->R_N_m * (1.0 - GF_WGS84_E2) / q;
+    if (!(h_m > -0.5 * earth->R_N_m))
+        return GF_ERR_BAD_PARAMETER;
+    earth->gravity_m_s2 = gravity_s2(s * s, h_m);
+    const double w = earth_rate_sign * GF_WGS84_OMEGA_IE_RAD_S;
+    earth->w_ie_n_rad_s[0] = 0.0;
+    earth->w_ie_n_rad_s[1] = w * c;
+    earth->w_ie_n_rad_s[2] = w * s;
+    if (v_n_m_s) {
+        const double RMh = earth->R_M_m + h_m, RNh = earth->R_N_m + h_m;
+        earth->w_en_n_rad_s[0] = -v_n_m_s[1] / RMh;
+        earth->w_en_n_rad_s[1] = v_n_m_s[0] / RNh;
+        earth->w_en_n_rad_s[2] = v_n_m_s[0] * earth->tan_lat / RNh;
+    } else {
+        earth->w_en_n_rad_s[0] = earth->w_en_n_rad_s[1] = earth->w_en_n_rad_s[2] = 0.0;
+    }
+    return GF_OK;
+}
+
+gf_status gf_earth_batch(size_t n, const double *lat_rad, const double *h_m, double *R_M_m,
+                         double *R_N_m, double *gravity_m_s2, size_t *n_done)
+{
+    if (n_done)
+        *n_done = 0;
+    if (!lat_rad || !h_m || !R_M_m || !R_N_m || !gravity_m_s2)
+        return GF_ERR_NULL_POINTER;
+    for (size_t k = 0; k < n; ++k) {
+        gf_earth e;
+        const gf_status st = gf_earth_update(&e, lat_rad[k], h_m[k], NULL, 1.0);
+        if (st != GF_OK) {
+            if (n_done)
+                *n_done = k;
+            return st;
+        }
+        R_M_m[k] = e.R_M_m;
+        R_N_m[k] = e.R_N_m;
+        gravity_m_s2[k] = e.gravity_m_s2;
+    }
+    if (n_done)
+        *n_done = n;
+    return GF_OK;
+}

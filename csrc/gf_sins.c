@@ -1,0 +1,396 @@
+/* gf_sins.c — ENU quaternion strapdown mechanization; equations in gf_sins.h. */
+#include "gf_sins.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "gf_math.h"
+
+#define GF_PI 3.14159265358979323846
+#define GF_HALF_PI (0.5 * GF_PI)
+
+void gf_sins_config_default(gf_sins_config *cfg)
+{
+    if (!cfg)
+        return;
+    memset(cfg, 0, sizeof *cfg);
+    cfg->input = GF_SINS_INPUT_INCREMENTS;
+    cfg->coning = 1;
+    cfg->vertical = GF_SINS_VERTICAL_FREE;
+    cfg->hold_height_m = 0.0;
+    cfg->baro_tau_s = 10.0;
+    cfg->max_rate_rad_s = 50.0;
+    cfg->max_specific_force_m_s2 = 1000.0;
+}
+
+static int config_is_valid(const gf_sins_config *c)
+{
+    return (c->input == GF_SINS_INPUT_INCREMENTS || c->input == GF_SINS_INPUT_RATES) &&
+           (c->coning == 0 || c->coning == 1) &&
+           (c->vertical >= GF_SINS_VERTICAL_FREE && c->vertical <= GF_SINS_VERTICAL_BARO) &&
+           isfinite(c->hold_height_m) && c->baro_tau_s > 0.0 && isfinite(c->baro_tau_s) &&
+           c->max_rate_rad_s > 0.0 && c->max_specific_force_m_s2 > 0.0;
+}
+
+/* ---- attitude conventions (seed 002) ---------------------------------------------- */
+
+static void quat_axis(int axis, double angle_rad, double q[4])
+{
+    q[0] = cos(0.5 * angle_rad);
+    q[1] = q[2] = q[3] = 0.0;
+    q[1 + axis] = sin(0.5 * angle_rad);
+}
+
+void gf_euler_to_quat(const double *euler_rad, double *q_bn)
+{
+    /* C_b^n = Rz(-psi) Rx(theta) Ry(gamma) */
+    double qz[4], qx[4], qy[4], t[4];
+    quat_axis(2, -euler_rad[0], qz);
+    quat_axis(0, euler_rad[1], qx);
+    quat_axis(1, euler_rad[2], qy);
+    gf_q_mul(qz, qx, t);
+    gf_q_mul(t, qy, q_bn);
+}
+
+void gf_quat_to_euler(const double *q_bn, double *euler_rad)
+{
+    gf_mat3 C;
+    gf_q_to_dcm(q_bn, &C);
+    /* C[2][1] = sin(theta); C[2][0] = -cos(theta) sin(gamma), C[2][2] = cos(theta) cos(gamma);
+     * C[0][1] = sin(psi) cos(theta), C[1][1] = cos(psi) cos(theta) */
+    const double s = fmax(-1.0, fmin(1.0, C.m[2][1]));
+    double psi, gamma;
+    const double theta = asin(s);
+    if (fabs(s) < 1.0 - 1e-12) {
+        gamma = atan2(-C.m[2][0], C.m[2][2]);
+        psi = atan2(C.m[0][1], C.m[1][1]);
+    } else { /* pitch +-90 deg: heading and roll are one angle; roll taken 0 */
+        gamma = 0.0;
+        psi = atan2(-C.m[0][2] * s, C.m[0][0]);
+    }
+    if (psi < 0.0)
+        psi += 2.0 * GF_PI;
+    if (psi >= 2.0 * GF_PI) /* -0 rounding up */
+        psi -= 2.0 * GF_PI;
+    euler_rad[0] = psi;
+    euler_rad[1] = theta;
+    euler_rad[2] = gamma;
+}
+
+gf_status gf_quat_to_euler_batch(size_t n, const double *q_bn, double *euler_rad)
+{
+    if (!q_bn || !euler_rad)
+        return GF_ERR_NULL_POINTER;
+    for (size_t k = 0; k < n; ++k)
+        gf_quat_to_euler(q_bn + 4 * k, euler_rad + 3 * k);
+    return GF_OK;
+}
+
+/* ---- initialisation ---------------------------------------------------------------- */
+
+gf_status gf_sins_init(gf_sins_state *state, const gf_sins_config *cfg, const double *q_bn,
+                       const double *v_n_m_s, double lat_rad, double lon_rad, double h_m,
+                       double t0_s)
+{
+    if (!state || !cfg || !q_bn || !v_n_m_s)
+        return GF_ERR_NULL_POINTER;
+    if (!config_is_valid(cfg))
+        return GF_ERR_BAD_PARAMETER;
+    if (!gf_v3_isfinite(v_n_m_s) || !isfinite(lat_rad) || !isfinite(lon_rad) ||
+        !isfinite(h_m) || !isfinite(t0_s))
+        return GF_ERR_NONFINITE_INPUT;
+    gf_earth e;
+    const gf_status st = gf_earth_update(&e, lat_rad, h_m, v_n_m_s, 1.0);
+    if (st != GF_OK)
+        return st;
+    double q[4];
+    if (!gf_q_normalize(q_bn, q))
+        return GF_ERR_BAD_PARAMETER;
+    memset(state, 0, sizeof *state);
+    state->cfg = *cfg;
+    memcpy(state->q_bn, q, sizeof q);
+    gf_v3_copy(v_n_m_s, state->v_n_m_s);
+    state->lat_rad = lat_rad;
+    state->lon_rad = lon_rad;
+    state->h_m = cfg->vertical == GF_SINS_VERTICAL_HOLD ? cfg->hold_height_m : h_m;
+    if (cfg->vertical == GF_SINS_VERTICAL_HOLD)
+        state->v_n_m_s[2] = 0.0;
+    state->time_s = t0_s;
+    state->earth_rate_sign = 1.0;
+    return GF_OK;
+}
+
+gf_status gf_sins_reverse(gf_sins_state *state)
+{
+    if (!state)
+        return GF_ERR_NULL_POINTER;
+    gf_v3_scale(state->v_n_m_s, -1.0, state->v_n_m_s);
+    state->earth_rate_sign = -state->earth_rate_sign;
+    /* the next sample in reverse order is not adjacent to the stored one in the sense
+     * the coning terms need, and in rate mode it is the same sample again */
+    state->have_prev = 0;
+    return GF_OK;
+}
+
+/* ---- the update -------------------------------------------------------------------- */
+
+/* Quaternion of a rotation vector without trig for |phi| < 0.1 rad (the usual size of
+ * one update): Taylor series of cos(a/2) and sin(a/2)/a to a^10, whose remainder is
+ * below 1e-19 there. */
+static inline void q_from_rotvec_fast(const double phi[3], double q[4])
+{
+    const double a2 = gf_v3_dot(phi, phi);
+    if (a2 < 1e-2) {
+        const double x = 0.25 * a2; /* (a/2)^2 */
+        const double c = 1.0 - x * (1.0 / 2 - x * (1.0 / 24 - x * (1.0 / 720 - x * (1.0 / 40320 - x / 3628800.0))));
+        const double s = 0.5 * (1.0 - x * (1.0 / 6 - x * (1.0 / 120 - x * (1.0 / 5040 - x * (1.0 / 362880 - x / 39916800.0)))));
+        q[0] = c;
+        q[1] = s * phi[0];
+        q[2] = s * phi[1];
+        q[3] = s * phi[2];
+    } else {
+        gf_q_from_rotvec(phi, q);
+    }
+}
+
+static inline int v3_finite(const double a[3])
+{
+    return (a[0] - a[0]) + (a[1] - a[1]) + (a[2] - a[2]) == 0.0;
+}
+
+/* One update of *s by one sample. All checks come before any write, so an error leaves
+ * *s unchanged. dir = +1 forward, -1 backward (gyro already negated by the caller). */
+static gf_status sins_update(gf_sins_state *s, const double gyro[3], const double accel[3],
+                             double dt_s, double h_ext_m)
+{
+    const gf_sins_config *cfg = &s->cfg;
+    if (!v3_finite(gyro) || !v3_finite(accel) || isinf(h_ext_m))
+        return GF_ERR_NONFINITE_INPUT;
+    const int rates = cfg->input == GF_SINS_INPUT_RATES;
+    const int first_rate = rates && !s->have_prev;
+    if (!first_rate && !(dt_s > 0.0 && isfinite(dt_s)))
+        return GF_ERR_BAD_TIME;
+    /* absurd samples */
+    const double w2 = gf_v3_dot(gyro, gyro), f2 = gf_v3_dot(accel, accel);
+    const double wmax = cfg->max_rate_rad_s * (rates ? 1.0 : dt_s);
+    const double fmax_ = cfg->max_specific_force_m_s2 * (rates ? 1.0 : dt_s);
+    if (!(w2 <= wmax * wmax) || !(f2 <= fmax_ * fmax_))
+        return GF_ERR_OUT_OF_RANGE;
+
+    if (first_rate) { /* a rate record's first sample only starts it */
+        gf_v3_copy(gyro, s->prev_gyro);
+        gf_v3_copy(accel, s->prev_accel);
+        s->have_prev = 1;
+        s->n_samples += 1;
+        return GF_OK;
+    }
+
+    const double T = dt_s;
+    /* increments, coning and sculling (see gf_sins.h) */
+    double dth[3], dv[3], cone[3] = {0, 0, 0}, scul[3] = {0, 0, 0};
+    if (rates) {
+        for (int i = 0; i < 3; ++i) {
+            dth[i] = 0.5 * T * (s->prev_gyro[i] + gyro[i]);
+            dv[i] = 0.5 * T * (s->prev_accel[i] + accel[i]);
+        }
+        if (cfg->coning) {
+            double a[3], b[3];
+            const double c = T * T / 12.0;
+            gf_v3_cross(s->prev_gyro, gyro, a);
+            gf_v3_scale(a, c, cone);
+            gf_v3_cross(s->prev_gyro, accel, a);
+            gf_v3_cross(s->prev_accel, gyro, b);
+            gf_v3_add(a, b, a);
+            gf_v3_scale(a, c, scul);
+        }
+    } else {
+        gf_v3_copy(gyro, dth);
+        gf_v3_copy(accel, dv);
+        if (cfg->coning && s->have_prev) {
+            double a[3], b[3];
+            gf_v3_cross(s->prev_gyro, gyro, a);
+            gf_v3_scale(a, 1.0 / 12.0, cone);
+            gf_v3_cross(s->prev_gyro, accel, a);
+            gf_v3_cross(s->prev_accel, gyro, b);
+            gf_v3_add(a, b, a);
+            gf_v3_scale(a, 1.0 / 12.0, scul);
+        }
+    }
+    double phi[3], dv_b[3], t1[3];
+    gf_v3_add(dth, cone, phi);
+    gf_v3_cross(dth, dv, t1);
+    for (int i = 0; i < 3; ++i)
+        dv_b[i] = dv[i] + 0.5 * t1[i] + scul[i];
+
+    /* mid-interval navigation quantities, extrapolated with the last acceleration */
+    gf_earth e;
+    double v_mid[3];
+    gf_v3_axpy(s->v_n_m_s, 0.5 * T, s->a_n_m_s2, v_mid);
+    {
+        gf_earth e0;
+        gf_status st = gf_earth_update(&e0, s->lat_rad, s->h_m, NULL, s->earth_rate_sign);
+        if (st != GF_OK)
+            return GF_ERR_DIVERGED;
+        const double lat_mid = s->lat_rad + 0.5 * T * v_mid[1] / (e0.R_M_m + s->h_m);
+        const double h_mid = s->h_m + 0.5 * T * v_mid[2];
+        st = gf_earth_update(&e, lat_mid, h_mid, v_mid, s->earth_rate_sign);
+        if (st != GF_OK)
+            return GF_ERR_DIVERGED;
+    }
+    const double h_mid = s->h_m + 0.5 * T * v_mid[2];
+
+    double w_in[3], zeta[3];
+    gf_v3_add(e.w_ie_n_rad_s, e.w_en_n_rad_s, w_in);
+    gf_v3_scale(w_in, T, zeta);
+
+    /* velocity */
+    double dv_n0[3], dv_n[3], zx[3], cor[3], w2ie_en[3], v_new[3];
+    gf_q_rotate(s->q_bn, dv_b, dv_n0);
+    gf_v3_cross(zeta, dv_n0, zx);
+    gf_v3_axpy(dv_n0, -0.5, zx, dv_n);
+    gf_v3_axpy(e.w_en_n_rad_s, 2.0, e.w_ie_n_rad_s, w2ie_en);
+    gf_v3_cross(w2ie_en, v_mid, cor);
+    for (int i = 0; i < 3; ++i)
+        v_new[i] = s->v_n_m_s[i] + dv_n[i] - cor[i] * T;
+    v_new[2] -= e.gravity_m_s2 * T;
+
+    /* vertical channel */
+    double h_new, b_new = s->baro_accel_m_s2;
+    if (cfg->vertical == GF_SINS_VERTICAL_HOLD) {
+        v_new[2] = 0.0;
+        h_new = cfg->hold_height_m;
+    } else if (cfg->vertical == GF_SINS_VERTICAL_BARO && !isnan(h_ext_m)) {
+        const double tau = cfg->baro_tau_s;
+        const double err = s->h_m - h_ext_m;
+        const double k1 = 3.0 / tau;
+        const double k2 = 3.0 / (tau * tau) + 2.0 * e.gravity_m_s2 / (e.R_N_m + h_mid);
+        const double k3 = 1.0 / (tau * tau * tau);
+        v_new[2] -= (k2 * err + s->baro_accel_m_s2) * T;
+        h_new = s->h_m + 0.5 * T * (s->v_n_m_s[2] + v_new[2]) - k1 * err * T;
+        b_new = s->baro_accel_m_s2 + k3 * err * T;
+    } else {
+        h_new = s->h_m + 0.5 * T * (s->v_n_m_s[2] + v_new[2]);
+    }
+
+    /* position: trapezoid with radii at the mid point */
+    const double vN = 0.5 * (s->v_n_m_s[1] + v_new[1]), vE = 0.5 * (s->v_n_m_s[0] + v_new[0]);
+    const double lat_new = s->lat_rad + T * vN / (e.R_M_m + h_mid);
+    double lon_new = s->lon_rad + T * vE / ((e.R_N_m + h_mid) * e.cos_lat);
+    if (!(fabs(lat_new) < GF_HALF_PI) || !(h_new > -0.5 * e.R_N_m) || !v3_finite(v_new))
+        return GF_ERR_DIVERGED;
+    if (lon_new > GF_PI)
+        lon_new -= 2.0 * GF_PI;
+    else if (lon_new <= -GF_PI)
+        lon_new += 2.0 * GF_PI;
+
+    /* attitude */
+    double qn[4], qb[4], q[4], zneg[3];
+    gf_v3_scale(zeta, -1.0, zneg);
+    q_from_rotvec_fast(zneg, qn);
+    q_from_rotvec_fast(phi, qb);
+    gf_q_mul(qn, s->q_bn, q);
+    gf_q_mul(q, qb, q);
+    if (!gf_q_normalize(q, q))
+        return GF_ERR_DIVERGED;
+
+    /* commit */
+    const double invT = 1.0 / T;
+    for (int i = 0; i < 3; ++i)
+        s->a_n_m_s2[i] = (v_new[i] - s->v_n_m_s[i]) * invT;
+    memcpy(s->q_bn, q, sizeof q);
+    gf_v3_copy(v_new, s->v_n_m_s);
+    s->lat_rad = lat_new;
+    s->lon_rad = lon_new;
+    s->h_m = h_new;
+    s->baro_accel_m_s2 = b_new;
+    gf_v3_copy(gyro, s->prev_gyro);
+    gf_v3_copy(accel, s->prev_accel);
+    s->have_prev = 1;
+    s->time_s += s->earth_rate_sign > 0 ? T : -T;
+    s->n_samples += 1;
+    return GF_OK;
+}
+
+static int state_is_valid(const gf_sins_state *s)
+{
+    return config_is_valid(&s->cfg) && (s->earth_rate_sign == 1.0 || s->earth_rate_sign == -1.0) &&
+           fabs(gf_q_norm(s->q_bn) - 1.0) < 1e-6 && v3_finite(s->v_n_m_s) &&
+           fabs(s->lat_rad) < GF_HALF_PI && isfinite(s->lon_rad) && isfinite(s->h_m) &&
+           isfinite(s->time_s);
+}
+
+gf_status gf_sins_step(gf_sins_state *state, const double *gyro, const double *accel,
+                       double dt_s, double h_ext_m)
+{
+    if (!state || !gyro || !accel)
+        return GF_ERR_NULL_POINTER;
+    if (!state_is_valid(state))
+        return GF_ERR_BAD_PARAMETER;
+    if (state->earth_rate_sign < 0) {
+        /* reverse navigation: the caller hands samples in reverse order; the gyro is
+         * negated here so that gf_sins_step and gf_sins_run agree */
+        const double g[3] = {-gyro[0], -gyro[1], -gyro[2]};
+        return sins_update(state, g, accel, dt_s, h_ext_m);
+    }
+    return sins_update(state, gyro, accel, dt_s, h_ext_m);
+}
+
+gf_status gf_sins_run(gf_sins_state *state, size_t n, const double *gyro, const double *accel,
+                      double dt_s, const double *t_s, const double *h_ext_m, int backward,
+                      double *q_bn, double *v_n_m_s, double *pos, double *time_s,
+                      size_t *n_done)
+{
+    if (n_done)
+        *n_done = 0;
+    if (!state || !gyro || !accel || !q_bn || !v_n_m_s || !pos)
+        return GF_ERR_NULL_POINTER;
+    if (!state_is_valid(state))
+        return GF_ERR_BAD_PARAMETER;
+    if ((backward != 0) != (state->earth_rate_sign < 0))
+        return GF_ERR_BAD_PARAMETER; /* backward runs need gf_sins_reverse() first */
+    if (!t_s && !(dt_s > 0.0 && isfinite(dt_s)))
+        return GF_ERR_BAD_TIME;
+    gf_sins_state s = *state;
+    gf_status status = GF_OK;
+    size_t done = 0;
+    for (; done < n; ++done) {
+        const size_t k = backward ? n - 1 - done : done;
+        double dt = dt_s;
+        if (t_s) {
+            if (!isfinite(t_s[k])) {
+                status = GF_ERR_NONFINITE_INPUT;
+                break;
+            }
+            /* interval in processing order; the first sample of a run is measured from
+             * the state's time, except that a backward increment run cannot know where
+             * interval 0 starts and takes dt_s for it */
+            if (s.cfg.input == GF_SINS_INPUT_RATES || !backward)
+                dt = done == 0 ? (backward ? s.time_s - t_s[k] : t_s[k] - s.time_s)
+                               : (backward ? t_s[k + 1] - t_s[k] : t_s[k] - t_s[k - 1]);
+            else
+                dt = k >= 1 ? t_s[k] - t_s[k - 1] : dt_s;
+        }
+        const double *g = gyro + 3 * k;
+        double gneg[3];
+        if (backward) {
+            gf_v3_scale(g, -1.0, gneg);
+            g = gneg;
+        }
+        status = sins_update(&s, g, accel + 3 * k, dt, h_ext_m ? h_ext_m[k] : NAN);
+        if (status != GF_OK)
+            break;
+        memcpy(q_bn + 4 * k, s.q_bn, sizeof s.q_bn);
+        gf_v3_copy(s.v_n_m_s, v_n_m_s + 3 * k);
+        if (backward)
+            gf_v3_scale(v_n_m_s + 3 * k, -1.0, v_n_m_s + 3 * k); /* report true-time velocity */
+        pos[3 * k] = s.lat_rad;
+        pos[3 * k + 1] = s.lon_rad;
+        pos[3 * k + 2] = s.h_m;
+        if (time_s)
+            time_s[k] = s.time_s;
+    }
+    *state = s;
+    if (n_done)
+        *n_done = done;
+    return status;
+}

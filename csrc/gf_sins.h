@@ -1,0 +1,127 @@
+/* gf_sins.h — strapdown inertial navigation: ENU quaternion mechanization on WGS-84.
+ *
+ * Frames and angles (seed 002): body b = right-front-up, navigation n = East-North-Up.
+ * Attitude is the quaternion q_b^n (scalar first). Euler angles: heading psi clockwise
+ * from north in [0, 2 pi), pitch theta in [-pi/2, pi/2] (nose up +), roll gamma in
+ * (-pi, pi] (right wing down +), with C_b^n = Rz(-psi) Rx(theta) Ry(gamma).
+ *
+ * One update from t_(k-1) to t_k = t_(k-1) + T (Savage, Strapdown Analytics ch. 7;
+ * Titterton & Weston ch. 11; seed 002 sections 2.2-2.4 in quaternion form):
+ *   rotation vector  phi  = dtheta_k + C (coning)         C = dtheta_(k-1) x dtheta_k / 12
+ *   velocity (body)  dv_b = dv_k + dtheta_k x dv_k / 2 + S  S = (dtheta_(k-1) x dv_k
+ *                                                              + dv_(k-1) x dtheta_k) / 12
+ *   mid-interval     v_m = v + a_(k-1) T / 2, position extrapolated with v_m: Earth rate,
+ *                    transport rate and gravity are evaluated there
+ *   velocity         v_k = v + (I - [zeta x]/2) C_b^n dv_b + (g - (2 w_ie + w_en) x v_m) T,
+ *                    zeta = (w_ie + w_en) T
+ *   position         trapezoid of v over T with radii at the mid point
+ *   attitude         q_k = q(-zeta) (x) q (x) q(phi), normalised
+ * Inputs are increments (dtheta rad, dv m/s over the interval) or rates (rad/s, m/s^2
+ * at the sample times). Rates are taken as linear between samples, for which
+ * dtheta = T (w0 + w1)/2, C = T^2 w0 x w1 / 12, S = T^2 (w0 x f1 + f0 x w1) / 12 are
+ * exact. With coning off ("one-sample") C = S = 0.
+ *
+ * Reverse navigation (seed 003): time reversal of the mechanization equations maps
+ * (w_ib, f, v, w_ie) to (-w_ib, f, -v, -w_ie): gf_sins_reverse() negates v and the Earth
+ * rate, and gf_sins_run(backward = 1) feeds the samples last to first with dtheta
+ * negated and dv unchanged.
+ */
+#ifndef GF_SINS_H
+#define GF_SINS_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "gf_earth.h"
+#include "gf_status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* CDEF BEGIN */
+#define GF_SINS_INPUT_INCREMENTS 0   /* dtheta (rad), dv (m/s) per interval */
+#define GF_SINS_INPUT_RATES 1        /* rate (rad/s), specific force (m/s^2) at sample times */
+
+#define GF_SINS_VERTICAL_FREE 0      /* integrate the vertical channel (unstable, ~ e^(t/570 s)) */
+#define GF_SINS_VERTICAL_HOLD 1      /* height held at hold_height_m, vertical velocity 0 */
+#define GF_SINS_VERTICAL_BARO 2      /* third-order loop on an external height, see below */
+
+/* Configuration (set once, before gf_sins_init). The baro loop, with e = h - h_ext:
+ *   h' = v_U - k1 e,  v_U' = a_U - k2 e - b,  b' = k3 e,
+ *   k1 = 3/tau, k2 = 3/tau^2 + 2 g/R, k3 = 1/tau^3: the height error then has a
+ *   triple pole at s = -1/tau (2 g/R cancels the free channel's instability). */
+typedef struct gf_sins_config {
+    int input;                       /* GF_SINS_INPUT_* */
+    int coning;                      /* 1: coning + sculling corrections; 0: none */
+    int vertical;                    /* GF_SINS_VERTICAL_* */
+    double hold_height_m;            /* height held in HOLD mode */
+    double baro_tau_s;               /* BARO loop time constant, > 0 */
+    double max_rate_rad_s;           /* |w| above this is an absurd sample (default 50) */
+    double max_specific_force_m_s2;  /* |f| above this is an absurd sample (default 1000) */
+} gf_sins_config;
+
+/* Navigation state. Pointer-free: copying it copies the navigator. */
+typedef struct gf_sins_state {
+    gf_sins_config cfg;
+    double q_bn[4];                  /* attitude q_b^n */
+    double v_n_m_s[3];               /* velocity, ENU */
+    double lat_rad, lon_rad, h_m;    /* geodetic position */
+    double time_s;                   /* time of the state */
+    double earth_rate_sign;          /* +1 forward, -1 reverse navigation */
+    double a_n_m_s2[3];              /* last (v_k - v_(k-1)) / T, for the mid-point */
+    double prev_gyro[3];             /* previous sample (increment or rate) */
+    double prev_accel[3];
+    int32_t have_prev;               /* 1 when prev_* hold a sample */
+    double baro_accel_m_s2;          /* BARO loop integral state b */
+    uint64_t n_samples;
+} gf_sins_state;
+
+/* Defaults: increments, coning on, free vertical channel, tau 10 s, limits 50 rad/s
+ * and 1000 m/s^2. */
+void gf_sins_config_default(gf_sins_config *cfg);
+
+/* Euler angles (heading, pitch, roll; rad) <-> quaternion q_b^n, conventions above. */
+void gf_euler_to_quat(const double *euler_rad, double *q_bn);
+void gf_quat_to_euler(const double *q_bn, double *euler_rad);
+/* n quaternions (n x 4) to Euler angles (n x 3). */
+gf_status gf_quat_to_euler_batch(size_t n, const double *q_bn, double *euler_rad);
+
+/* Initialises *state at time t0_s with attitude q_bn (normalised here; error if it
+ * cannot be), ENU velocity v_n_m_s, latitude/longitude (rad) and height (m).
+ * Errors: GF_ERR_BAD_PARAMETER (bad configuration, |lat| >= 90 deg, quaternion not
+ * normalisable), GF_ERR_NONFINITE_INPUT. */
+gf_status gf_sins_init(gf_sins_state *state, const gf_sins_config *cfg, const double *q_bn,
+                       const double *v_n_m_s, double lat_rad, double lon_rad, double h_m,
+                       double t0_s);
+
+/* One sample. Increments: gyro = dtheta (rad), accel = dv (m/s) over the dt_s that ends
+ * at the new state time. Rates: gyro = w_ib^b (rad/s), accel = f^b (m/s^2) sampled
+ * dt_s after the previous sample (the first sample only starts the record). h_ext_m is
+ * the external height for the BARO mode (NaN: no height this sample). The state is
+ * changed only on GF_OK. Errors: GF_ERR_NONFINITE_INPUT, GF_ERR_OUT_OF_RANGE (|w| or
+ * |f| beyond the limits), GF_ERR_BAD_TIME (dt_s <= 0), GF_ERR_DIVERGED. */
+gf_status gf_sins_step(gf_sins_state *state, const double *gyro, const double *accel,
+                       double dt_s, double h_ext_m);
+
+/* Turns the navigator around in time (see above). Calling it twice restores it. */
+gf_status gf_sins_reverse(gf_sins_state *state);
+
+/* Batch: n samples (gyro, accel: n x 3) in one call. Sample spacing: t_s (n sample
+ * times, strictly monotonic in the direction of travel) if not NULL, else dt_s.
+ * h_ext_m (n, may be NULL). backward = 1 processes samples n-1 .. 0 (after
+ * gf_sins_reverse). Row k of the outputs is the state after sample k: q_bn (n x 4),
+ * v_n_m_s (n x 3), pos (n x 3: lat rad, lon rad, h m), time_s (n, may be NULL).
+ * On an error the run stops: *n_done = samples processed (in processing order),
+ * their rows are valid and *state is the state after the last good one. */
+gf_status gf_sins_run(gf_sins_state *state, size_t n, const double *gyro, const double *accel,
+                      double dt_s, const double *t_s, const double *h_ext_m, int backward,
+                      double *q_bn, double *v_n_m_s, double *pos, double *time_s,
+                      size_t *n_done);
+/* CDEF END */
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* GF_SINS_H */

@@ -1,0 +1,319 @@
+"""Strapdown inertial navigation (C core ``gf_sins``): ENU quaternion mechanization on
+WGS-84, forward and reverse in time. Equations and conventions: ``csrc/gf_sins.h``.
+
+>>> import gfins_fmi as gf
+>>> from gfins_fmi import trajectory as tj
+>>> truth = tj.sample(tj.Stationary(), duration_s=10.0, dt_s=0.01)
+>>> nav = gf.Strapdown(gf.NavState.from_trajectory(truth, 0))
+>>> sol = nav.run(truth.dtheta_rad, truth.dv_m_s, dt_s=0.01)
+>>> bool(abs(sol.lat_rad[-1] - truth.lat_rad[-1]) < 1e-12)
+True
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from gfins_fmi._lib import (GfinsError, NonFiniteInputError, as_rows, check_status, ffi,
+                            first_nonfinite, lib, ptr, status_text)
+
+__all__ = ["SinsConfig", "NavState", "NavSolution", "Strapdown", "euler_to_quat",
+           "quat_to_euler", "SampleError"]
+
+_INPUTS = {"increments": lib.GF_SINS_INPUT_INCREMENTS, "rates": lib.GF_SINS_INPUT_RATES}
+_VERTICAL = {"free": lib.GF_SINS_VERTICAL_FREE, "hold": lib.GF_SINS_VERTICAL_HOLD,
+             "baro": lib.GF_SINS_VERTICAL_BARO}
+
+
+class SampleError(GfinsError, ValueError):
+    """A sample was refused (out of range, bad time step) or the state diverged there.
+    ``index`` is the sample, ``partial`` the solution before it."""
+
+    def __init__(self, message: str, status: int, index: int, partial=None):
+        super().__init__(message, status)
+        self.index = index
+        self.partial = partial
+
+
+@dataclass
+class SinsConfig:
+    """Mechanization options.
+
+    Parameters
+    ----------
+    input : {"increments", "rates"}
+        Increments: gyro = dtheta (rad), accel = dv (m/s) per interval. Rates: gyro =
+        w_ib^b (rad/s), accel = f^b (m/s^2) at the sample times.
+    coning : bool
+        Two-sample coning and sculling corrections (off: the one-sample algorithm).
+    vertical : {"free", "hold", "baro"}
+        Vertical channel: free (unstable, time constant ~570 s), held at
+        ``hold_height_m``, or damped by an external height (``h_ext_m`` in :meth:`run`)
+        through a third-order loop with a triple pole at -1/``baro_tau_s``.
+    max_rate_rad_s, max_specific_force_m_s2 : float
+        Samples beyond these are refused as absurd.
+    """
+
+    input: str = "increments"
+    coning: bool = True
+    vertical: str = "free"
+    hold_height_m: float = 0.0
+    baro_tau_s: float = 10.0
+    max_rate_rad_s: float = 50.0
+    max_specific_force_m_s2: float = 1000.0
+
+    def _c(self):
+        if self.input not in _INPUTS:
+            raise ValueError(f"input must be one of {sorted(_INPUTS)}; got {self.input!r}")
+        if self.vertical not in _VERTICAL:
+            raise ValueError(f"vertical must be one of {sorted(_VERTICAL)}; got {self.vertical!r}")
+        for name in ("baro_tau_s", "max_rate_rad_s", "max_specific_force_m_s2"):
+            v = getattr(self, name)
+            if not (np.isfinite(v) and v > 0):
+                raise ValueError(f"{name} must be finite and > 0; got {v!r}")
+        if not np.isfinite(self.hold_height_m):
+            raise ValueError(f"hold_height_m must be finite; got {self.hold_height_m!r}")
+        c = ffi.new("gf_sins_config *")
+        lib.gf_sins_config_default(c)
+        c.input = _INPUTS[self.input]
+        c.coning = int(bool(self.coning))
+        c.vertical = _VERTICAL[self.vertical]
+        c.hold_height_m = self.hold_height_m
+        c.baro_tau_s = self.baro_tau_s
+        c.max_rate_rad_s = self.max_rate_rad_s
+        c.max_specific_force_m_s2 = self.max_specific_force_m_s2
+        return c
+
+
+def euler_to_quat(euler_rad) -> np.ndarray:
+    """q_b^n (4,) of (heading, pitch, roll) in rad (heading clockwise from north)."""
+    e = np.ascontiguousarray(euler_rad, dtype=float)
+    if e.shape != (3,):
+        raise ValueError(f"euler_rad must be (heading, pitch, roll); got shape {e.shape}")
+    q = np.empty(4)
+    lib.gf_euler_to_quat(ptr(e), ptr(q))
+    return q
+
+
+def quat_to_euler(q_bn) -> np.ndarray:
+    """(heading, pitch, roll) in rad of quaternions q_b^n, shape (4,) or (n, 4)."""
+    q = np.asarray(q_bn, dtype=float)
+    single = q.ndim == 1
+    q = as_rows("q_bn", q.reshape(1, 4) if single else q, 4, "unit quaternions")
+    out = np.empty((q.shape[0], 3))
+    check_status(lib.gf_quat_to_euler_batch(q.shape[0], ptr(q), ptr(out)), "quat_to_euler")
+    return out[0] if single else out
+
+
+@dataclass
+class NavState:
+    """A navigation state: attitude q_b^n, ENU velocity (m/s), latitude and longitude
+    (rad), height (m), time (s)."""
+
+    q_bn: np.ndarray
+    v_n_m_s: np.ndarray
+    lat_rad: float
+    lon_rad: float
+    h_m: float
+    t_s: float = 0.0
+
+    @classmethod
+    def from_euler(cls, euler_rad, v_n_m_s, lat_rad, lon_rad, h_m, t_s=0.0) -> "NavState":
+        """From (heading, pitch, roll) in rad."""
+        return cls(euler_to_quat(euler_rad), np.asarray(v_n_m_s, float), lat_rad, lon_rad,
+                   h_m, t_s)
+
+    @classmethod
+    def from_trajectory(cls, trajectory, k: int = 0) -> "NavState":
+        """The true state of a :class:`gfins_fmi.trajectory.Trajectory` at sample k."""
+        tr = trajectory
+        return cls(tr.q_bn[k].copy(), tr.v_n_m_s[k].copy(), float(tr.lat_rad[k]),
+                   float(tr.lon_rad[k]), float(tr.h_m[k]), float(tr.t_s[k]))
+
+    @property
+    def euler_rad(self) -> np.ndarray:
+        """(heading, pitch, roll), rad."""
+        return quat_to_euler(self.q_bn)
+
+
+@dataclass
+class NavSolution:
+    """Navigation solution, row k = the state after sample k.
+
+    Attributes: t_s (n,), q_bn (n, 4), v_n_m_s (n, 3), lat_rad, lon_rad, h_m (n,);
+    ``euler_rad`` (n, 3) is computed on demand.
+    """
+
+    t_s: np.ndarray
+    q_bn: np.ndarray
+    v_n_m_s: np.ndarray
+    lat_rad: np.ndarray
+    lon_rad: np.ndarray
+    h_m: np.ndarray
+    _euler: np.ndarray | None = field(default=None, repr=False)
+
+    def __len__(self) -> int:
+        return int(self.t_s.shape[0])
+
+    @property
+    def euler_rad(self) -> np.ndarray:
+        """(heading, pitch, roll) per row, rad."""
+        if self._euler is None:
+            self._euler = quat_to_euler(self.q_bn)
+        return self._euler
+
+    def _rows(self, sl) -> "NavSolution":
+        return NavSolution(self.t_s[sl].copy(), self.q_bn[sl].copy(), self.v_n_m_s[sl].copy(),
+                           self.lat_rad[sl].copy(), self.lon_rad[sl].copy(), self.h_m[sl].copy())
+
+
+class Strapdown:
+    """A strapdown navigator (one C state); :meth:`run` continues where it stopped.
+
+    Parameters
+    ----------
+    initial : NavState
+    config : SinsConfig
+    """
+
+    def __init__(self, initial: NavState, config: SinsConfig | None = None):
+        self.config = config or SinsConfig()
+        q = np.ascontiguousarray(initial.q_bn, dtype=float)
+        v = np.ascontiguousarray(initial.v_n_m_s, dtype=float)
+        if q.shape != (4,) or v.shape != (3,):
+            raise ValueError("initial.q_bn must have 4 elements and initial.v_n_m_s 3")
+        if abs(initial.lat_rad) >= np.pi / 2:
+            raise ValueError(f"initial latitude {np.degrees(initial.lat_rad):.6g} deg is outside "
+                             "(-90, 90) deg: the ENU frame is singular at the poles")
+        if not (np.all(np.isfinite(q)) and np.linalg.norm(q) > 0):
+            raise ValueError(f"initial attitude quaternion {q.tolist()} cannot be normalised")
+        self._state = ffi.new("gf_sins_state *")
+        status = lib.gf_sins_init(self._state, self.config._c(), ptr(q), ptr(v),
+                                  float(initial.lat_rad), float(initial.lon_rad),
+                                  float(initial.h_m), float(initial.t_s))
+        check_status(status, "gf_sins_init (check the initial state: finite values, "
+                             "height above -R/2)")
+        self._backward = False
+
+    @property
+    def state(self) -> NavState:
+        """The current state (after the last sample)."""
+        s = self._state
+        sign = -1.0 if self._backward else 1.0
+        return NavState(np.array(list(s.q_bn)), sign * np.array(list(s.v_n_m_s)),
+                        float(s.lat_rad), float(s.lon_rad), float(s.h_m), float(s.time_s))
+
+    def reverse(self) -> None:
+        """Turn around in time: following :meth:`run` calls take records backward (the
+        samples are given in their recorded order and processed last to first)."""
+        check_status(lib.gf_sins_reverse(self._state), "gf_sins_reverse")
+        self._backward = not self._backward
+
+    def run(self, gyro, accel, dt_s: float | None = None, t_s=None, h_ext_m=None,
+            progress: bool = False, chunk: int = 1_000_000) -> NavSolution:
+        """Navigate a record in one C call (or in chunks of ``chunk`` with a progress bar).
+
+        Parameters
+        ----------
+        gyro, accel : array_like (n, 3)
+            Increments (rad, m/s) or rates (rad/s, m/s^2) per ``config.input``.
+        dt_s : float, optional
+            Fixed sampling interval (s). Either this or ``t_s``.
+        t_s : array_like (n,), optional
+            Sample times (s), strictly increasing. For increments, t_k ends interval k.
+        h_ext_m : array_like (n,), optional
+            External height for ``vertical="baro"`` (NaN where there is none).
+        progress : bool
+            Show a progress bar (tqdm) while running.
+
+        Raises
+        ------
+        NonFiniteInputError, SampleError
+            With ``index`` of the bad sample and ``partial``: the solution up to it.
+        """
+        g = as_rows("gyro", gyro, 3, "rad or rad/s")
+        a = as_rows("accel", accel, 3, "m/s or m/s^2")
+        n = g.shape[0]
+        if a.shape[0] != n:
+            raise ValueError(f"gyro has {n} samples but accel has {a.shape[0]}")
+        if (dt_s is None) == (t_s is None):
+            raise ValueError("give exactly one of dt_s (fixed interval, s) and t_s (sample times, s)")
+        dt = 0.0
+        if dt_s is not None:
+            dt = float(dt_s)
+            if not (np.isfinite(dt) and dt > 0):
+                raise ValueError(f"dt_s must be finite and > 0 s; got {dt_s!r}")
+        tt = None
+        if t_s is not None:
+            tt = np.ascontiguousarray(t_s, dtype=float)
+            if tt.shape != (n,):
+                raise ValueError(f"t_s must have shape ({n},); got {tt.shape}")
+        he = None
+        if h_ext_m is not None:
+            he = np.ascontiguousarray(h_ext_m, dtype=float)
+            if he.shape != (n,):
+                raise ValueError(f"h_ext_m must have shape ({n},); got {he.shape}")
+        sol = NavSolution(np.empty(n), np.empty((n, 4)), np.empty((n, 3)), np.empty(n),
+                          np.empty(n), np.empty(n))
+        pos = np.empty((n, 3))
+        done_total = 0
+        bar = None
+        if progress:
+            from tqdm import tqdm
+            bar = tqdm(total=n, unit="sample", unit_scale=True, desc="navigating")
+        order = range(n, 0, -chunk) if self._backward else range(0, n, chunk)
+        status = lib.GF_OK
+        done = ffi.new("size_t *")
+        try:
+            for start in order:
+                lo, hi = (max(0, start - chunk), start) if self._backward else (start, min(n, start + chunk))
+                m = hi - lo
+                # a chunk continues the previous one: times come from the state, so t_s
+                # must include the sample before the chunk for interval lengths
+                tptr, dt_chunk = ffi.NULL, dt
+                if tt is not None:
+                    tptr = ptr(tt[lo:hi])
+                    if self._backward and self.config.input == "increments":
+                        # the C core needs the length of the chunk's first interval; for
+                        # the record's first one it is taken equal to the second
+                        dt_chunk = tt[lo] - tt[lo - 1] if lo > 0 else (tt[1] - tt[0] if n > 1 else 0.0)
+                status = lib.gf_sins_run(
+                    self._state, m, ptr(g[lo:hi]), ptr(a[lo:hi]), dt_chunk, tptr,
+                    ptr(he[lo:hi]) if he is not None else ffi.NULL, int(self._backward),
+                    ptr(sol.q_bn[lo:hi]), ptr(sol.v_n_m_s[lo:hi]), ptr(pos[lo:hi]),
+                    ptr(sol.t_s[lo:hi]), done)
+                done_total += int(done[0])
+                if bar:
+                    bar.update(int(done[0]))
+                if status != lib.GF_OK:
+                    bad = (hi - 1 - int(done[0])) if self._backward else lo + int(done[0])
+                    break
+        finally:
+            if bar:
+                bar.close()
+        sol.lat_rad[:], sol.lon_rad[:], sol.h_m[:] = pos[:, 0], pos[:, 1], pos[:, 2]
+        if status != lib.GF_OK:
+            good = slice(bad + 1, n) if self._backward else slice(0, bad)
+            partial = sol._rows(good)
+            if status == lib.GF_ERR_NONFINITE_INPUT:
+                for name, arr in (("gyro", g), ("accel", a)):
+                    col = first_nonfinite(arr, bad)
+                    if col >= 0:
+                        raise NonFiniteInputError(f"{name}[{bad}, {col}] = {arr[bad, col]} is not "
+                                                  f"finite; the solution before it is in .partial",
+                                                  bad, col, partial)
+                raise NonFiniteInputError(f"sample {bad}: time or external height is not finite",
+                                          bad, -1, partial)
+            hints = {
+                lib.GF_ERR_OUT_OF_RANGE: (f"sample {bad} exceeds |w| <= {self.config.max_rate_rad_s} "
+                                          f"rad/s or |f| <= {self.config.max_specific_force_m_s2} m/s^2 "
+                                          f"(gyro {g[bad].tolist()}, accel {a[bad].tolist()}; "
+                                          f"input = {self.config.input!r})"),
+                lib.GF_ERR_BAD_TIME: f"sample {bad}: sample times must be strictly increasing",
+                lib.GF_ERR_DIVERGED: (f"sample {bad}: the navigation state left its domain "
+                                      "(pole reached or absurd height)"),
+            }
+            msg = hints.get(status, f"sample {bad}: {status_text(status)}")
+            raise SampleError(msg + "; the solution before it is in .partial", int(status), bad, partial)
+        return sol

@@ -1,0 +1,342 @@
+"""Closed-form motions and the exact outputs of the sensors that would ride them — the
+truth for tests, benchmarks and demonstrations.
+
+A motion gives, as functions of time, the geodetic position (latitude L, longitude
+lambda, height h) with its first and second derivatives, and the attitude q_b^n with the
+body rate relative to the navigation frame w_nb^b. From these, with the WGS-84 model
+written out here independently of the C core (so that it can serve as truth; the
+tests check that both agree to round-off):
+
+    v^n  = [(R_N + h) cos L dlambda, (R_M + h) dL, dh]                       (ENU)
+    f^n  = dv^n/dt + (2 w_ie^n + w_en^n) x v^n - g^n,   g^n = [0, 0, -gamma(L, h)]
+    w_en^n = [-dL, dlambda cos L, dlambda sin L],  w_ie^n = W [0, cos L, sin L]
+    f^b  = C_n^b f^n,   w_ib^b = w_nb^b + C_n^b (w_ie^n + w_en^n)
+
+dv^n/dt is differentiated by hand (including dR/dL), never by finite differences.
+Increments over each sampling interval are integrated with Gauss-Legendre quadrature of
+order 2m (m = 8 nodes: exact for polynomials of degree 15; for the smooth motions here
+the quadrature error is below double round-off).
+
+Frames and angles follow the C core (gf_sins.h): body right-front-up, navigation ENU,
+heading clockwise from north, C_b^n = Rz(-psi) Rx(theta) Ry(gamma).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["WGS84", "radii", "gravity", "euler_to_quat", "quat_to_dcm", "Motion",
+           "Stationary", "ConstantVelocity", "SineVelocity", "Circle", "Coning",
+           "Trajectory", "sample", "deg", "rad"]
+
+deg = np.pi / 180.0  #: multiply degrees by this to get radians
+rad = 1.0            #: radians
+
+
+class WGS84:
+    """WGS-84 constants (NIMA TR8350.2)."""
+    a = 6378137.0
+    f = 1.0 / 298.257223563
+    e2 = f * (2.0 - f)
+    b = a * (1.0 - f)
+    omega_ie = 7.292115e-5
+    GM = 3.986004418e14
+    gamma_e = 9.7803253359
+    k = 0.00193185265241
+    m = omega_ie ** 2 * a ** 2 * b / GM
+
+
+def radii(lat):
+    """R_M, R_N (m) and their derivatives with respect to latitude (m/rad)."""
+    s, c = np.sin(lat), np.cos(lat)
+    q = 1.0 - WGS84.e2 * s * s
+    RN = WGS84.a / np.sqrt(q)
+    RM = WGS84.a * (1.0 - WGS84.e2) / q ** 1.5
+    dRN = RN * WGS84.e2 * s * c / q
+    dRM = 3.0 * RM * WGS84.e2 * s * c / q
+    return RM, RN, dRM, dRN
+
+
+def gravity(lat, h):
+    """Normal gravity (m/s^2): Somigliana with the second-order height expansion."""
+    s2 = np.sin(lat) ** 2
+    g0 = WGS84.gamma_e * (1 + WGS84.k * s2) / np.sqrt(1 - WGS84.e2 * s2)
+    a, f, m = WGS84.a, WGS84.f, WGS84.m
+    return g0 * (1 - 2 / a * (1 + f + m - 2 * f * s2) * h + 3 / a ** 2 * h * h)
+
+
+def _qmul(p, q):
+    p0, p1, p2, p3 = np.moveaxis(p, -1, 0)
+    q0, q1, q2, q3 = np.moveaxis(q, -1, 0)
+    return np.stack([p0 * q0 - p1 * q1 - p2 * q2 - p3 * q3,
+                     p0 * q1 + p1 * q0 + p2 * q3 - p3 * q2,
+                     p0 * q2 - p1 * q3 + p2 * q0 + p3 * q1,
+                     p0 * q3 + p1 * q2 - p2 * q1 + p3 * q0], axis=-1)
+
+
+def _qaxis(axis: int, angle):
+    angle = np.asarray(angle)
+    # complex angles pass through, so that tests can differentiate by complex step
+    q = np.zeros(angle.shape + (4,), dtype=np.result_type(angle, float))
+    q[..., 0] = np.cos(angle / 2)
+    q[..., 1 + axis] = np.sin(angle / 2)
+    return q
+
+
+def euler_to_quat(heading, pitch, roll):
+    """q_b^n of Euler angles (rad), C_b^n = Rz(-heading) Rx(pitch) Ry(roll)."""
+    return _qmul(_qmul(_qaxis(2, -np.asarray(heading)), _qaxis(0, pitch)), _qaxis(1, roll))
+
+
+def quat_to_dcm(q):
+    """C_b^n (..., 3, 3) of quaternions q_b^n (..., 4)."""
+    q0, q1, q2, q3 = np.moveaxis(q, -1, 0)
+    return np.stack([
+        np.stack([q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3, 2 * (q1 * q2 - q0 * q3), 2 * (q1 * q3 + q0 * q2)], -1),
+        np.stack([2 * (q1 * q2 + q0 * q3), q0 * q0 - q1 * q1 + q2 * q2 - q3 * q3, 2 * (q2 * q3 - q0 * q1)], -1),
+        np.stack([2 * (q1 * q3 - q0 * q2), 2 * (q2 * q3 + q0 * q1), q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3], -1),
+    ], -2)
+
+
+def _euler_body_rate(heading, pitch, roll, dheading, dpitch, droll):
+    """w_nb^b of Euler angles and their rates for C_b^n = Rz(-psi) Rx(theta) Ry(gamma):
+    w = Ry(g)^T Rx(t)^T [0, 0, -dpsi] + Ry(g)^T [dtheta, 0, 0] + [0, dgamma, 0]."""
+    ct, st = np.cos(pitch), np.sin(pitch)
+    cg, sg = np.cos(roll), np.sin(roll)
+    # Rx(t)^T [0,0,-dpsi] = [0, -st*(-dpsi)... ] written out:
+    a = np.stack([np.zeros_like(dheading), -st * dheading, -ct * dheading], -1)  # Rx^T [0,0,-dpsi]
+    a[..., 0] += dpitch
+    # Ry(g)^T v = [cg v0 - sg v2, v1, sg v0 + cg v2]
+    w = np.stack([cg * a[..., 0] - sg * a[..., 2], a[..., 1] + droll, sg * a[..., 0] + cg * a[..., 2]], -1)
+    return w
+
+
+class Motion:
+    """A closed-form motion. Subclasses define :meth:`position` and :meth:`attitude`."""
+
+    #: whether the motion's functions are smooth everywhere (quadrature is then exact)
+    def position(self, t):
+        """Return (L, lam, h), (dL, dlam, dh), (ddL, ddlam, ddh) at times t (arrays, rad, m, s)."""
+        raise NotImplementedError
+
+    def attitude(self, t):
+        """Return q_b^n (n, 4) and w_nb^b (n, 3) at times t."""
+        raise NotImplementedError
+
+    # -- derived quantities -------------------------------------------------------------
+    def state(self, t):
+        """True navigation state and sensor rates at times t.
+
+        Returns a dict with lat, lon, h (n,), v_n (n, 3), q_bn (n, 4), gyro w_ib^b (n, 3)
+        and accel f^b (n, 3).
+        """
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        (L, lam, h), (dL, dlam, dh), (ddL, ddlam, ddh) = [
+            tuple(np.broadcast_to(np.asarray(x, dtype=float), t.shape) for x in trip)
+            for trip in self.position(t)]
+        RM, RN, dRM, dRN = radii(L)
+        sL, cL = np.sin(L), np.cos(L)
+        v = np.stack([(RN + h) * cL * dlam, (RM + h) * dL, dh], -1)
+        dv = np.stack([
+            (dRN * dL + dh) * cL * dlam - (RN + h) * sL * dL * dlam + (RN + h) * cL * ddlam,
+            (dRM * dL + dh) * dL + (RM + h) * ddL,
+            ddh], -1)
+        w_ie = WGS84.omega_ie * np.stack([np.zeros_like(L), cL, sL], -1)
+        w_en = np.stack([-dL, dlam * cL, dlam * sL], -1)
+        g_n = np.stack([np.zeros_like(L), np.zeros_like(L), -gravity(L, h)], -1)
+        f_n = dv + np.cross(2 * w_ie + w_en, v) - g_n
+        q, w_nb = self.attitude(t)
+        C = quat_to_dcm(q)                                   # C_b^n
+        f_b = np.einsum("nji,nj->ni", C, f_n)                # C_n^b f^n
+        w_ib = w_nb + np.einsum("nji,nj->ni", C, w_ie + w_en)
+        return dict(t=t, lat=L, lon=lam, h=h, v_n=v, q_bn=q, gyro=w_ib, accel=f_b)
+
+
+class _EulerAttitude:
+    """Attitude from Euler-angle functions (heading, pitch, roll) and their rates."""
+
+    def euler(self, t):
+        raise NotImplementedError
+
+    def attitude(self, t):
+        (psi, th, ga), (dpsi, dth, dga) = self.euler(t)
+        shape = np.shape(t)
+        psi, th, ga, dpsi, dth, dga = (np.broadcast_to(np.asarray(x, float), shape)
+                                       for x in (psi, th, ga, dpsi, dth, dga))
+        return euler_to_quat(psi, th, ga), _euler_body_rate(psi, th, ga, dpsi, dth, dga)
+
+
+@dataclass
+class _Local:
+    """Reference point; local displacements (m) become geodetic coordinates with the
+    radii of the reference point, so L and lam are exact closed forms of t."""
+    lat: float = 30 * deg
+    lon: float = 114 * deg
+    h: float = 100.0
+
+    def _geo(self, E, N, U, dE, dN, dU, ddE, ddN, ddU):
+        RM, RN, _, _ = radii(self.lat)
+        kN = 1.0 / (RM + self.h)
+        kE = 1.0 / ((RN + self.h) * np.cos(self.lat))
+        return ((self.lat + kN * N, self.lon + kE * E, self.h + U),
+                (kN * dN, kE * dE, dU), (kN * ddN, kE * ddE, ddU))
+
+
+@dataclass
+class Stationary(_Local, _EulerAttitude, Motion):
+    """At rest on the Earth with a fixed attitude (rad)."""
+    heading: float = 30 * deg
+    pitch: float = 2 * deg
+    roll: float = -1 * deg
+
+    def position(self, t):
+        z = np.zeros_like(t)
+        return self._geo(z, z, z, z, z, z, z, z, z)
+
+    def euler(self, t):
+        z = np.zeros_like(t)
+        return (self.heading + z, self.pitch + z, self.roll + z), (z, z, z)
+
+
+@dataclass
+class ConstantVelocity(_Local, _EulerAttitude, Motion):
+    """Constant rates of latitude, longitude and height giving ``v_enu_m_s`` at the
+    reference point; heading along the track, level."""
+    v_enu_m_s: tuple = (10.0, 5.0, 0.0)
+
+    def position(self, t):
+        vE, vN, vU = self.v_enu_m_s
+        z = np.zeros_like(t)
+        return self._geo(vE * t, vN * t, vU * t, vE + z, vN + z, vU + z, z, z, z)
+
+    def euler(self, t):
+        vE, vN, _ = self.v_enu_m_s
+        z = np.zeros_like(t)
+        return (np.arctan2(vE, vN) % (2 * np.pi) + z, z, z), (z, z, z)
+
+
+@dataclass
+class SineVelocity(_Local, _EulerAttitude, Motion):
+    """Velocity oscillating sinusoidally in each axis (amplitudes m/s, period s), with a
+    slowly oscillating attitude."""
+    amplitude_m_s: tuple = (2.0, 3.0, 0.5)
+    period_s: float = 100.0
+    attitude_amplitude_rad: tuple = (5 * deg, 2 * deg, 3 * deg)
+
+    def position(self, t):
+        w = 2 * np.pi / self.period_s
+        (aE, aN, aU) = self.amplitude_m_s
+        s, c = np.sin(w * t), np.cos(w * t)
+        # v = a sin(w t): displacement (a/w)(1 - cos w t)
+        return self._geo(aE / w * (1 - c), aN / w * (1 - c), aU / w * (1 - c),
+                         aE * s, aN * s, aU * s, aE * w * c, aN * w * c, aU * w * c)
+
+    def euler(self, t):
+        w = 2 * np.pi / self.period_s
+        a0, a1, a2 = self.attitude_amplitude_rad
+        return ((1.0 + a0 * np.sin(w * t), a1 * np.sin(2 * w * t), a2 * np.cos(w * t)),
+                (a0 * w * np.cos(w * t), 2 * a1 * w * np.cos(2 * w * t), -a2 * w * np.sin(w * t)))
+
+
+@dataclass
+class Circle(_Local, _EulerAttitude, Motion):
+    """Counter-clockwise circle of radius r at speed v (seen from above), heading along
+    the track, banked (roll) and pitching sinusoidally."""
+    radius_m: float = 100.0
+    speed_m_s: float = 10.0
+    pitch_amplitude_rad: float = 3 * deg
+    roll_rad: float = -5 * deg
+
+    def position(self, t):
+        r, w = self.radius_m, self.speed_m_s / self.radius_m
+        s, c = np.sin(w * t), np.cos(w * t)
+        z = np.zeros_like(t)
+        # centre at (-r, 0): E = r (cos wt - 1), N = r sin wt
+        return self._geo(r * (c - 1), r * s, z, -r * w * s, r * w * c, z,
+                         -r * w * w * c, -r * w * w * s, z)
+
+    def euler(self, t):
+        w = self.speed_m_s / self.radius_m
+        # velocity direction (E, N) = (-sin wt, cos wt): heading = -wt (clockwise from N)
+        psi = np.mod(-w * t, 2 * np.pi)
+        return ((psi, self.pitch_amplitude_rad * np.sin(2 * w * t), self.roll_rad + 0 * t),
+                (-w + 0 * t, 2 * w * self.pitch_amplitude_rad * np.cos(2 * w * t), 0 * t))
+
+
+@dataclass
+class Coning(_Local, Motion):
+    """Classic coning at rest: the body's up axis sweeps a cone of half-angle
+    ``half_angle_rad`` about the navigation up axis at ``frequency_hz``:
+    q_b^n = [cos(a/2), sin(a/2) cos(W t), sin(a/2) sin(W t), 0] (x) q0, q0 the base
+    attitude."""
+    half_angle_rad: float = 1 * deg
+    frequency_hz: float = 5.0
+    heading: float = 0.0
+
+    def attitude(self, t):
+        a, W = self.half_angle_rad, 2 * np.pi * self.frequency_hz
+        ca, sa = np.cos(a / 2), np.sin(a / 2)
+        qc = np.stack([ca + 0 * t, sa * np.cos(W * t), sa * np.sin(W * t), 0 * t], -1)
+        dqc = np.stack([0 * t, -sa * W * np.sin(W * t), sa * W * np.cos(W * t), 0 * t], -1)
+        q0 = euler_to_quat(self.heading, 0.0, 0.0)
+        q = _qmul(qc, np.broadcast_to(q0, qc.shape))
+        dq = _qmul(dqc, np.broadcast_to(q0, qc.shape))
+        conj = q * np.array([1, -1, -1, -1])
+        w = 2 * _qmul(conj, dq)[..., 1:]          # w_nb^b = 2 q* dq/dt (vector part)
+        return q, w
+
+    def position(self, t):
+        z = np.zeros_like(t)
+        return self._geo(z, z, z, z, z, z, z, z, z)
+
+
+@dataclass
+class Trajectory:
+    """A sampled motion: truth at t_k and sensor outputs.
+
+    Attributes
+    ----------
+    t_s : (n,)
+    lat_rad, lon_rad, h_m : (n,)
+    v_n_m_s : (n, 3)  ENU velocity
+    q_bn : (n, 4)     attitude
+    gyro_rad_s, accel_m_s2 : (n, 3)   w_ib^b and f^b at t_k (rate sensors)
+    dtheta_rad, dv_m_s : (n - 1, 3)   increments over (t_(k-1), t_k], k = 1..n-1
+    """
+
+    t_s: np.ndarray
+    lat_rad: np.ndarray
+    lon_rad: np.ndarray
+    h_m: np.ndarray
+    v_n_m_s: np.ndarray
+    q_bn: np.ndarray
+    gyro_rad_s: np.ndarray
+    accel_m_s2: np.ndarray
+    dtheta_rad: np.ndarray
+    dv_m_s: np.ndarray
+
+    @property
+    def dt_s(self) -> float:
+        return float(self.t_s[1] - self.t_s[0])
+
+
+def sample(motion: Motion, duration_s: float, dt_s: float, nodes: int = 8,
+           chunk: int = 200_000) -> Trajectory:
+    """Sample ``motion`` every ``dt_s`` over ``duration_s`` (n = duration/dt + 1 points)."""
+    n = int(round(duration_s / dt_s)) + 1
+    t = np.arange(n) * dt_s
+    st = motion.state(t)
+    x, w = np.polynomial.legendre.leggauss(nodes)
+    dth = np.empty((n - 1, 3))
+    dv = np.empty((n - 1, 3))
+    for a in range(0, n - 1, chunk):  # bounded memory for long records
+        b = min(n - 1, a + chunk)
+        t0 = t[a:b]
+        tq = (t0[:, None] + 0.5 * dt_s * (x[None, :] + 1.0)).ravel()
+        s = motion.state(tq)
+        wq = 0.5 * dt_s * w
+        dth[a:b] = np.einsum("knj,n->kj", s["gyro"].reshape(b - a, nodes, 3), wq)
+        dv[a:b] = np.einsum("knj,n->kj", s["accel"].reshape(b - a, nodes, 3), wq)
+    return Trajectory(t, st["lat"], st["lon"], st["h"], st["v_n"], st["q_bn"],
+                      st["gyro"], st["accel"], dth, dv)

@@ -13,17 +13,18 @@ from __future__ import annotations
 import importlib.resources
 import pathlib
 import shutil
-from typing import Callable
+from typing import Callable, Mapping
 
 import numpy as np
 
 from gfins_fmi._lib import GfinsError, as_positive_scalar, as_rows, as_vector3
 from gfins_fmi.accel_array import Accel9Solution
 
-__all__ = ["MODELS", "fmu_path", "validate", "run_accel9_fmu", "FmuRunError"]
+__all__ = ["MODELS", "fmu_path", "validate", "run_fmu", "run_accel9_fmu", "run_sins_fmu",
+           "FmuRunError"]
 
 #: model name -> model identifier of the FMUs shipped
-MODELS = {"accel9": "gfins_accel9"}
+MODELS = {"accel9": "gfins_accel9", "sins": "gfins_sins"}
 
 
 class FmuRunError(GfinsError):
@@ -42,7 +43,8 @@ def fmu_path(model: str = "accel9", fmi_version: int = 2) -> pathlib.Path:
     Parameters
     ----------
     model : str
-        One of :data:`MODELS` (``"accel9"``: the 9-accelerometer solver).
+        One of :data:`MODELS` (``"accel9"``: the 9-accelerometer solver; ``"sins"``:
+        the strapdown navigator).
     fmi_version : {2, 3}
         FMI 2.0 (scalar variables, structured names ``A[1]`` ...) or FMI 3.0 (arrays).
     """
@@ -82,80 +84,86 @@ class _Log:
             self.echo(line)
 
 
-_ACCEL9_OUTPUTS = ("f", "omega", "omega_dot", "omega_sq")
-
-
-class _Accel9Fmu:
-    """One instance of the accel9 FMU through fmpy, FMI 2 or FMI 3."""
+class _Slave:
+    """One instance of a shipped FMU through fmpy's FMU2Slave / FMU3Slave, with
+    variables addressed by their FMI 3.0 names (FMI 2.0 scalars ``x[i]`` are gathered)."""
 
     def __init__(self, path: pathlib.Path, fmi_version: int, log: _Log, logging_on: bool):
         from fmpy import extract, read_model_description
         self.version = fmi_version
         self.md = read_model_description(str(path))
         self.unzipdir = extract(str(path))
-        vars_ = {v.name: v for v in self.md.modelVariables}
-        self.vr = {}
-        self.log = log
+        self.vars = {v.name: v for v in self.md.modelVariables}
         if fmi_version == 2:
-            from fmpy.fmi2 import (FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE,
-                                   fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE)
             from fmpy import calloc, free
-            for name, n in (("l", 0), ("omega_init", 3), ("A", 9), ("f", 3), ("omega", 3),
-                            ("omega_dot", 3), ("omega_sq", 3), ("flags", 0)):
-                names = [name] if n == 0 else [f"{name}[{i + 1}]" for i in range(n)]
-                self.vr[name] = [vars_[s].valueReference for s in names]
+            from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE,
+                                   fmi2CallbackFreeMemoryTYPE, fmi2CallbackFunctions,
+                                   fmi2CallbackLoggerTYPE)
             self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=self.unzipdir,
                                    modelIdentifier=self.md.coSimulation.modelIdentifier,
-                                   instanceName="accel9")
+                                   instanceName=self.md.coSimulation.modelIdentifier)
             cb = fmi2CallbackFunctions()
-            self._logger = fmi2CallbackLoggerTYPE(
-                lambda env, name, status, cat, msg: log.add(status, cat, msg, fmi2=True))
-            cb.logger = self._logger
-            # the FMU declares canNotUseMemoryManagementFunctions; fmpy's C allocator
-            # is passed anyway because the standard asks for non-NULL pointers
-            cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-            cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
             # No fmpy.logging.addLoggerProxy: it keeps one global logger for the whole
             # process, which would outlive this object. The FMU passes the formatted text
             # as the format with '%' doubled (see fmi2_glue.c), undone in _Log.add.
+            self._logger = fmi2CallbackLoggerTYPE(
+                lambda env, name, status, cat, msg: log.add(status, cat, msg, fmi2=True))
+            cb.logger = self._logger
+            # the FMU declares canNotUseMemoryManagementFunctions; fmpy's C allocator is
+            # passed anyway because the standard asks for non-NULL pointers
+            cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+            cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
             self._callbacks = cb
             self.slave.instantiate(callbacks=cb, loggingOn=logging_on)
-            self.set_real, self.get_real = self.slave.setReal, self.slave.getReal
-            self.get_int = self.slave.getInteger
         else:
             from fmpy.fmi3 import FMU3Slave
-            for name in ("l", "omega_init", "A", "f", "omega", "omega_dot", "omega_sq", "flags"):
-                self.vr[name] = [vars_[name].valueReference]
             self.slave = FMU3Slave(guid=self.md.instantiationToken, unzipDirectory=self.unzipdir,
                                    modelIdentifier=self.md.coSimulation.modelIdentifier,
-                                   instanceName="accel9")
+                                   instanceName=self.md.coSimulation.modelIdentifier)
             self.slave.instantiate(loggingOn=logging_on,
                                    logMessage=lambda env, status, cat, msg: log.add(status, cat, msg))
-            self.set_real = self.slave.setFloat64
-            self.get_real = lambda vr, n=None: self.slave.getFloat64(vr, n)
-            self.get_int = self.slave.getInt32
-        self.n_out = {"f": 3, "omega": 3, "omega_dot": 3, "omega_sq": 3}
 
-    def initialize(self, start_s: float, stop_s: float, l_m: float, omega_init) -> None:
+    def refs(self, name: str) -> tuple[list[int], int, str]:
+        """(value references, number of values, type) of a variable by FMI 3.0 name."""
+        if self.version == 3:
+            v = self.vars[name]
+            n = int(np.prod([int(d.start) for d in v.dimensions])) if v.dimensions else 1
+            return [v.valueReference], n, v.type
+        if name in self.vars:
+            return [self.vars[name].valueReference], 1, self.vars[name].type
+        vrs, i = [], 1
+        while f"{name}[{i}]" in self.vars:
+            vrs.append(self.vars[f"{name}[{i}]"].valueReference)
+            i += 1
+        if not vrs:
+            raise KeyError(f"the FMU has no variable {name!r}")
+        return vrs, len(vrs), self.vars[f"{name}[1]"].type
+
+    def set(self, name: str, values) -> None:
+        vrs, n, typ = self.refs(name)
+        vals = np.atleast_1d(np.asarray(values))
+        if vals.size != n:
+            raise ValueError(f"{name} takes {n} values; got {vals.size}")
+        if typ in ("Integer", "Int32"):
+            (self.slave.setInteger if self.version == 2 else self.slave.setInt32)(vrs, [int(x) for x in vals])
+        else:
+            (self.slave.setReal if self.version == 2 else self.slave.setFloat64)(vrs, [float(x) for x in vals])
+
+    def get(self, name: str) -> list:
+        vrs, n, typ = self.refs(name)
+        if typ in ("Integer", "Int32"):
+            return self.slave.getInteger(vrs) if self.version == 2 else self.slave.getInt32(vrs, n)
+        return self.slave.getReal(vrs) if self.version == 2 else self.slave.getFloat64(vrs, n)
+
+    def initialize(self, start_s: float, stop_s: float, parameters: Mapping) -> None:
         if self.version == 2:
             self.slave.setupExperiment(startTime=start_s, stopTime=stop_s)
             self.slave.enterInitializationMode()
         else:
             self.slave.enterInitializationMode(startTime=start_s, stopTime=stop_s)
-        self.set_real(self.vr["l"], [l_m])
-        self.set_real(self.vr["omega_init"], list(omega_init))
+        for name, value in parameters.items():
+            self.set(name, value)
         self.slave.exitInitializationMode()
-
-    def outputs(self) -> tuple[list[list[float]], int]:
-        if self.version == 2:
-            vals = [self.get_real(self.vr[name]) for name in _ACCEL9_OUTPUTS]
-        else:
-            vals = [self.get_real(self.vr[name], 3) for name in _ACCEL9_OUTPUTS]
-        return vals, int(self.get_int(self.vr["flags"])[0])
-
-    def step(self, A_row, t_s: float, h_s: float) -> None:
-        self.set_real(self.vr["A"], A_row)
-        self.slave.doStep(currentCommunicationPoint=t_s, communicationStepSize=h_s)
 
     def close(self) -> None:
         try:
@@ -166,6 +174,77 @@ class _Accel9Fmu:
         shutil.rmtree(self.unzipdir, ignore_errors=True)
 
 
+def run_fmu(model: str, inputs: Mapping[str, np.ndarray], outputs: list[str], dt_s: float, *,
+            parameters: Mapping | None = None, fmi_version: int = 2,
+            start_time_s: float = 0.0, path: str | pathlib.Path | None = None,
+            logging_on: bool = False, echo: Callable[[str], None] | None = None,
+            progress: bool = False) -> dict[str, np.ndarray]:
+    """Co-simulate a shipped FMU alone with fmpy as the master, one ``doStep`` per sample.
+
+    Parameters
+    ----------
+    model : str
+        One of :data:`MODELS`.
+    inputs : mapping name -> array (n, k) or (n,)
+        Input samples; row j is set before the step at ``start_time_s + j dt_s``.
+    outputs : list of str
+        Variables (FMI 3.0 names, e.g. ``"omega"``) read after each step.
+    dt_s : float
+        Communication step, s.
+    parameters : mapping name -> value, optional
+        Set in initialization mode.
+
+    Returns
+    -------
+    dict name -> ndarray (n, k)
+        Row j: the outputs after the step at sample j (they describe that sample).
+
+    Raises
+    ------
+    FmuRunError
+        An FMU call failed; carries the FMU's log and the rows completed (``partial``).
+    """
+    dt_s = as_positive_scalar("dt_s (communication step)", dt_s, "s")
+    arrays = {k: np.atleast_2d(np.asarray(v, dtype=float).T).T for k, v in inputs.items()}
+    n = {a.shape[0] for a in arrays.values()}
+    if len(n) != 1:
+        raise ValueError(f"all inputs must have the same number of samples; got {sorted(n)}")
+    n = n.pop()
+    path = pathlib.Path(path) if path else fmu_path(model, fmi_version)
+    log = _Log(echo)
+    slave = _Slave(path, fmi_version, log, logging_on)
+    out = {name: np.empty((n, slave.refs(name)[1])) for name in outputs}
+    k = 0
+    bar = None
+    if progress:
+        from tqdm import tqdm
+        bar = tqdm(total=n, unit="step", unit_scale=True, desc=f"{model} FMU")
+    try:
+        from fmpy.fmi1 import FMICallException
+        try:
+            slave.initialize(start_time_s, start_time_s + n * dt_s, parameters or {})
+            for k in range(n):
+                for name, arr in arrays.items():
+                    slave.set(name, arr[k])
+                slave.slave.doStep(currentCommunicationPoint=start_time_s + k * dt_s,
+                                   communicationStepSize=dt_s)
+                for name in outputs:
+                    out[name][k] = slave.get(name)
+                if bar and k % 1000 == 999:
+                    bar.update(1000)
+            k = n
+        except FMICallException as exc:
+            detail = "; ".join(log.messages) or "no message logged"
+            raise FmuRunError(f"FMI {fmi_version}.0 {model} FMU failed at sample {k}: {exc} "
+                              f"FMU log: {detail}", log.messages,
+                              {name: v[:k].copy() for name, v in out.items()}) from exc
+    finally:
+        if bar:
+            bar.close()
+        slave.close()
+    return out
+
+
 def run_accel9_fmu(A_m_s2, dt_s: float, l_m: float, omega_init_rad_s=(0.0, 0.0, 0.0), *,
                    fmi_version: int = 2, start_time_s: float = 0.0,
                    path: str | pathlib.Path | None = None, logging_on: bool = False,
@@ -174,56 +253,65 @@ def run_accel9_fmu(A_m_s2, dt_s: float, l_m: float, omega_init_rad_s=(0.0, 0.0, 
 
     One ``doStep`` per sample (communication step ``dt_s``); the outputs read after the
     step of sample k are row k of the result, so it lines up with
-    :func:`gfins_fmi.solve_accel9` on the same record.
-
-    Parameters
-    ----------
-    A_m_s2 : array_like, shape (n, 9)
-        Accelerometer outputs, m/s^2.
-    dt_s, l_m, omega_init_rad_s
-        As for :func:`gfins_fmi.solve_accel9`.
-    fmi_version : {2, 3}
-        Which FMU to run.
-    start_time_s : float
-        Time of the first sample, s.
-    path : path, optional
-        An FMU file to run instead of the shipped one.
-    logging_on : bool
-        Ask the FMU for debug messages too (errors are always logged).
-    echo : callable, optional
-        Called with each log line as it arrives (e.g. ``print``).
+    :func:`gfins_fmi.solve_accel9` on the same record. ``l_m`` is checked by the FMU
+    itself (that check is part of what runs here).
 
     Raises
     ------
     FmuRunError
-        An FMU call failed; carries the FMU's log and the rows completed.
+        An FMU call failed; carries the FMU's log and, in ``partial``, an
+        :class:`Accel9Solution` of the rows completed.
     """
     A = as_rows("A_m_s2", A_m_s2, 9, "m/s^2")
-    dt_s = as_positive_scalar("dt_s (sampling interval)", dt_s, "s")
-    l_m = float(l_m)  # the FMU itself validates l: that check is part of what runs here
     w0 = as_vector3("omega_init_rad_s", omega_init_rad_s, "rad/s")
-    n = A.shape[0]
-    fmu_file = pathlib.Path(path) if path else fmu_path("accel9", fmi_version)
-    log = _Log(echo)
-    out = Accel9Solution(np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)),
-                         np.empty((n, 3)), np.empty(n, dtype=np.uint8))
-    fmu = _Accel9Fmu(fmu_file, fmi_version, log, logging_on)
-    k = 0
+    names = ["f", "omega", "omega_dot", "omega_sq", "flags"]
+
+    def solution(d):
+        return Accel9Solution(d["f"], d["omega"], d["omega_dot"], d["omega_sq"],
+                              d["flags"][:, 0].astype(np.uint8))
     try:
-        fmu.initialize(start_time_s, start_time_s + n * dt_s, l_m, w0)
-        for k in range(n):
-            fmu.step(A[k].tolist(), start_time_s + k * dt_s, dt_s)
-            vals, flags = fmu.outputs()
-            out.f_m_s2[k], out.omega_rad_s[k], out.omega_dot_rad_s2[k], out.omega_sq_rad2_s2[k] = vals
-            out.flags[k] = flags
-        k = n
-    except Exception as exc:
-        from fmpy.fmi1 import FMICallException
-        if not isinstance(exc, FMICallException):
-            raise
-        detail = "; ".join(log.messages) or "no message logged"
-        raise FmuRunError(f"FMI {fmi_version}.0 FMU failed at sample {k}: {exc} FMU log: {detail}",
-                          log.messages, out._head(k)) from exc
-    finally:
-        fmu.close()
-    return out
+        d = run_fmu("accel9", {"A": A}, names, dt_s, parameters={"l": float(l_m), "omega_init": w0},
+                    fmi_version=fmi_version, start_time_s=start_time_s, path=path,
+                    logging_on=logging_on, echo=echo)
+    except FmuRunError as exc:
+        exc.partial = solution(exc.partial)
+        raise
+    return solution(d)
+
+
+def run_sins_fmu(gyro, accel, dt_s: float, initial, *, config=None, h_ext_m=None,
+                 fmi_version: int = 2, start_time_s: float | None = None,
+                 progress: bool = False, **kwargs):
+    """Run a record through the strapdown FMU; the result lines up with
+    :meth:`gfins_fmi.Strapdown.run` on the same record (for increments, the FMU takes
+    the increment over (t_(k-1), t_k] at t_k, so the record is shifted by one step
+    internally and its first step only starts the run).
+
+    Returns a :class:`gfins_fmi.NavSolution`.
+    """
+    from gfins_fmi.sins import NavSolution, SinsConfig
+    cfg = config or SinsConfig()
+    g = as_rows("gyro", gyro, 3, "rad or rad/s")
+    a = as_rows("accel", accel, 3, "m/s or m/s^2")
+    n = g.shape[0]
+    t0 = initial.t_s if start_time_s is None else start_time_s
+    params = {"input_mode": {"increments": 0, "rates": 1}[cfg.input], "coning": int(cfg.coning),
+              "vertical_mode": {"free": 0, "hold": 1, "baro": 2}[cfg.vertical],
+              "hold_height": cfg.hold_height_m, "baro_tau": cfg.baro_tau_s,
+              "max_rate": cfg.max_rate_rad_s, "max_specific_force": cfg.max_specific_force_m_s2,
+              "q0": np.asarray(initial.q_bn, float), "v0": np.asarray(initial.v_n_m_s, float),
+              "lat0": initial.lat_rad, "lon0": initial.lon_rad, "h0": initial.h_m}
+    he = np.full(n, np.nan) if h_ext_m is None else np.asarray(h_ext_m, float)
+    if cfg.input == "increments":
+        # sample j of the record covers (t_j, t_(j+1)]: set it at t_(j+1)
+        z = np.zeros((1, 3))
+        ins = {"dtheta": np.r_[z, g], "dv": np.r_[z, a], "gyro_rate": np.zeros((n + 1, 3)),
+               "specific_force": np.zeros((n + 1, 3)), "h_ext": np.r_[np.nan, he]}
+    else:
+        ins = {"gyro_rate": g, "specific_force": a, "dtheta": np.zeros((n, 3)),
+               "dv": np.zeros((n, 3)), "h_ext": he}
+    d = run_fmu("sins", ins, ["q", "v", "lat", "lon", "h", "time_s"], dt_s, parameters=params,
+                fmi_version=fmi_version, start_time_s=t0, progress=progress, **kwargs)
+    sl = slice(1, None) if cfg.input == "increments" else slice(None)
+    return NavSolution(d["time_s"][sl, 0], d["q"][sl], d["v"][sl], d["lat"][sl, 0],
+                       d["lon"][sl, 0], d["h"][sl, 0])

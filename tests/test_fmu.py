@@ -186,3 +186,59 @@ def test_fmu_call_sequence_and_stop_time(record, version):
         s.terminate()
         s.freeInstance()
         shutil.rmtree(unzip, ignore_errors=True)
+
+
+# ---- the strapdown navigator FMU ----------------------------------------------------
+
+from gfins_fmi import trajectory as tj  # noqa: E402
+from gfins_fmi.fmu import run_fmu, run_sins_fmu  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def circle():
+    return tj.sample(tj.Circle(), 20.0, 0.01)
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_sins_fmu_valid(version):
+    path = gf.fmu_path("sins", version)
+    assert validate_fmu(str(path)) == []
+    md = read_model_description(str(path))
+    assert md.coSimulation.modelIdentifier == "gfins_sins"
+
+
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("cfg", [gf.SinsConfig(), gf.SinsConfig(input="rates"),
+                                 gf.SinsConfig(coning=False, vertical="baro", baro_tau_s=5.0)],
+                         ids=["increments", "rates", "baro"])
+def test_sins_fmu_equals_batch(circle, version, cfg):
+    """The FMU and the batch call run the same gf_sins code on the same samples with the
+    same intervals: equal to 1e-12 relative (measured: bitwise)."""
+    tr = circle
+    x0 = gf.NavState.from_trajectory(tr, 0)
+    if cfg.input == "rates":
+        g, a, h = tr.gyro_rad_s, tr.accel_m_s2, tr.h_m + 1.0
+    else:
+        g, a, h = tr.dtheta_rad, tr.dv_m_s, tr.h_m[1:] + 1.0
+    ref = gf.Strapdown(x0, cfg).run(g, a, dt_s=tr.dt_s, h_ext_m=h)
+    out = run_sins_fmu(g, a, tr.dt_s, x0, config=cfg, h_ext_m=h, fmi_version=version)
+    for name in ("q_bn", "v_n_m_s", "lat_rad", "lon_rad", "h_m", "t_s"):
+        x, y = getattr(out, name), getattr(ref, name)
+        assert np.all(np.abs(x - y) <= 1e-12 * np.maximum(np.abs(y), 1e-300)), name
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_sins_fmu_bad_parameters_and_input(circle, version):
+    tr = circle
+    x0 = gf.NavState.from_trajectory(tr, 0)
+    x0.lat_rad = 1.6
+    with pytest.raises(gf.FmuRunError, match="parameter lat0 = 1.6 rad is outside"):
+        run_sins_fmu(tr.dtheta_rad[:5], tr.dv_m_s[:5], 0.01, x0, fmi_version=version)
+    with pytest.raises(gf.FmuRunError, match="input_mode = 7 must be 0"):
+        run_fmu("sins", {"dtheta": np.zeros((3, 3))}, ["q"], 0.01,
+                parameters={"input_mode": 7}, fmi_version=version)
+    g = tr.dtheta_rad[:50].copy()
+    g[20, 0] = np.inf
+    x0 = gf.NavState.from_trajectory(tr, 0)
+    with pytest.raises(gf.FmuRunError, match=r"t = 0.21 s: input dtheta = \[inf"):
+        run_sins_fmu(g, tr.dv_m_s[:50], 0.01, x0, fmi_version=version)

@@ -1,0 +1,99 @@
+/* model.c — the strapdown navigator as an FMU model: FMI-agnostic, calls gf_sins.
+ *
+ * Sampling: doStep(t, h) consumes the inputs set for t and leaves the outputs at t.
+ * Increments cover the step that ends at t (so at the start time there is none: the
+ * first doStep only starts the run); rates are samples at t (the first one starts the
+ * record, as in gf_sins). The interval since the previous sample is the previous
+ * communication step, so with a fixed step the FMU computes exactly what
+ * gf_sins_run computes with dt = h. */
+#include <math.h>
+#include <string.h>
+
+#include "fmu_model.h"
+#include "model.h"
+
+static void publish(ModelData *d)
+{
+    memcpy(d->q_bn, d->nav.q_bn, sizeof d->q_bn);
+    gf_quat_to_euler(d->nav.q_bn, d->euler_rad);
+    memcpy(d->v_n_m_s, d->nav.v_n_m_s, sizeof d->v_n_m_s);
+    d->lat_rad = d->nav.lat_rad;
+    d->lon_rad = d->nav.lon_rad;
+    d->h_m = d->nav.h_m;
+    d->nav_time_s = d->nav.time_s;
+}
+
+FmuStatus model_exit_initialization(FmuInstance *instance, ModelData *d, double start_time_s)
+{
+    gf_sins_config cfg;
+    gf_sins_config_default(&cfg);
+    cfg.input = d->input_mode;
+    cfg.coning = d->coning;
+    cfg.vertical = d->vertical_mode;
+    cfg.hold_height_m = d->hold_height_m;
+    cfg.baro_tau_s = d->baro_tau_s;
+    cfg.max_rate_rad_s = d->max_rate_rad_s;
+    cfg.max_specific_force_m_s2 = d->max_specific_force_m_s2;
+    const gf_status st = gf_sins_init(&d->nav, &cfg, d->q0, d->v0_m_s, d->lat0_rad,
+                                      d->lon0_rad, d->h0_m, start_time_s);
+    if (st != GF_OK) {
+        if (d->input_mode != 0 && d->input_mode != 1)
+            fmu_log_error(instance, "parameter input_mode = %d must be 0 (increments) or 1 (rates)",
+                          (int)d->input_mode);
+        else if (d->coning != 0 && d->coning != 1)
+            fmu_log_error(instance, "parameter coning = %d must be 0 or 1", (int)d->coning);
+        else if (d->vertical_mode < 0 || d->vertical_mode > 2)
+            fmu_log_error(instance, "parameter vertical_mode = %d must be 0, 1 or 2",
+                          (int)d->vertical_mode);
+        else if (!(d->baro_tau_s > 0.0) || !(d->max_rate_rad_s > 0.0) ||
+                 !(d->max_specific_force_m_s2 > 0.0))
+            fmu_log_error(instance, "parameters baro_tau, max_rate and max_specific_force must "
+                          "be > 0 (got %g s, %g rad/s, %g m/s2)", d->baro_tau_s,
+                          d->max_rate_rad_s, d->max_specific_force_m_s2);
+        else if (!(fabs(d->lat0_rad) < 1.5707963267948966))
+            fmu_log_error(instance, "parameter lat0 = %g rad is outside (-pi/2, pi/2)", d->lat0_rad);
+        else
+            fmu_log_error(instance, "initial state rejected (%s): q0 must be a finite, non-zero "
+                          "quaternion and v0, lat0, lon0, h0 finite", gf_status_string(st));
+        return FMU_ERROR;
+    }
+    d->previous_step_s = 0.0;
+    d->steps = 0;
+    publish(d);
+    return FMU_OK;
+}
+
+FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double h_s)
+{
+    const int increments = d->nav.cfg.input == GF_SINS_INPUT_INCREMENTS;
+    if (increments && d->steps == 0) { /* no increment ends at the start time */
+        d->previous_step_s = h_s;
+        d->steps = 1;
+        return FMU_OK;
+    }
+    gf_sins_state next = d->nav;
+    const double *gyro = increments ? d->dtheta_rad : d->gyro_rad_s;
+    const double *accel = increments ? d->dv_m_s : d->accel_m_s2;
+    const gf_status st = gf_sins_step(&next, gyro, accel, d->previous_step_s, d->h_ext_m);
+    if (st != GF_OK) {
+        const char *g = increments ? "dtheta" : "gyro_rate", *a = increments ? "dv" : "specific_force";
+        if (st == GF_ERR_NONFINITE_INPUT)
+            fmu_log_error(instance, "t = %.9g s: input %s = [%g, %g, %g] or %s = [%g, %g, %g] is "
+                          "not finite (or h_ext is infinite); the outputs keep the last good sample",
+                          t_s, g, gyro[0], gyro[1], gyro[2], a, accel[0], accel[1], accel[2]);
+        else if (st == GF_ERR_OUT_OF_RANGE)
+            fmu_log_error(instance, "t = %.9g s: input %s = [%g, %g, %g] / %s = [%g, %g, %g] exceeds "
+                          "max_rate = %g rad/s or max_specific_force = %g m/s2", t_s, g, gyro[0],
+                          gyro[1], gyro[2], a, accel[0], accel[1], accel[2],
+                          d->nav.cfg.max_rate_rad_s, d->nav.cfg.max_specific_force_m_s2);
+        else
+            fmu_log_error(instance, "t = %.9g s: navigation step failed: %s", t_s,
+                          gf_status_string(st));
+        return FMU_ERROR;
+    }
+    d->nav = next;
+    d->previous_step_s = h_s;
+    d->steps += 1;
+    publish(d);
+    return FMU_OK;
+}

@@ -1,0 +1,24 @@
+/* model.h — data of the strapdown navigator FMU (variables: model_spec.py). */
+#ifndef SINS_MODEL_H
+#define SINS_MODEL_H
+
+#include <stdint.h>
+
+#include "gf_sins.h"
+
+typedef struct ModelData {
+    /* parameters */
+    int32_t input_mode, coning, vertical_mode;
+    double hold_height_m, baro_tau_s, max_rate_rad_s, max_specific_force_m_s2;
+    double q0[4], v0_m_s[3], lat0_rad, lon0_rad, h0_m;
+    /* inputs */
+    double dtheta_rad[3], dv_m_s[3], gyro_rad_s[3], accel_m_s2[3], h_ext_m;
+    /* outputs */
+    double q_bn[4], euler_rad[3], v_n_m_s[3], lat_rad, lon_rad, h_m, nav_time_s;
+    /* internal */
+    double previous_step_s;   /* communication step that ended at this sample: its dt */
+    int32_t steps;            /* doSteps taken */
+    gf_sins_state nav;
+} ModelData;
+
+#endif /* SINS_MODEL_H */

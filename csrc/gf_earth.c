@@ -28,6 +28,36 @@ double gf_earth_gravity(double lat_rad, double h_m)
     return gravity_s2(s * s, h_m);
 }
 
+void gf_earth_from_sincos(gf_earth *earth, double sin_lat, double cos_lat, double h_m,
+                          const double *v_n_m_s, double earth_rate_sign)
+{
+    const double s = sin_lat, c = cos_lat, s2 = s * s;
+    const double q = 1.0 - GF_WGS84_E2 * s2;
+    const double inv_sq = 1.0 / sqrt(q);
+    earth->sin_lat = s;
+    earth->cos_lat = c;
+    earth->tan_lat = s / c;
+    earth->R_N_m = GF_WGS84_A_M * inv_sq;
+    earth->R_M_m = GF_WGS84_A_M * (1.0 - GF_WGS84_E2) * inv_sq * inv_sq * inv_sq;
+    /* gravity_s2 with the square root shared */
+    const double a = GF_WGS84_A_M, f = GF_WGS84_F, m = GF_WGS84_M;
+    const double g0 = GF_WGS84_GAMMA_E_M_S2 * (1.0 + GF_WGS84_K_SOMIGLIANA * s2) * inv_sq;
+    earth->gravity_m_s2 =
+        g0 * (1.0 - 2.0 / a * (1.0 + f + m - 2.0 * f * s2) * h_m + 3.0 / (a * a) * h_m * h_m);
+    const double w = earth_rate_sign * GF_WGS84_OMEGA_IE_RAD_S;
+    earth->w_ie_n_rad_s[0] = 0.0;
+    earth->w_ie_n_rad_s[1] = w * c;
+    earth->w_ie_n_rad_s[2] = w * s;
+    if (v_n_m_s) {
+        const double inv_RMh = 1.0 / (earth->R_M_m + h_m), inv_RNh = 1.0 / (earth->R_N_m + h_m);
+        earth->w_en_n_rad_s[0] = -v_n_m_s[1] * inv_RMh;
+        earth->w_en_n_rad_s[1] = v_n_m_s[0] * inv_RNh;
+        earth->w_en_n_rad_s[2] = v_n_m_s[0] * earth->tan_lat * inv_RNh;
+    } else {
+        earth->w_en_n_rad_s[0] = earth->w_en_n_rad_s[1] = earth->w_en_n_rad_s[2] = 0.0;
+    }
+}
+
 gf_status gf_earth_update(gf_earth *earth, double lat_rad, double h_m, const double *v_n_m_s,
                           double earth_rate_sign)
 {
@@ -38,29 +68,10 @@ gf_status gf_earth_update(gf_earth *earth, double lat_rad, double h_m, const dou
         return GF_ERR_NONFINITE_INPUT;
     if (!(fabs(lat_rad) < 0.5 * 3.14159265358979323846))
         return GF_ERR_BAD_PARAMETER;
-    const double s = sin(lat_rad), c = cos(lat_rad);
-    const double q = 1.0 - GF_WGS84_E2 * s * s;
-    const double sq = sqrt(q);
-    earth->sin_lat = s;
-    earth->cos_lat = c;
-    earth->tan_lat = s / c;
-    earth->R_N_m = GF_WGS84_A_M / sq;
-    earth->R_M_m = earth->R_N_m * (1.0 - GF_WGS84_E2) / q;
-    if (!(h_m > -0.5 * earth->R_N_m))
+    /* R_N >= a: a height below -a/2 is absurd wherever it is */
+    if (!(h_m > -0.5 * GF_WGS84_A_M))
         return GF_ERR_BAD_PARAMETER;
-    earth->gravity_m_s2 = gravity_s2(s * s, h_m);
-    const double w = earth_rate_sign * GF_WGS84_OMEGA_IE_RAD_S;
-    earth->w_ie_n_rad_s[0] = 0.0;
-    earth->w_ie_n_rad_s[1] = w * c;
-    earth->w_ie_n_rad_s[2] = w * s;
-    if (v_n_m_s) {
-        const double RMh = earth->R_M_m + h_m, RNh = earth->R_N_m + h_m;
-        earth->w_en_n_rad_s[0] = -v_n_m_s[1] / RMh;
-        earth->w_en_n_rad_s[1] = v_n_m_s[0] / RNh;
-        earth->w_en_n_rad_s[2] = v_n_m_s[0] * earth->tan_lat / RNh;
-    } else {
-        earth->w_en_n_rad_s[0] = earth->w_en_n_rad_s[1] = earth->w_en_n_rad_s[2] = 0.0;
-    }
+    gf_earth_from_sincos(earth, sin(lat_rad), cos(lat_rad), h_m, v_n_m_s, earth_rate_sign);
     return GF_OK;
 }
 

@@ -43,9 +43,14 @@ typedef struct gf_earth {
  * zero transport rate). earth_rate_sign multiplies the Earth rate (+1 forward in
  * time, -1 for reverse navigation).
  * Errors: GF_ERR_NONFINITE_INPUT; GF_ERR_BAD_PARAMETER when |lat| >= 90 deg (the
- * ENU frame is singular at the poles) or h is below -R_N/2 (absurd). */
+ * ENU frame is singular at the poles) or h is below -a/2 (absurd). */
 gf_status gf_earth_update(gf_earth *earth, double lat_rad, double h_m, const double *v_n_m_s,
                           double earth_rate_sign);
+
+/* As gf_earth_update, from sin and cos of the latitude (the mechanization keeps them
+ * and so saves the trigonometry); no argument checks. */
+void gf_earth_from_sincos(gf_earth *earth, double sin_lat, double cos_lat, double h_m,
+                          const double *v_n_m_s, double earth_rate_sign);
 
 /* Normal gravity magnitude (m/s^2) at latitude lat_rad and height h_m. */
 double gf_earth_gravity(double lat_rad, double h_m);

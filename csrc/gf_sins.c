@@ -117,6 +117,9 @@ gf_status gf_sins_init(gf_sins_state *state, const gf_sins_config *cfg, const do
         state->v_n_m_s[2] = 0.0;
     state->time_s = t0_s;
     state->earth_rate_sign = 1.0;
+    state->sin_lat = e.sin_lat;
+    state->cos_lat = e.cos_lat;
+    state->R_M_m = e.R_M_m;
     return GF_OK;
 }
 
@@ -222,22 +225,31 @@ static gf_status sins_update(gf_sins_state *s, const double gyro[3], const doubl
     for (int i = 0; i < 3; ++i)
         dv_b[i] = dv[i] + 0.5 * t1[i] + scul[i];
 
-    /* mid-interval navigation quantities, extrapolated with the last acceleration */
+    /* mid-interval navigation quantities, extrapolated with the last acceleration: the
+     * latitude moves by d = T/2 vN / (R_M + h) (a few 1e-7 rad at most), so sin and cos
+     * at the mid point follow from the kept ones by the angle-sum formulas with a
+     * second-order series (remainder d^3/6 < 1e-20); larger steps use libm */
     gf_earth e;
     double v_mid[3];
     gf_v3_axpy(s->v_n_m_s, 0.5 * T, s->a_n_m_s2, v_mid);
-    {
-        gf_earth e0;
-        gf_status st = gf_earth_update(&e0, s->lat_rad, s->h_m, NULL, s->earth_rate_sign);
-        if (st != GF_OK)
-            return GF_ERR_DIVERGED;
-        const double lat_mid = s->lat_rad + 0.5 * T * v_mid[1] / (e0.R_M_m + s->h_m);
-        const double h_mid = s->h_m + 0.5 * T * v_mid[2];
-        st = gf_earth_update(&e, lat_mid, h_mid, v_mid, s->earth_rate_sign);
-        if (st != GF_OK)
-            return GF_ERR_DIVERGED;
-    }
     const double h_mid = s->h_m + 0.5 * T * v_mid[2];
+    const double d_mid = 0.5 * T * v_mid[1] / (s->R_M_m + s->h_m);
+    const double lat_mid = s->lat_rad + d_mid;
+    {
+        const double d = d_mid;
+        double s_mid, c_mid;
+        if (fabs(d) < 1e-4) {
+            const double cd = 1.0 - 0.5 * d * d;
+            s_mid = s->sin_lat * cd + s->cos_lat * d;
+            c_mid = s->cos_lat * cd - s->sin_lat * d;
+        } else {
+            s_mid = sin(lat_mid);
+            c_mid = cos(lat_mid);
+        }
+        if (!(c_mid > 0.0) || !(h_mid > -0.5 * GF_WGS84_A_M) || !v3_finite(v_mid))
+            return GF_ERR_DIVERGED;
+        gf_earth_from_sincos(&e, s_mid, c_mid, h_mid, v_mid, s->earth_rate_sign);
+    }
 
     double w_in[3], zeta[3];
     gf_v3_add(e.w_ie_n_rad_s, e.w_en_n_rad_s, w_in);
@@ -276,7 +288,7 @@ static gf_status sins_update(gf_sins_state *s, const double gyro[3], const doubl
     const double vN = 0.5 * (s->v_n_m_s[1] + v_new[1]), vE = 0.5 * (s->v_n_m_s[0] + v_new[0]);
     const double lat_new = s->lat_rad + T * vN / (e.R_M_m + h_mid);
     double lon_new = s->lon_rad + T * vE / ((e.R_N_m + h_mid) * e.cos_lat);
-    if (!(fabs(lat_new) < GF_HALF_PI) || !(h_new > -0.5 * e.R_N_m) || !v3_finite(v_new))
+    if (!(fabs(lat_new) < GF_HALF_PI) || !(h_new > -0.5 * GF_WGS84_A_M) || !v3_finite(v_new))
         return GF_ERR_DIVERGED;
     if (lon_new > GF_PI)
         lon_new -= 2.0 * GF_PI;
@@ -290,8 +302,15 @@ static gf_status sins_update(gf_sins_state *s, const double gyro[3], const doubl
     q_from_rotvec_fast(phi, qb);
     gf_q_mul(qn, s->q_bn, q);
     gf_q_mul(q, qb, q);
-    if (!gf_q_normalize(q, q))
+    /* products of unit quaternions have |q|^2 = 1 + O(eps): one Newton step of
+     * 1/sqrt, q (3 - |q|^2)/2, normalises to round-off without sqrt or division */
+    const double n2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
+    if (fabs(n2 - 1.0) < 1e-6) {
+        const double k = 1.5 - 0.5 * n2;
+        q[0] *= k; q[1] *= k; q[2] *= k; q[3] *= k;
+    } else if (!gf_q_normalize(q, q)) {
         return GF_ERR_DIVERGED;
+    }
 
     /* commit */
     const double invT = 1.0 / T;
@@ -302,6 +321,22 @@ static gf_status sins_update(gf_sins_state *s, const double gyro[3], const doubl
     s->lat_rad = lat_new;
     s->lon_rad = lon_new;
     s->h_m = h_new;
+    {
+        /* sin and cos of the new latitude by the angle-sum series from the mid point
+         * (|lat_new - lat_mid| < 1e-4 rad: remainder < 1e-20); every 64th sample they
+         * are recomputed with libm so that rounding cannot accumulate */
+        const double d = lat_new - lat_mid;
+        if ((s->n_samples & 63u) != 0 && fabs(d) < 1e-4) {
+            const double cd = 1.0 - 0.5 * d * d;
+            const double s_new = e.sin_lat * cd + e.cos_lat * d;
+            s->cos_lat = e.cos_lat * cd - e.sin_lat * d;
+            s->sin_lat = s_new;
+        } else {
+            s->sin_lat = sin(lat_new);
+            s->cos_lat = cos(lat_new);
+        }
+    }
+    s->R_M_m = e.R_M_m; /* at the mid point: within 1e-9 relative of R_M(lat_new) */
     s->baro_accel_m_s2 = b_new;
     gf_v3_copy(gyro, s->prev_gyro);
     gf_v3_copy(accel, s->prev_accel);

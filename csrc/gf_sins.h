@@ -74,6 +74,8 @@ typedef struct gf_sins_state {
     double prev_accel[3];
     int32_t have_prev;               /* 1 when prev_* hold a sample */
     double baro_accel_m_s2;          /* BARO loop integral state b */
+    double sin_lat, cos_lat;         /* of lat_rad (kept to save trigonometry) */
+    double R_M_m;                    /* meridian radius at lat_rad */
     uint64_t n_samples;
 } gf_sins_state;
 

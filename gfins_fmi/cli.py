@@ -16,6 +16,49 @@ def _demo(args) -> int:
     return 0 if ok else 1
 
 
+def _navigate(args) -> int:
+    import numpy as np
+    from gfins_fmi import NavState, SinsConfig, Strapdown
+    from gfins_fmi._lib import NonFiniteInputError
+    from gfins_fmi.sins import SampleError
+    data = np.loadtxt(args.input, delimiter=",", ndmin=2, comments="#",
+                      skiprows=1 if args.header else 0)
+    if data.shape[1] not in (7, 8):
+        raise ValueError(f"{args.input}: expected 7 or 8 columns (t, gyro x y z, accel x y z "
+                         f"[, h_ext]); found {data.shape[1]}")
+    t, gyro, accel = data[:, 0], data[:, 1:4], data[:, 4:7]
+    h_ext = data[:, 7] if data.shape[1] == 8 else None
+    if args.input_kind == "increments":
+        # row k is the increment over (t_(k-1), t_k]; the navigator starts one interval
+        # before the first row unless --t0 says otherwise
+        t0 = args.t0 if args.t0 is not None else (t[0] - (t[1] - t[0]) if len(t) > 1 else t[0])
+    else:
+        t0 = args.t0 if args.t0 is not None else t[0]
+    deg = np.pi / 180
+    v0 = [float(x) for x in args.v0.split(",")]
+    x0 = NavState.from_euler([args.heading0 * deg, args.pitch0 * deg, args.roll0 * deg], v0,
+                             args.lat0 * deg, args.lon0 * deg, args.h0, t0)
+    cfg = SinsConfig(input=args.input_kind, coning=not args.no_coning, vertical=args.vertical,
+                     hold_height_m=args.h0, baro_tau_s=args.baro_tau)
+    nav = Strapdown(x0, cfg)
+    status = 0
+    progress = args.progress if args.progress is not None else len(t) >= 1_000_000
+    try:
+        sol = nav.run(gyro, accel, t_s=t, h_ext_m=h_ext, progress=progress)
+    except (NonFiniteInputError, SampleError) as exc:
+        print(f"error: {exc}; writing the {len(exc.partial)} samples navigated before it",
+              file=sys.stderr)
+        sol, status = exc.partial, 1
+    e = sol.euler_rad / deg
+    table = np.column_stack([sol.t_s, sol.lat_rad / deg, sol.lon_rad / deg, sol.h_m, sol.v_n_m_s,
+                             e, sol.q_bn])
+    header = ("t_s,lat_deg,lon_deg,h_m,v_e_m_s,v_n_m_s,v_u_m_s,heading_deg,pitch_deg,roll_deg,"
+              "q0,q1,q2,q3")
+    np.savetxt(args.output, table, delimiter=",", header=header, comments="", fmt="%.12g")
+    print(f"{len(sol)} samples navigated -> {args.output}")
+    return status
+
+
 def _validate(args) -> int:
     from gfins_fmi.fmu import MODELS, fmu_path, validate
     bad = 0
@@ -93,6 +136,32 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--omega-init", default="0,0,0",
                    help="rate before the first sample, rad/s, as x,y,z (gives the first signs)")
     p.set_defaults(func=_solve9)
+
+    p = sub.add_parser("navigate", help="strapdown navigation of a CSV record "
+                       "(t, gyro x y z, accel x y z [, h_ext]) -> solution CSV")
+    p.add_argument("input", type=pathlib.Path)
+    p.add_argument("output", type=pathlib.Path)
+    p.add_argument("--input-kind", choices=["increments", "rates"], default="increments",
+                   help="increments: rad and m/s over (t_(k-1), t_k]; rates: rad/s and m/s^2 at t_k")
+    p.add_argument("--header", action="store_true", help="the CSV's first line is a header")
+    p.add_argument("--lat0", type=float, required=True, help="initial latitude, deg")
+    p.add_argument("--lon0", type=float, required=True, help="initial longitude, deg")
+    p.add_argument("--h0", type=float, default=0.0, help="initial height, m (also the held height)")
+    p.add_argument("--heading0", type=float, default=0.0, help="initial heading, deg clockwise from north")
+    p.add_argument("--pitch0", type=float, default=0.0, help="initial pitch, deg")
+    p.add_argument("--roll0", type=float, default=0.0, help="initial roll, deg")
+    p.add_argument("--v0", default="0,0,0",
+                   help="initial velocity E,N,U in m/s (write --v0=-1,2,0 when it starts with -)")
+    p.add_argument("--t0", type=float, default=None,
+                   help="time of the initial state, s (default: one interval before the first "
+                        "increment, or the first rate sample)")
+    p.add_argument("--vertical", choices=["free", "hold", "baro"], default="free",
+                   help="vertical channel (baro needs the 8th column h_ext)")
+    p.add_argument("--baro-tau", type=float, default=10.0, help="baro loop time constant, s")
+    p.add_argument("--no-coning", action="store_true", help="one-sample algorithm")
+    p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                   help="progress bar (default: on for records of 10^6 samples or more)")
+    p.set_defaults(func=_navigate)
 
     p = sub.add_parser("validate", help="run fmpy's validation on every shipped FMU")
     p.set_defaults(func=_validate)

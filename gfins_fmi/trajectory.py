@@ -27,8 +27,8 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = ["WGS84", "radii", "gravity", "euler_to_quat", "quat_to_dcm", "Motion",
-           "Stationary", "ConstantVelocity", "SineVelocity", "Circle", "Coning",
-           "Trajectory", "sample", "deg", "rad"]
+           "Stationary", "ConstantVelocity", "SineVelocity", "Circle", "Coning", "Airdrop",
+           "VehicleRun", "Trajectory", "sample", "deg", "rad"]
 
 deg = np.pi / 180.0  #: multiply degrees by this to get radians
 rad = 1.0            #: radians
@@ -289,6 +289,121 @@ class Coning(_Local, Motion):
     def position(self, t):
         z = np.zeros_like(t)
         return self._geo(z, z, z, z, z, z, z, z, z)
+
+
+@dataclass
+class Airdrop(_Local, _EulerAttitude, Motion):
+    """An airdrop-like fall (seed 002: an instrumented water tank dropped from an aircraft
+    under a parachute): the forward speed decays from the aircraft's by drag,
+    v_N = v0 exp(-t/tau_h); the descent rate approaches the terminal speed,
+    v_U = -v_t (1 - exp(-t/tau_v)); the load swings in pitch and roll with a decaying
+    amplitude. All closed forms."""
+    h: float = 1500.0
+    v0_m_s: float = 60.0
+    tau_h_s: float = 8.0
+    v_terminal_m_s: float = 7.0
+    tau_v_s: float = 3.0
+    swing_rad: float = 15 * deg
+    swing_period_s: float = 6.0
+    swing_decay_s: float = 40.0
+    heading: float = 20 * deg
+
+    def position(self, t):
+        v0, th, vt, tv = self.v0_m_s, self.tau_h_s, self.v_terminal_m_s, self.tau_v_s
+        eh, ev = np.exp(-t / th), np.exp(-t / tv)
+        along, d_along, dd_along = v0 * th * (1 - eh), v0 * eh, -v0 / th * eh
+        U, dU, ddU = -vt * (t - tv * (1 - ev)), -vt * (1 - ev), -vt / tv * ev
+        sh, ch = np.sin(self.heading), np.cos(self.heading)
+        return self._geo(sh * along, ch * along, U, sh * d_along, ch * d_along, dU,
+                         sh * dd_along, ch * dd_along, ddU)
+
+    def euler(self, t):
+        A, w, td = self.swing_rad, 2 * np.pi / self.swing_period_s, self.swing_decay_s
+        e = np.exp(-t / td)
+        p = A * e * np.sin(w * t)
+        dp = A * e * (w * np.cos(w * t) - np.sin(w * t) / td)
+        r = 0.5 * A * e * np.cos(w * t)
+        dr = 0.5 * A * e * (-w * np.sin(w * t) - np.cos(w * t) / td)
+        return (self.heading + 0 * t, p, r), (0 * t, dp, dr)
+
+
+def _smoothstep(u):
+    """S(u) = u - sin(2 pi u)/(2 pi) on [0, 1], 0 before, 1 after: S' and S'' vanish at
+    both ends, so a profile built from it has continuous acceleration and jerk."""
+    u = np.clip(u, 0.0, 1.0) if not np.iscomplexobj(u) else u
+    return u - np.sin(2 * np.pi * u) / (2 * np.pi), 1 - np.cos(2 * np.pi * u), 2 * np.pi * np.sin(2 * np.pi * u)
+
+
+@dataclass
+class VehicleRun(_Local, _EulerAttitude, Motion):
+    """The vehicle test of seed 001: at rest for ``align_s`` (alignment), a smooth
+    start to ``speed_m_s``, a straight run, a 180 deg turn at ``turn_times_s[0]`` after
+    the start of motion and another at ``turn_times_s[1]``, each lasting ``turn_s``
+    (heading by a C2 smooth step, so the lateral acceleration is smooth).
+    The path has no closed form: north/east displacements are integrated from the
+    closed-form velocity with 8-node Gauss-Legendre quadrature per 0.25 s knot interval
+    (error far below round-off for these smooth profiles)."""
+    align_s: float = 600.0
+    speed_m_s: float = 15.0
+    accel_s: float = 20.0
+    turn_times_s: tuple = (240.0, 480.0)
+    turn_s: float = 30.0
+    heading: float = 0.0
+    knot_s: float = 0.25
+
+    def _speed_heading(self, t):
+        """speed, d speed, heading, d heading, dd heading at t (complex t allowed)."""
+        tm = t - self.align_s
+        S, dS, ddS = _smoothstep(tm / self.accel_s)
+        v = self.speed_m_s * S
+        dv = self.speed_m_s * dS / self.accel_s
+        ddv = self.speed_m_s * ddS / self.accel_s ** 2
+        psi, dpsi, ddpsi = self.heading + 0 * t, 0 * t, 0 * t
+        for t_turn in self.turn_times_s:
+            St, dSt, ddSt = _smoothstep((tm - t_turn) / self.turn_s)
+            psi = psi + np.pi * St
+            dpsi = dpsi + np.pi * dSt / self.turn_s
+            ddpsi = ddpsi + np.pi * ddSt / self.turn_s ** 2
+        return v, dv, ddv, psi, dpsi, ddpsi
+
+    def _velocity_en(self, t):
+        v, _, _, psi, _, _ = self._speed_heading(t)
+        return v * np.sin(psi), v * np.cos(psi)
+
+    def _displacement(self, t):
+        """(E, N) at times t: knots every knot_s, Gauss-Legendre inside."""
+        x, w = np.polynomial.legendre.leggauss(8)
+        tr = np.real(t)
+        tmax = float(np.max(tr)) if np.size(tr) else 0.0
+        nk = int(np.ceil(max(tmax, 0.0) / self.knot_s)) + 1
+        kt = np.arange(nk + 1) * self.knot_s
+        a, b = kt[:-1], kt[1:]
+        nodes = (a[:, None] + 0.5 * (b - a)[:, None] * (x[None, :] + 1)).ravel()
+        vE, vN = self._velocity_en(nodes)
+        wq = 0.5 * self.knot_s * w
+        cumE = np.r_[0.0, np.cumsum((vE.reshape(nk, 8) * wq).sum(1))]
+        cumN = np.r_[0.0, np.cumsum((vN.reshape(nk, 8) * wq).sum(1))]
+        k = np.clip(np.floor(tr / self.knot_s).astype(int), 0, nk - 1)
+        t0 = kt[k]
+        half = 0.5 * (t - t0)
+        tn = t0[..., None] + half[..., None] * (x + 1)
+        vEn, vNn = self._velocity_en(tn)
+        E = cumE[k] + half * (vEn * w).sum(-1)
+        N = cumN[k] + half * (vNn * w).sum(-1)
+        return E, N
+
+    def position(self, t):
+        E, N = self._displacement(t)
+        v, dv, _, psi, dpsi, _ = self._speed_heading(t)
+        s, c = np.sin(psi), np.cos(psi)
+        z = 0 * t
+        return self._geo(E, N, z, v * s, v * c, z,
+                         dv * s + v * c * dpsi, dv * c - v * s * dpsi, z)
+
+    def euler(self, t):
+        _, _, _, psi, dpsi, _ = self._speed_heading(t)
+        z = 0 * t
+        return (psi, z, z), (dpsi, z, z)   # heading beyond 2 pi is the same attitude
 
 
 @dataclass

@@ -131,9 +131,11 @@ class Motion:
         Returns a dict with lat, lon, h (n,), v_n (n, 3), q_bn (n, 4), gyro w_ib^b (n, 3)
         and accel f^b (n, 3).
         """
-        t = np.atleast_1d(np.asarray(t, dtype=float))
+        t = np.atleast_1d(np.asarray(t))
+        dtype = complex if np.iscomplexobj(t) else float   # complex: see gyro_dot
+        t = t.astype(dtype)
         (L, lam, h), (dL, dlam, dh), (ddL, ddlam, ddh) = [
-            tuple(np.broadcast_to(np.asarray(x, dtype=float), t.shape) for x in trip)
+            tuple(np.broadcast_to(np.asarray(x, dtype=dtype), t.shape) for x in trip)
             for trip in self.position(t)]
         RM, RN, dRM, dRN = radii(L)
         sL, cL = np.sin(L), np.cos(L)
@@ -152,6 +154,15 @@ class Motion:
         w_ib = w_nb + np.einsum("nji,nj->ni", C, w_ie + w_en)
         return dict(t=t, lat=L, lon=lam, h=h, v_n=v, q_bn=q, gyro=w_ib, accel=f_b)
 
+    def gyro_dot(self, t):
+        """d/dt of w_ib^b (rad/s^2, body axes) at times t, by complex-step
+        differentiation: for the analytic closed forms here, Im(w(t + i h))/h with
+        h = 1e-30 s equals the derivative to round-off (no subtraction, so no
+        cancellation: this is not a finite difference)."""
+        h = 1e-30
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        return np.imag(self.state(t + 1j * h)["gyro"]) / h
+
 
 class _EulerAttitude:
     """Attitude from Euler-angle functions (heading, pitch, roll) and their rates."""
@@ -162,7 +173,8 @@ class _EulerAttitude:
     def attitude(self, t):
         (psi, th, ga), (dpsi, dth, dga) = self.euler(t)
         shape = np.shape(t)
-        psi, th, ga, dpsi, dth, dga = (np.broadcast_to(np.asarray(x, float), shape)
+        dtype = complex if np.iscomplexobj(t) else float
+        psi, th, ga, dpsi, dth, dga = (np.broadcast_to(np.asarray(x, dtype), shape)
                                        for x in (psi, th, ga, dpsi, dth, dga))
         return euler_to_quat(psi, th, ga), _euler_body_rate(psi, th, ga, dpsi, dth, dga)
 
@@ -258,8 +270,9 @@ class Circle(_Local, _EulerAttitude, Motion):
 
     def euler(self, t):
         w = self.speed_m_s / self.radius_m
-        # velocity direction (E, N) = (-sin wt, cos wt): heading = -wt (clockwise from N)
-        psi = np.mod(-w * t, 2 * np.pi)
+        # velocity direction (E, N) = (-sin wt, cos wt): heading = -wt (clockwise from N);
+        # not wrapped into [0, 2 pi): the attitude is the same and t may be complex
+        psi = -w * t
         return ((psi, self.pitch_amplitude_rad * np.sin(2 * w * t), self.roll_rad + 0 * t),
                 (-w + 0 * t, 2 * w * self.pitch_amplitude_rad * np.cos(2 * w * t), 0 * t))
 
@@ -328,10 +341,15 @@ class Airdrop(_Local, _EulerAttitude, Motion):
 
 
 def _smoothstep(u):
-    """S(u) = u - sin(2 pi u)/(2 pi) on [0, 1], 0 before, 1 after: S' and S'' vanish at
-    both ends, so a profile built from it has continuous acceleration and jerk."""
-    u = np.clip(u, 0.0, 1.0) if not np.iscomplexobj(u) else u
-    return u - np.sin(2 * np.pi * u) / (2 * np.pi), 1 - np.cos(2 * np.pi * u), 2 * np.pi * np.sin(2 * np.pi * u)
+    """S(u) = u - sin(2 pi u)/(2 pi) on [0, 1], 0 before, 1 after, with S' and S''
+    (both vanish at the ends, so a profile built from it has continuous acceleration and
+    jerk). Complex u (complex-step differentiation) is kept inside the interval; outside
+    it the constants have no imaginary part, as the derivative there is 0."""
+    ur = np.real(u)
+    inside = (ur > 0.0) & (ur < 1.0)
+    uu = np.where(inside, u, np.where(ur >= 1.0, 1.0, 0.0))
+    w = 2 * np.pi * uu
+    return uu - np.sin(w) / (2 * np.pi), 1 - np.cos(w), 2 * np.pi * np.sin(w)
 
 
 @dataclass
@@ -430,10 +448,22 @@ class Trajectory:
     accel_m_s2: np.ndarray
     dtheta_rad: np.ndarray
     dv_m_s: np.ndarray
+    motion: Motion | None = None
 
     @property
     def dt_s(self) -> float:
         return float(self.t_s[1] - self.t_s[0])
+
+    def array_outputs(self, geometry) -> np.ndarray:
+        """Outputs (n, N) of an accelerometer array of any geometry riding the motion,
+        at the sample times: A_i = theta_i . [f + w_dot x u_i + w x (w x u_i)] with
+        w = w_ib^b, w_dot its derivative (complex step) and f the specific force at the
+        array centre (the C forward model of gfins_fmi.accel_array)."""
+        from gfins_fmi.accel_array import forward_model
+        if self.motion is None:
+            raise ValueError("this Trajectory has no motion attached (make it with sample())")
+        return forward_model(geometry, self.accel_m_s2, self.gyro_rad_s,
+                             self.motion.gyro_dot(self.t_s))
 
 
 def sample(motion: Motion, duration_s: float, dt_s: float, nodes: int = 8,
@@ -454,4 +484,4 @@ def sample(motion: Motion, duration_s: float, dt_s: float, nodes: int = 8,
         dth[a:b] = np.einsum("knj,n->kj", s["gyro"].reshape(b - a, nodes, 3), wq)
         dv[a:b] = np.einsum("knj,n->kj", s["accel"].reshape(b - a, nodes, 3), wq)
     return Trajectory(t, st["lat"], st["lon"], st["h"], st["v_n"], st["q_bn"],
-                      st["gyro"], st["accel"], dth, dv)
+                      st["gyro"], st["accel"], dth, dv, motion)

@@ -321,3 +321,27 @@ def test_airdrop_velocity_is_the_position_derivative():
     (Lc, lamc, hc), _, _ = m.position(t + 1e-30j)
     np.testing.assert_allclose(np.imag(Lc) / 1e-30, dL, rtol=1e-13, atol=1e-20)
     np.testing.assert_allclose(np.imag(hc) / 1e-30, dh, rtol=1e-13, atol=1e-15)
+
+
+@pytest.mark.parametrize("motion", [tj.SineVelocity(), tj.Circle(), tj.Airdrop(), tj.Coning()],
+                         ids=["sine", "circle", "airdrop", "coning"])
+def test_generator_array_outputs(motion):
+    """Accelerometer-array outputs of a trajectory: the 9-accelerometer solver gives back
+    the trajectory's own w_ib^b and f^b (round-off, as in test_accel9), and the angular
+    acceleration (complex step) agrees with a central difference of the rates to that
+    difference's truncation error, (W dt)^2/6 relative at the highest frequency W."""
+    dt = 0.01
+    tr = tj.sample(motion, 30.0, dt)
+    wd = motion.gyro_dot(tr.t_s)
+    cd = (tr.gyro_rad_s[2:] - tr.gyro_rad_s[:-2]) / (2 * dt)
+    W = 2 * np.pi * 5.0 if isinstance(motion, tj.Coning) else 2 * np.pi / 6.0 * 1.5
+    assert np.abs(wd[1:-1] - cd).max() <= 2 * (W * dt) ** 2 / 6 * np.abs(wd).max()
+    A = tr.array_outputs(gf.accel9_geometry(0.1))
+    sol = gf.solve_accel9(A, dt, 0.1, tr.gyro_rad_s[0])
+    S = np.abs(A).max()
+    eps = np.finfo(float).eps
+    assert np.abs(sol.f_m_s2 - tr.accel_m_s2).max() <= 64 * eps * S
+    assert np.abs(sol.omega_dot_rad_s2 - wd).max() <= 64 * eps * S / 0.1
+    big = np.abs(tr.gyro_rad_s) > 1e-3
+    tol = 64 * eps * S / 0.1 / (2 * np.maximum(np.abs(tr.gyro_rad_s), 1e-3))
+    assert np.all((np.abs(sol.omega_rad_s - tr.gyro_rad_s) <= tol)[big])

@@ -11,7 +11,7 @@ def _demo(args) -> int:
     res = demo.run(out_dir=args.out, duration_s=args.duration, dt_s=args.dt, l_m=args.lever_arm,
                    noise_m_s2=args.noise)
     ok = all(res[f"fmi{v}"]["problems"] == [] and res[f"fmi{v}"]["max_rel_diff"] <= 1e-12
-             for v in (2, 3))
+             for v in (2, 3)) and res["sins"]["fmu_max_rel_diff"] <= 1e-12
     print("\ndemo " + ("passed: C core, FMUs and analysis agree" if ok else "FAILED"))
     return 0 if ok else 1
 

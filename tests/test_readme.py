@@ -1,4 +1,5 @@
-"""The README's Python examples run as written (so the README stays true)."""
+"""The Python examples of the README and of docs/*.md run as written (so the docs stay
+true)."""
 from __future__ import annotations
 
 import re
@@ -7,13 +8,15 @@ import pytest
 
 from conftest import ROOT
 
-BLOCKS = re.findall(r"```python\n(.*?)```", (ROOT / "README.md").read_text(encoding="utf-8"), re.S)
+DOCS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+BLOCKS = [(doc.name, i, block) for doc in DOCS
+          for i, block in enumerate(re.findall(r"```python\n(.*?)```", doc.read_text(encoding="utf-8"), re.S))]
 
 
 def test_readme_has_examples():
-    assert len(BLOCKS) >= 2
+    assert sum(1 for name, _, _ in BLOCKS if name == "README.md") >= 3
 
 
-@pytest.mark.parametrize("index", range(len(BLOCKS)))
-def test_readme_example_runs(index, capsys):
-    exec(compile(BLOCKS[index], f"README.md python block {index + 1}", "exec"), {})
+@pytest.mark.parametrize("name, index, block", BLOCKS, ids=[f"{n}-{i + 1}" for n, i, _ in BLOCKS])
+def test_doc_example_runs(name, index, block, capsys):
+    exec(compile(block, f"{name} python block {index + 1}", "exec"), {})

@@ -12,20 +12,20 @@
     (GF_WGS84_OMEGA_IE_RAD_S * GF_WGS84_OMEGA_IE_RAD_S * GF_WGS84_A_M * GF_WGS84_A_M *       \
      GF_WGS84_B_M / GF_WGS84_GM_M3_S2)
 
-static double gravity_s2(double s2, double h_m)
+/* Normal gravity from sin^2(lat), 1/sqrt(1 - e^2 sin^2(lat)) and height: Somigliana
+ * (NIMA TR8350.2 eq. 4-1) times the second-order height expansion (eq. 4-3). One
+ * expression for every caller, so all agree to the bit. */
+static double gravity_of(double s2, double inv_sq, double h_m)
 {
-    /* Somigliana, NIMA TR8350.2 eq. 4-1 */
-    const double g0 = GF_WGS84_GAMMA_E_M_S2 * (1.0 + GF_WGS84_K_SOMIGLIANA * s2) /
-                      sqrt(1.0 - GF_WGS84_E2 * s2);
-    /* height expansion, eq. 4-3 */
     const double a = GF_WGS84_A_M, f = GF_WGS84_F, m = GF_WGS84_M;
+    const double g0 = GF_WGS84_GAMMA_E_M_S2 * (1.0 + GF_WGS84_K_SOMIGLIANA * s2) * inv_sq;
     return g0 * (1.0 - 2.0 / a * (1.0 + f + m - 2.0 * f * s2) * h_m + 3.0 / (a * a) * h_m * h_m);
 }
 
 double gf_earth_gravity(double lat_rad, double h_m)
 {
-    const double s = sin(lat_rad);
-    return gravity_s2(s * s, h_m);
+    const double s = sin(lat_rad), s2 = s * s;
+    return gravity_of(s2, 1.0 / sqrt(1.0 - GF_WGS84_E2 * s2), h_m);
 }
 
 void gf_earth_from_sincos(gf_earth *earth, double sin_lat, double cos_lat, double h_m,
@@ -39,11 +39,7 @@ void gf_earth_from_sincos(gf_earth *earth, double sin_lat, double cos_lat, doubl
     earth->tan_lat = s / c;
     earth->R_N_m = GF_WGS84_A_M * inv_sq;
     earth->R_M_m = GF_WGS84_A_M * (1.0 - GF_WGS84_E2) * inv_sq * inv_sq * inv_sq;
-    /* gravity_s2 with the square root shared */
-    const double a = GF_WGS84_A_M, f = GF_WGS84_F, m = GF_WGS84_M;
-    const double g0 = GF_WGS84_GAMMA_E_M_S2 * (1.0 + GF_WGS84_K_SOMIGLIANA * s2) * inv_sq;
-    earth->gravity_m_s2 =
-        g0 * (1.0 - 2.0 / a * (1.0 + f + m - 2.0 * f * s2) * h_m + 3.0 / (a * a) * h_m * h_m);
+    earth->gravity_m_s2 = gravity_of(s2, inv_sq, h_m);
     const double w = earth_rate_sign * GF_WGS84_OMEGA_IE_RAD_S;
     earth->w_ie_n_rad_s[0] = 0.0;
     earth->w_ie_n_rad_s[1] = w * c;

@@ -106,7 +106,9 @@ gf_status gf_sins_init(gf_sins_state *state, const gf_sins_config *cfg, const do
 gf_status gf_sins_step(gf_sins_state *state, const double *gyro, const double *accel,
                        double dt_s, double h_ext_m);
 
-/* Turns the navigator around in time (see above). Calling it twice restores it. */
+/* Turns the navigator around in time (see above). Calling it twice restores the
+ * navigation state and the direction; the previous-sample memory (coning terms, the
+ * start of a rate record) is cleared each time, as the next sample is not adjacent. */
 gf_status gf_sins_reverse(gf_sins_state *state);
 
 /* Batch: n samples (gyro, accel: n x 3) in one call. Sample spacing: t_s (n sample

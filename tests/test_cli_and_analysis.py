@@ -88,3 +88,31 @@ def test_noise_gains_match_monte_carlo():
     np.testing.assert_allclose(sol.f_m_s2.std(axis=0), sigma * g.f, rtol=0.015)
     np.testing.assert_allclose(sol.omega_sq_rad2_s2.std(axis=0), sigma * g.omega_sq, rtol=0.015)
     np.testing.assert_allclose(sol.omega_dot_rad_s2.std(axis=0), sigma * g.omega_dot, rtol=0.015)
+
+
+def test_navigate_csv_and_bad_sample(tmp_path):
+    """gfins navigate on a CSV of increments reproduces Strapdown.run; a NaN row stops it
+    with status 1 and the rows before it written."""
+    from gfins_fmi import trajectory as tj
+    tr = tj.sample(tj.Circle(), 30.0, 0.01)
+    src, dst = tmp_path / "rec.csv", tmp_path / "sol.csv"
+    rec = np.c_[tr.t_s[1:], tr.dtheta_rad, tr.dv_m_s]
+    np.savetxt(src, rec, delimiter=",", header="t,gx,gy,gz,ax,ay,az", fmt="%.17g")
+    e = np.degrees(gf.quat_to_euler(tr.q_bn[0]))
+    args = ["navigate", str(src), str(dst), "--header",
+            "--lat0", repr(float(np.degrees(tr.lat_rad[0]))), "--lon0", repr(float(np.degrees(tr.lon_rad[0]))),
+            "--h0", repr(float(tr.h_m[0])), "--heading0", repr(float(e[0])), "--pitch0", repr(float(e[1])),
+            "--roll0", repr(float(e[2])), "--v0=" + ",".join(repr(float(x)) for x in tr.v_n_m_s[0])]
+    run(*args)
+    sol = np.loadtxt(dst, delimiter=",", skiprows=1)
+    assert sol.shape == (len(rec), 14)
+    ref = gf.Strapdown(gf.NavState.from_trajectory(tr, 0)).run(tr.dtheta_rad, tr.dv_m_s, t_s=tr.t_s[1:])
+    # the CSV keeps 12 significant digits of degrees: 1e-10 deg = 1.7e-12 rad (11 um),
+    # and the initial state passes through decimal degrees too: allow 5e-12 rad
+    np.testing.assert_allclose(np.radians(sol[:, 1]), ref.lat_rad, rtol=0, atol=5e-12)
+    np.testing.assert_allclose(sol[:, 0], ref.t_s, atol=1e-9)
+    rec[1000, 5] = np.nan
+    np.savetxt(src, rec, delimiter=",", fmt="%.17g")
+    proc = run(*[a for a in args if a != "--header"], check=False)
+    assert proc.returncode == 1 and "accel[1000, 1]" in proc.stderr
+    assert np.loadtxt(dst, delimiter=",", skiprows=1).shape[0] == 1000

@@ -227,8 +227,9 @@ static gf_status sins_update(gf_sins_state *s, const double gyro[3], const doubl
 
     /* mid-interval navigation quantities, extrapolated with the last acceleration: the
      * latitude moves by d = T/2 vN / (R_M + h) (a few 1e-7 rad at most), so sin and cos
-     * at the mid point follow from the kept ones by the angle-sum formulas with a
-     * second-order series (remainder d^3/6 < 1e-20); larger steps use libm */
+     * at the mid point follow from the kept ones by the angle-sum formulas with
+     * sin d = d - d^3/6 and cos d = 1 - d^2/2 (remainders d^5/120 and d^4/24, below
+     * 5e-18 for |d| < 1e-4 rad); larger steps use libm */
     gf_earth e;
     double v_mid[3];
     gf_v3_axpy(s->v_n_m_s, 0.5 * T, s->a_n_m_s2, v_mid);
@@ -239,9 +240,9 @@ static gf_status sins_update(gf_sins_state *s, const double gyro[3], const doubl
         const double d = d_mid;
         double s_mid, c_mid;
         if (fabs(d) < 1e-4) {
-            const double cd = 1.0 - 0.5 * d * d;
-            s_mid = s->sin_lat * cd + s->cos_lat * d;
-            c_mid = s->cos_lat * cd - s->sin_lat * d;
+            const double cd = 1.0 - 0.5 * d * d, sd = d * (1.0 - d * d / 6.0);
+            s_mid = s->sin_lat * cd + s->cos_lat * sd;
+            c_mid = s->cos_lat * cd - s->sin_lat * sd;
         } else {
             s_mid = sin(lat_mid);
             c_mid = cos(lat_mid);
@@ -322,14 +323,14 @@ static gf_status sins_update(gf_sins_state *s, const double gyro[3], const doubl
     s->lon_rad = lon_new;
     s->h_m = h_new;
     {
-        /* sin and cos of the new latitude by the angle-sum series from the mid point
-         * (|lat_new - lat_mid| < 1e-4 rad: remainder < 1e-20); every 64th sample they
-         * are recomputed with libm so that rounding cannot accumulate */
+        /* sin and cos of the new latitude by the same angle-sum series from the mid
+         * point; every 64th sample they are recomputed with libm so that rounding
+         * cannot accumulate */
         const double d = lat_new - lat_mid;
         if ((s->n_samples & 63u) != 0 && fabs(d) < 1e-4) {
-            const double cd = 1.0 - 0.5 * d * d;
-            const double s_new = e.sin_lat * cd + e.cos_lat * d;
-            s->cos_lat = e.cos_lat * cd - e.sin_lat * d;
+            const double cd = 1.0 - 0.5 * d * d, sd = d * (1.0 - d * d / 6.0);
+            const double s_new = e.sin_lat * cd + e.cos_lat * sd;
+            s->cos_lat = e.cos_lat * cd - e.sin_lat * sd;
             s->sin_lat = s_new;
         } else {
             s->sin_lat = sin(lat_new);
@@ -411,9 +412,12 @@ gf_status gf_sins_run(gf_sins_state *state, size_t n, const double *gyro, const 
             gf_v3_scale(g, -1.0, gneg);
             g = gneg;
         }
+        const int starts_record = s.cfg.input == GF_SINS_INPUT_RATES && !s.have_prev;
         status = sins_update(&s, g, accel + 3 * k, dt, h_ext_m ? h_ext_m[k] : NAN);
         if (status != GF_OK)
             break;
+        if (starts_record && t_s) /* a rate record that starts later than the state */
+            s.time_s = t_s[k];
         memcpy(q_bn + 4 * k, s.q_bn, sizeof s.q_bn);
         gf_v3_copy(s.v_n_m_s, v_n_m_s + 3 * k);
         if (backward)

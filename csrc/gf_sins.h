@@ -66,7 +66,7 @@ typedef struct gf_sins_state {
     gf_sins_config cfg;
     double q_bn[4];                  /* attitude q_b^n */
     double v_n_m_s[3];               /* velocity, ENU */
-    double lat_rad, lon_rad, h_m;    /* geodetic position */
+    double lat_rad, lon_rad, h_m;    /* geodetic position; lon in (-pi, pi] */
     double time_s;                   /* time of the state */
     double earth_rate_sign;          /* +1 forward, -1 reverse navigation */
     double a_n_m_s2[3];              /* last (v_k - v_(k-1)) / T, for the mid-point */
@@ -99,7 +99,8 @@ gf_status gf_sins_init(gf_sins_state *state, const gf_sins_config *cfg, const do
 
 /* One sample. Increments: gyro = dtheta (rad), accel = dv (m/s) over the dt_s that ends
  * at the new state time. Rates: gyro = w_ib^b (rad/s), accel = f^b (m/s^2) sampled
- * dt_s after the previous sample (the first sample only starts the record). h_ext_m is
+ * dt_s after the previous sample (the first sample only starts the record; its dt_s
+ * is not used; gf_sins_run with t_s sets the state time to that sample's time). h_ext_m is
  * the external height for the BARO mode (NaN: no height this sample). The state is
  * changed only on GF_OK. Errors: GF_ERR_NONFINITE_INPUT, GF_ERR_OUT_OF_RANGE (|w| or
  * |f| beyond the limits), GF_ERR_BAD_TIME (dt_s <= 0), GF_ERR_DIVERGED. */

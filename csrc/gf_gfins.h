@@ -1,0 +1,160 @@
+/* gf_gfins.h — gyro-free inertial navigation for any accelerometer array (seed 000).
+ *
+ * Every output is linear in x = [f (3), w_dot (3), W11, W22, W33, W12, W13, W23], the
+ * specific force, the angular acceleration and the six products W = w w^T:
+ *
+ *   A_i = theta_i . f + (u_i x theta_i) . w_dot + sum_jk M_i,jk W_jk,
+ *   M_i = sym(theta_i u_i^T) - (theta_i . u_i) I                (from seed 000 eq. 1-2)
+ *
+ * so an array is the N x 12 matrix H of these rows. The solver (gf_array_solver) finds
+ * which groups of unknowns affect the outputs and which of them the array separates:
+ *   - all of them (e.g. the 12-accelerometer layout: w w^T is measured linearly),
+ *   - f, w_dot and the diagonal of W while the off-diagonal products do not appear
+ *     (Qin's 9-accelerometer layout), or
+ *   - f and w_dot, the products being taken from a predicted rate (the 6-accelerometer
+ *     cube of Tan & Park, which must integrate w_dot for its rate),
+ * and solves by least squares with the pseudo-inverse (SVD). Its report gives rank,
+ * condition number and the noise gain of each unknown (row norms of the pseudo-inverse).
+ *
+ * The rate w follows from a strategy (gf_rate_strategy); the navigator feeds (w, f) to
+ * the strapdown mechanization (gf_sins, rate input).
+ */
+#ifndef GF_GFINS_H
+#define GF_GFINS_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "gf_accel_array.h"
+#include "gf_kalman.h"
+#include "gf_sins.h"
+#include "gf_status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* CDEF BEGIN */
+#define GF_X_N 12                /* unknowns per sample */
+#define GF_GROUP_F 1             /* f */
+#define GF_GROUP_OMEGA_DOT 2     /* w_dot */
+#define GF_GROUP_W_DIAG 4        /* W11, W22, W33 */
+#define GF_GROUP_W_OFFDIAG 8     /* W12, W13, W23 */
+
+typedef struct gf_array_solver {
+    size_t n_sensors;
+    uint32_t present;            /* groups whose columns are not zero (affect outputs) */
+    uint32_t estimated;          /* groups solved from the outputs */
+    uint32_t from_rate;          /* present groups taken from the predicted rate */
+    size_t n_est;                /* estimated unknowns */
+    int32_t est[GF_X_N];         /* their indices in x */
+    size_t rank;                 /* rank of the estimated columns (= n_est when solvable) */
+    double cond;                 /* their condition number s_max / s_min */
+    double noise_gain[GF_X_N];   /* std of each estimated unknown per unit output noise */
+    double pinv[GF_X_N * GF_ARRAY_MAX_SENSORS];   /* n_est x n_sensors */
+    double H[GF_ARRAY_MAX_SENSORS * GF_X_N];      /* n_sensors x 12 */
+} gf_array_solver;
+
+/* Builds the solver of an array. On GF_ERR_SINGULAR_GEOMETRY *unobservable (may be
+ * NULL) has bit i set for every unknown i of x that the outputs cannot separate even
+ * when the products come from a predicted rate (e.g. zero lever arms: w_dot). */
+gf_status gf_array_solver_init(gf_array_solver *solver, const gf_array_geometry *geometry,
+                               uint32_t *unobservable);
+
+/* One sample: outputs A (n_sensors, m/s^2), predicted rate w_pred (3, rad/s; used for
+ * the from_rate products, may be NULL when there are none) -> x (12). Unknowns that
+ * are neither estimated nor present are filled from w_pred (or 0 without it). */
+gf_status gf_array_solve(const gf_array_solver *solver, const double *A_m_s2,
+                         const double *w_pred_rad_s, double *x);
+
+/* The layouts of the literature (positions in m, unit directions):
+ * cube6: Tan & Park's 6-accelerometer cube as tabled in the mission digest (face
+ * centres, face diagonals); layout12: Qin's nine plus three tangential sensors
+ * (l e_x along e_y, l e_y along e_z, l e_z along e_x), which makes all of w w^T linear. */
+gf_status gf_layout_cube6(double lever_arm_m, gf_array_geometry *geometry);
+gf_status gf_layout_12(double lever_arm_m, gf_array_geometry *geometry);
+
+/* ---- angular-rate strategies ------------------------------------------------------ */
+#define GF_RATE_INTEGRATE 0   /* w_k = w_(k-1) + trapezoid(w_dot)  (6-accelerometer style) */
+#define GF_RATE_SQRT 1        /* |w| = sqrt(W_kk), sign from integrated w_dot (Qin)    */
+#define GF_RATE_EIGEN 2       /* dominant eigenpair of W, sign from integrated w_dot  */
+#define GF_RATE_FUSED 3       /* EKF on [w, w_dot bias]: predicted with w_dot, corrected
+                                 with the measured W (its information about w_k vanishes
+                                 as w_k -> 0, so zero crossings ride on w_dot)           */
+
+/* flags per sample */
+#define GF_RATE_FLAG_NEG_X 1          /* W_kk < 0 (SQRT) / lambda_max < 0 (EIGEN, bit 0) */
+#define GF_RATE_FLAG_NEG_Y 2
+#define GF_RATE_FLAG_NEG_Z 4
+#define GF_RATE_FLAG_SIGN_UNKNOWN 8   /* a sign reference was exactly zero */
+#define GF_RATE_FLAG_UPDATE_SKIPPED 16 /* FUSED: innovation covariance not positive definite */
+
+typedef struct gf_rate_config {
+    int32_t strategy;               /* GF_RATE_* */
+    double accel_noise_m_s2;        /* white noise std of each accelerometer (FUSED), > 0 */
+    double bias_walk_rad_s2_sqrt_s; /* FUSED: random walk of the w_dot bias state */
+    double init_std_rad_s;          /* FUSED: initial std of w about omega_init */
+    double init_bias_std_rad_s2;    /* FUSED: initial std of the w_dot bias */
+} gf_rate_config;
+
+typedef struct gf_gfins_state {
+    gf_array_solver solver;
+    gf_rate_config cfg;
+    double omega_rad_s[3];          /* rate at the last sample */
+    double omega_ref_rad_s[3];      /* omega_init + trapezoidal integral of w_dot */
+    double omega_dot_rad_s2[3];     /* w_dot at the last sample */
+    double R_W[36];                 /* covariance of the measured products (m x m) */
+    double var_omega_dot[9];        /* covariance of w_dot (3 x 3) */
+    int32_t n_w_meas;               /* 3 (diagonal) or 6 (all products) for FUSED */
+    gf_kalman kf;                   /* FUSED: x = [w (3), b (3)], w_dot_true = w_dot - b */
+    uint64_t n_samples;
+} gf_gfins_state;
+
+void gf_rate_config_default(gf_rate_config *cfg);
+
+/* Initialises the rate solver. Errors: the geometry's (see gf_array_solver_init);
+ * GF_ERR_BAD_PARAMETER when the strategy needs what the array does not measure (SQRT:
+ * the diagonal of W; EIGEN: all of W; FUSED: at least the diagonal) or a bad config. */
+gf_status gf_gfins_init(gf_gfins_state *state, const gf_array_geometry *geometry,
+                        const gf_rate_config *cfg, const double *omega_init_rad_s,
+                        uint32_t *unobservable);
+
+/* One sample of outputs A (n_sensors) dt_s after the previous one (ignored for the
+ * first): f (3), w (3), w_dot (3), W (6: measured or predicted products), flags.
+ * The state changes only on GF_OK. */
+gf_status gf_gfins_step(gf_gfins_state *state, const double *A_m_s2, double dt_s,
+                        double *f_m_s2, double *omega_rad_s, double *omega_dot_rad_s2,
+                        double *W, uint8_t *flags);
+
+/* Batch: n samples (A: n x n_sensors) at a fixed dt_s; outputs n x 3 (W: n x 6, may be
+ * NULL) and n flags. *n_done = samples solved; rows before an error are valid. */
+gf_status gf_gfins_run(gf_gfins_state *state, size_t n, const double *A_m_s2, double dt_s,
+                       double *f_m_s2, double *omega_rad_s, double *omega_dot_rad_s2,
+                       double *W, uint8_t *flags, size_t *n_done);
+
+/* ---- navigator: array -> (w, f) -> strapdown ------------------------------------- */
+typedef struct gf_gfnav_state {
+    gf_gfins_state rate;
+    gf_sins_state nav;              /* rate input */
+} gf_gfnav_state;
+
+/* sins_cfg->input must be GF_SINS_INPUT_RATES. */
+gf_status gf_gfnav_init(gf_gfnav_state *state, const gf_array_geometry *geometry,
+                        const gf_rate_config *rate_cfg, const double *omega_init_rad_s,
+                        const gf_sins_config *sins_cfg, const double *q_bn,
+                        const double *v_n_m_s, double lat_rad, double lon_rad, double h_m,
+                        double t0_s, uint32_t *unobservable);
+
+/* Batch navigation of n array samples (the first one at t0): rows of q_bn (n x 4),
+ * v_n_m_s (n x 3), pos (n x 3), and optionally omega_rad_s, f_m_s2 (n x 3, may be NULL)
+ * and flags (n, may be NULL). Errors as gf_gfins_run and gf_sins_run. */
+gf_status gf_gfnav_run(gf_gfnav_state *state, size_t n, const double *A_m_s2, double dt_s,
+                       const double *h_ext_m, double *q_bn, double *v_n_m_s, double *pos,
+                       double *omega_rad_s, double *f_m_s2, uint8_t *flags, size_t *n_done);
+/* CDEF END */
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* GF_GFINS_H */

@@ -1,0 +1,159 @@
+/* gf_kalman.c — see gf_kalman.h. */
+#include "gf_kalman.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "gf_linalg.h"
+
+#define NMAX GF_KF_MAX_N
+#define MMAX GF_KF_MAX_M
+
+gf_status gf_kalman_init(gf_kalman *kf, size_t n, const double *x0, const double *P0)
+{
+    if (!kf || !x0 || !P0)
+        return GF_ERR_NULL_POINTER;
+    if (n == 0 || n > NMAX)
+        return GF_ERR_BAD_SIZE;
+    for (size_t i = 0; i < n; ++i)
+        if (!isfinite(x0[i]))
+            return GF_ERR_NONFINITE_INPUT;
+    for (size_t i = 0; i < n * n; ++i)
+        if (!isfinite(P0[i]))
+            return GF_ERR_NONFINITE_INPUT;
+    memset(kf, 0, sizeof *kf);
+    kf->n = n;
+    memcpy(kf->x, x0, n * sizeof *x0);
+    memcpy(kf->P, P0, n * n * sizeof *P0);
+    return GF_OK;
+}
+
+gf_status gf_kalman_predict(gf_kalman *kf, const double *F, const double *Q, int propagate_x)
+{
+    if (!kf)
+        return GF_ERR_NULL_POINTER;
+    const size_t n = kf->n;
+    if (n == 0 || n > NMAX)
+        return GF_ERR_BAD_SIZE;
+    if (F) {
+        double FP[NMAX * NMAX];
+        for (size_t i = 0; i < n; ++i)
+            for (size_t j = 0; j < n; ++j) {
+                double acc = 0.0;
+                for (size_t k = 0; k < n; ++k)
+                    acc += F[i * n + k] * kf->P[k * n + j];
+                FP[i * n + j] = acc;
+            }
+        for (size_t i = 0; i < n; ++i)
+            for (size_t j = i; j < n; ++j) {
+                double acc = 0.0;
+                for (size_t k = 0; k < n; ++k)
+                    acc += FP[i * n + k] * F[j * n + k];
+                kf->P[i * n + j] = kf->P[j * n + i] = acc;
+            }
+        if (propagate_x) {
+            double x[NMAX];
+            for (size_t i = 0; i < n; ++i) {
+                double acc = 0.0;
+                for (size_t k = 0; k < n; ++k)
+                    acc += F[i * n + k] * kf->x[k];
+                x[i] = acc;
+            }
+            memcpy(kf->x, x, n * sizeof *x);
+        }
+    }
+    if (Q)
+        for (size_t i = 0; i < n * n; ++i)
+            kf->P[i] += Q[i];
+    return GF_OK;
+}
+
+gf_status gf_kalman_update(gf_kalman *kf, size_t m, const double *residual, const double *H,
+                           const double *R, double *nis)
+{
+    if (!kf || !residual || !H || !R)
+        return GF_ERR_NULL_POINTER;
+    const size_t n = kf->n;
+    if (m == 0 || m > MMAX || n == 0 || n > NMAX)
+        return GF_ERR_BAD_SIZE;
+    for (size_t i = 0; i < m; ++i)
+        if (!isfinite(residual[i]))
+            return GF_ERR_NONFINITE_INPUT;
+    /* PHt = P H^T (n x m), S = H P H^T + R (m x m) */
+    double PHt[NMAX * MMAX], S[MMAX * MMAX], L[MMAX * MMAX];
+    for (size_t i = 0; i < n; ++i)
+        for (size_t j = 0; j < m; ++j) {
+            double acc = 0.0;
+            for (size_t k = 0; k < n; ++k)
+                acc += kf->P[i * n + k] * H[j * n + k];
+            PHt[i * m + j] = acc;
+        }
+    for (size_t i = 0; i < m; ++i)
+        for (size_t j = 0; j < m; ++j) {
+            double acc = R[i * m + j];
+            for (size_t k = 0; k < n; ++k)
+                acc += H[i * n + k] * PHt[k * m + j];
+            S[i * m + j] = acc;
+        }
+    for (size_t i = 0; i < m; ++i) /* symmetrise against round-off */
+        for (size_t j = i + 1; j < m; ++j)
+            S[i * m + j] = S[j * m + i] = 0.5 * (S[i * m + j] + S[j * m + i]);
+    memcpy(L, S, m * m * sizeof *S);
+    const gf_status st = gf_cholesky(m, L);
+    if (st != GF_OK)
+        return st;
+    /* K^T = S^-1 (P H^T)^T  (m x n) */
+    double Kt[MMAX * NMAX];
+    for (size_t i = 0; i < m; ++i)
+        for (size_t j = 0; j < n; ++j)
+            Kt[i * n + j] = PHt[j * m + i];
+    gf_cholesky_solve(m, L, n, Kt);
+    if (nis) {
+        double y[MMAX];
+        memcpy(y, residual, m * sizeof *y);
+        gf_cholesky_solve(m, L, 1, y);
+        double acc = 0.0;
+        for (size_t i = 0; i < m; ++i)
+            acc += residual[i] * y[i];
+        *nis = acc;
+    }
+    for (size_t i = 0; i < n; ++i) {
+        double acc = 0.0;
+        for (size_t j = 0; j < m; ++j)
+            acc += Kt[j * n + i] * residual[j];
+        kf->x[i] += acc;
+    }
+    /* Joseph form: A = I - K H;  P <- A P A^T + K R K^T */
+    double A[NMAX * NMAX], AP[NMAX * NMAX], KR[NMAX * MMAX];
+    for (size_t i = 0; i < n; ++i)
+        for (size_t j = 0; j < n; ++j) {
+            double acc = (i == j) ? 1.0 : 0.0;
+            for (size_t k = 0; k < m; ++k)
+                acc -= Kt[k * n + i] * H[k * n + j];
+            A[i * n + j] = acc;
+        }
+    for (size_t i = 0; i < n; ++i)
+        for (size_t j = 0; j < n; ++j) {
+            double acc = 0.0;
+            for (size_t k = 0; k < n; ++k)
+                acc += A[i * n + k] * kf->P[k * n + j];
+            AP[i * n + j] = acc;
+        }
+    for (size_t i = 0; i < n; ++i)
+        for (size_t j = 0; j < m; ++j) {
+            double acc = 0.0;
+            for (size_t k = 0; k < m; ++k)
+                acc += Kt[k * n + i] * R[k * m + j];
+            KR[i * m + j] = acc;
+        }
+    for (size_t i = 0; i < n; ++i)
+        for (size_t j = i; j < n; ++j) {
+            double acc = 0.0;
+            for (size_t k = 0; k < n; ++k)
+                acc += AP[i * n + k] * A[j * n + k];
+            for (size_t k = 0; k < m; ++k)
+                acc += KR[i * m + k] * Kt[k * n + j];
+            kf->P[i * n + j] = kf->P[j * n + i] = acc;
+        }
+    return GF_OK;
+}

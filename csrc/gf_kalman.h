@@ -1,0 +1,52 @@
+/* gf_kalman.h — the one Kalman engine of gfins_fmi: a fixed maximum dimension, dense,
+ * no heap. Filters (the fused rate estimator now; the INS/GNSS, calibration and
+ * alignment filters later) own the model — state layout with named indices, the
+ * transition F, noise Q, measurement H, R — and hand it to these two calls. Extended
+ * (linearised) filters propagate their state themselves and give the residual z - h(x).
+ *
+ *   predict:  x <- F x (unless the caller propagated x),  P <- F P F^T + Q
+ *   update:   S = H P H^T + R,  K = P H^T S^-1,  x <- x + K r,
+ *             P <- (I - K H) P (I - K H)^T + K R K^T      (Joseph form: stays symmetric
+ *                                                           positive semi-definite)
+ */
+#ifndef GF_KALMAN_H
+#define GF_KALMAN_H
+
+#include <stddef.h>
+
+#include "gf_status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* CDEF BEGIN */
+#define GF_KF_MAX_N 36   /* states: the 36-state rotating-INS calibration of seed 001 */
+#define GF_KF_MAX_M 12   /* measurements per update */
+
+typedef struct gf_kalman {
+    size_t n;                                /* number of states, 1..GF_KF_MAX_N */
+    double x[GF_KF_MAX_N];                   /* state estimate */
+    double P[GF_KF_MAX_N * GF_KF_MAX_N];     /* covariance, row-major n x n (stride n) */
+} gf_kalman;
+
+/* x0 (n) and P0 (n x n, symmetric positive semi-definite). */
+gf_status gf_kalman_init(gf_kalman *kf, size_t n, const double *x0, const double *P0);
+
+/* F (n x n; NULL = identity) and Q (n x n; NULL = zero). propagate_x = 0 leaves x to
+ * the caller (extended filters). */
+gf_status gf_kalman_predict(gf_kalman *kf, const double *F, const double *Q, int propagate_x);
+
+/* Update with m measurements: residual r = z - h(x) (m), H (m x n), R (m x m, positive
+ * definite). nis (may be NULL) receives r^T S^-1 r. Errors: GF_ERR_BAD_SIZE,
+ * GF_ERR_NONFINITE_INPUT, GF_ERR_SINGULAR_GEOMETRY (S not positive definite); the
+ * filter is unchanged on error. */
+gf_status gf_kalman_update(gf_kalman *kf, size_t m, const double *residual, const double *H,
+                           const double *R, double *nis);
+/* CDEF END */
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* GF_KALMAN_H */

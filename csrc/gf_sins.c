@@ -17,6 +17,7 @@ void gf_sins_config_default(gf_sins_config *cfg)
     cfg->input = GF_SINS_INPUT_INCREMENTS;
     cfg->coning = 1;
     cfg->vertical = GF_SINS_VERTICAL_FREE;
+    cfg->earth = GF_SINS_EARTH_WGS84;
     cfg->hold_height_m = 0.0;
     cfg->baro_tau_s = 10.0;
     cfg->max_rate_rad_s = 50.0;
@@ -28,6 +29,8 @@ static int config_is_valid(const gf_sins_config *c)
     return (c->input == GF_SINS_INPUT_INCREMENTS || c->input == GF_SINS_INPUT_RATES) &&
            (c->coning == 0 || c->coning == 1) &&
            (c->vertical >= GF_SINS_VERTICAL_FREE && c->vertical <= GF_SINS_VERTICAL_BARO) &&
+           (c->earth == GF_SINS_EARTH_WGS84 || c->earth == GF_SINS_EARTH_FLAT) &&
+           c->flat_gravity_m_s2 >= 0.0 && isfinite(c->flat_gravity_m_s2) &&
            isfinite(c->hold_height_m) && c->baro_tau_s > 0.0 && isfinite(c->baro_tau_s) &&
            c->max_rate_rad_s > 0.0 && c->max_specific_force_m_s2 > 0.0;
 }
@@ -120,6 +123,16 @@ gf_status gf_sins_init(gf_sins_state *state, const gf_sins_config *cfg, const do
     state->sin_lat = e.sin_lat;
     state->cos_lat = e.cos_lat;
     state->R_M_m = e.R_M_m;
+    return GF_OK;
+}
+
+gf_status gf_sins_set_flat_position(gf_sins_state *state, const double *pos_m)
+{
+    if (!state || !pos_m)
+        return GF_ERR_NULL_POINTER;
+    if (!gf_v3_isfinite(pos_m))
+        return GF_ERR_NONFINITE_INPUT;
+    gf_v3_copy(pos_m, state->flat_pos_m);
     return GF_OK;
 }
 
@@ -224,6 +237,30 @@ static gf_status sins_update(gf_sins_state *s, const double gyro[3], const doubl
     gf_v3_cross(dth, dv, t1);
     for (int i = 0; i < 3; ++i)
         dv_b[i] = dv[i] + 0.5 * t1[i] + scul[i];
+
+    if (cfg->earth == GF_SINS_EARTH_FLAT) {
+        /* fixed frame: v' = C f + g, r' = v, q' = q w/2, g = [0, 0, -flat_gravity] */
+        double dvn[3], v_new[3], qb[4], q[4];
+        gf_q_rotate(s->q_bn, dv_b, dvn);
+        gf_v3_add(s->v_n_m_s, dvn, v_new);
+        v_new[2] -= cfg->flat_gravity_m_s2 * T;
+        q_from_rotvec_fast(phi, qb);
+        gf_q_mul(s->q_bn, qb, q);
+        if (!gf_q_normalize(q, q) || !v3_finite(v_new))
+            return GF_ERR_DIVERGED;
+        for (int i = 0; i < 3; ++i) {
+            s->flat_pos_m[i] += 0.5 * T * (s->v_n_m_s[i] + v_new[i]);
+            s->a_n_m_s2[i] = (v_new[i] - s->v_n_m_s[i]) / T;
+        }
+        memcpy(s->q_bn, q, sizeof q);
+        gf_v3_copy(v_new, s->v_n_m_s);
+        gf_v3_copy(gyro, s->prev_gyro);
+        gf_v3_copy(accel, s->prev_accel);
+        s->have_prev = 1;
+        s->time_s += s->earth_rate_sign > 0 ? T : -T;
+        s->n_samples += 1;
+        return GF_OK;
+    }
 
     /* mid-interval navigation quantities, extrapolated with the last acceleration: the
      * latitude moves by d = T/2 vN / (R_M + h) (a few 1e-7 rad at most), so sin and cos
@@ -422,9 +459,13 @@ gf_status gf_sins_run(gf_sins_state *state, size_t n, const double *gyro, const 
         gf_v3_copy(s.v_n_m_s, v_n_m_s + 3 * k);
         if (backward)
             gf_v3_scale(v_n_m_s + 3 * k, -1.0, v_n_m_s + 3 * k); /* report true-time velocity */
-        pos[3 * k] = s.lat_rad;
-        pos[3 * k + 1] = s.lon_rad;
-        pos[3 * k + 2] = s.h_m;
+        if (s.cfg.earth == GF_SINS_EARTH_FLAT) {
+            gf_v3_copy(s.flat_pos_m, pos + 3 * k);
+        } else {
+            pos[3 * k] = s.lat_rad;
+            pos[3 * k + 1] = s.lon_rad;
+            pos[3 * k + 2] = s.h_m;
+        }
         if (time_s)
             time_s[k] = s.time_s;
     }

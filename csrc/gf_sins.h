@@ -47,6 +47,13 @@ extern "C" {
 #define GF_SINS_VERTICAL_HOLD 1      /* height held at hold_height_m, vertical velocity 0 */
 #define GF_SINS_VERTICAL_BARO 2      /* third-order loop on an external height, see below */
 
+#define GF_SINS_EARTH_WGS84 0        /* the Earth of gf_earth: rotation, curvature, gravity */
+#define GF_SINS_EARTH_FLAT 1         /* a fixed (non-rotating) frame with constant gravity
+                                        flat_gravity_m_s2 along -z (0: none): q_b^i, v^i,
+                                        position in metres (east, north, up axes); the
+                                        idealised setting of seed 000's simulation.
+                                        Vertical modes do not apply. */
+
 /* Configuration (set once, before gf_sins_init). The baro loop, with e = h - h_ext:
  *   h' = v_U - k1 e,  v_U' = a_U - k2 e - b,  b' = k3 e,
  *   k1 = 3/tau, k2 = 3/tau^2 + 2 g/R, k3 = 1/tau^3: the height error then has a
@@ -55,6 +62,8 @@ typedef struct gf_sins_config {
     int input;                       /* GF_SINS_INPUT_* */
     int coning;                      /* 1: coning + sculling corrections; 0: none */
     int vertical;                    /* GF_SINS_VERTICAL_* */
+    int earth;                       /* GF_SINS_EARTH_* */
+    double flat_gravity_m_s2;        /* EARTH_FLAT: gravity magnitude, >= 0 (default 0) */
     double hold_height_m;            /* height held in HOLD mode */
     double baro_tau_s;               /* BARO loop time constant, > 0 */
     double max_rate_rad_s;           /* |w| above this is an absurd sample (default 50) */
@@ -76,6 +85,7 @@ typedef struct gf_sins_state {
     double baro_accel_m_s2;          /* BARO loop integral state b */
     double sin_lat, cos_lat;         /* of lat_rad (kept to save trigonometry) */
     double R_M_m;                    /* meridian radius at lat_rad */
+    double flat_pos_m[3];            /* EARTH_FLAT: position, m */
     uint64_t n_samples;
 } gf_sins_state;
 
@@ -107,6 +117,9 @@ gf_status gf_sins_init(gf_sins_state *state, const gf_sins_config *cfg, const do
 gf_status gf_sins_step(gf_sins_state *state, const double *gyro, const double *accel,
                        double dt_s, double h_ext_m);
 
+/* EARTH_FLAT: sets the position (m); the geodetic fields are then unused. */
+gf_status gf_sins_set_flat_position(gf_sins_state *state, const double *pos_m);
+
 /* Turns the navigator around in time (see above). Calling it twice restores the
  * navigation state and the direction; the previous-sample memory (coning terms, the
  * start of a rate record) is cleared each time, as the next sample is not adjacent. */
@@ -116,7 +129,8 @@ gf_status gf_sins_reverse(gf_sins_state *state);
  * times, strictly monotonic in the direction of travel) if not NULL, else dt_s.
  * h_ext_m (n, may be NULL). backward = 1 processes samples n-1 .. 0 (after
  * gf_sins_reverse). Row k of the outputs is the state after sample k: q_bn (n x 4),
- * v_n_m_s (n x 3), pos (n x 3: lat rad, lon rad, h m), time_s (n, may be NULL).
+ * v_n_m_s (n x 3), pos (n x 3: lat rad, lon rad, h m; EARTH_FLAT: position in m),
+ * time_s (n, may be NULL).
  * On an error the run stops: *n_done = samples processed (in processing order),
  * their rows are valid and *state is the state after the last good one. */
 gf_status gf_sins_run(gf_sins_state *state, size_t n, const double *gyro, const double *accel,

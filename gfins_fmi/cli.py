@@ -59,6 +59,30 @@ def _navigate(args) -> int:
     return status
 
 
+def _reproduce(args) -> int:
+    from gfins_fmi import reproduce as R
+    args.out.mkdir(parents=True, exist_ok=True)
+    print("Reproduction of Qin, Xu, Li (seed 000), section 2: Monte Carlo of "
+          f"{args.runs} runs (assumptions: gfins_fmi/reproduce.py, docs/reproductions/qin.md)")
+    res = R.run_qin(runs=args.runs, seed=args.seed, progress=True,
+                    drift_signs=args.drift_signs,
+                    scenario=R.QinScenario(gravity_m_s2=args.gravity))
+    table = R.qin_table(res)
+    print("\nErrors at t = 60 s\n" + table)
+    imp = R.improvement(res)
+    print(f"\nimprovement of 9 over 6 (median |error|): attitude "
+          + ", ".join(f"{100 * v:.2f}%" for v in imp["att"]) + "; position "
+          + ", ".join(f"{100 * v:.2f}%" for v in imp["pos"]))
+    rates = R.rate_strategy_table(progress=False)
+    print("\nangular-rate RMS error of the 9-accelerometer strategies (rad/s, median of 20 runs):")
+    for case, row in rates.items():
+        print(f"  {case:40s} " + "  ".join(f"{k} {v:.3g}" for k, v in row.items()))
+    png = R.qin_plot(res, args.out / "qin_errors.png")
+    (args.out / "qin_table.md").write_text(table + "\n", encoding="utf-8")
+    print(f"\nfigure: {png}\ntable: {args.out / 'qin_table.md'}")
+    return 0
+
+
 def _validate(args) -> int:
     from gfins_fmi.fmu import MODELS, fmu_path, validate
     bad = 0
@@ -162,6 +186,19 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                    help="progress bar (default: on for records of 10^6 samples or more)")
     p.set_defaults(func=_navigate)
+
+    p = sub.add_parser("reproduce", help="reproduce a published experiment (qin: the 6- vs "
+                       "9-accelerometer comparison of seed 000, as a Monte Carlo)")
+    p.add_argument("experiment", choices=["qin"])
+    p.add_argument("--runs", type=int, default=100, help="Monte-Carlo runs (default 100)")
+    p.add_argument("--seed", type=int, default=2008, help="random seed (default 2008)")
+    p.add_argument("--drift-signs", choices=["random", "equal"], default="random",
+                   help="signs of the 1.5e-5 m/s^2 drifts (default: random per sensor and run)")
+    p.add_argument("--gravity", type=float, default=9.8,
+                   help="gravity of the fixed frame, m/s^2 (default 9.8; 0: gravity-free)")
+    p.add_argument("--out", type=pathlib.Path, default=pathlib.Path("gfins_reproduce"),
+                   help="folder for the figure and the table")
+    p.set_defaults(func=_reproduce)
 
     p = sub.add_parser("validate", help="run fmpy's validation on every shipped FMU")
     p.set_defaults(func=_validate)

@@ -261,6 +261,12 @@ class GyroFreeNavigator:
         if status == lib.GF_ERR_BAD_PARAMETER:
             raise ValueError(_strategy_error(strategy, geometry) + " — or a bad initial state")
         check_status(status, "gf_gfnav_init")
+        self._flat = sc.earth == "flat"
+        if self._flat:
+            pm = as_vector3("initial.pos_m", initial.pos_m if initial.pos_m is not None
+                            else (0.0, 0.0, 0.0), "m")
+            check_status(lib.gf_sins_set_flat_position(ffi.addressof(self._state, "nav"), ptr(pm)),
+                         "flat position")
 
     def run(self, A_m_s2, dt_s: float, h_ext_m=None) -> tuple[NavSolution, RateSolution]:
         """Navigate a record (n, n_sensors); row k = state at sample k (row 0: t0)."""
@@ -284,7 +290,7 @@ class GyroFreeNavigator:
                                   ptr(rates.flags, "uint8_t"), done)
         k = int(done[0])
         t = t0 + (np.arange(n) + first) * dt_s
-        sol = NavSolution(t, q, v, pos[:, 0].copy(), pos[:, 1].copy(), pos[:, 2].copy())
+        sol = NavSolution._from_pos(t, q, v, pos, self._flat)
         if status != lib.GF_OK:
             partial = sol._rows(slice(0, k))
             if status == lib.GF_ERR_NONFINITE_INPUT:

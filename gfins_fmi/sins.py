@@ -24,6 +24,7 @@ __all__ = ["SinsConfig", "NavState", "NavSolution", "Strapdown", "euler_to_quat"
 _INPUTS = {"increments": lib.GF_SINS_INPUT_INCREMENTS, "rates": lib.GF_SINS_INPUT_RATES}
 _VERTICAL = {"free": lib.GF_SINS_VERTICAL_FREE, "hold": lib.GF_SINS_VERTICAL_HOLD,
              "baro": lib.GF_SINS_VERTICAL_BARO}
+_EARTH = {"wgs84": lib.GF_SINS_EARTH_WGS84, "flat": lib.GF_SINS_EARTH_FLAT}
 
 
 class SampleError(GfinsError, ValueError):
@@ -53,6 +54,13 @@ class SinsConfig:
         through a third-order loop with a triple pole at -1/``baro_tau_s``.
     max_rate_rad_s, max_specific_force_m_s2 : float
         Samples beyond these are refused as absurd.
+    earth : {"wgs84", "flat"}
+        The rotating WGS-84 Earth with gravity, or a fixed (non-rotating) frame with
+        constant gravity ``flat_gravity_m_s2`` along -z and position in metres
+        (``NavState.pos_m``, ``NavSolution.pos_m``): the idealised setting of seed
+        000's simulation. Vertical modes apply to "wgs84" only.
+    flat_gravity_m_s2 : float
+        Gravity of the flat frame (m/s^2, >= 0).
     """
 
     input: str = "increments"
@@ -62,10 +70,14 @@ class SinsConfig:
     baro_tau_s: float = 10.0
     max_rate_rad_s: float = 50.0
     max_specific_force_m_s2: float = 1000.0
+    earth: str = "wgs84"
+    flat_gravity_m_s2: float = 0.0
 
     def _c(self):
         if self.input not in _INPUTS:
             raise ValueError(f"input must be one of {sorted(_INPUTS)}; got {self.input!r}")
+        if self.earth not in _EARTH:
+            raise ValueError(f"earth must be one of {sorted(_EARTH)}; got {self.earth!r}")
         if self.vertical not in _VERTICAL:
             raise ValueError(f"vertical must be one of {sorted(_VERTICAL)}; got {self.vertical!r}")
         for name in ("baro_tau_s", "max_rate_rad_s", "max_specific_force_m_s2"):
@@ -83,6 +95,10 @@ class SinsConfig:
         c.baro_tau_s = self.baro_tau_s
         c.max_rate_rad_s = self.max_rate_rad_s
         c.max_specific_force_m_s2 = self.max_specific_force_m_s2
+        c.earth = _EARTH[self.earth]
+        if not (np.isfinite(self.flat_gravity_m_s2) and self.flat_gravity_m_s2 >= 0):
+            raise ValueError(f"flat_gravity_m_s2 must be finite and >= 0; got {self.flat_gravity_m_s2!r}")
+        c.flat_gravity_m_s2 = self.flat_gravity_m_s2
         return c
 
 
@@ -109,7 +125,8 @@ def quat_to_euler(q_bn) -> np.ndarray:
 @dataclass
 class NavState:
     """A navigation state: attitude q_b^n, ENU velocity (m/s), latitude and longitude
-    (rad), height (m), time (s)."""
+    (rad), height (m), time (s); ``pos_m`` (east, north, up) replaces the geodetic
+    position with ``SinsConfig(earth="flat")``."""
 
     q_bn: np.ndarray
     v_n_m_s: np.ndarray
@@ -117,6 +134,7 @@ class NavState:
     lon_rad: float
     h_m: float
     t_s: float = 0.0
+    pos_m: np.ndarray | None = None
 
     @classmethod
     def from_euler(cls, euler_rad, v_n_m_s, lat_rad, lon_rad, h_m, t_s=0.0) -> "NavState":
@@ -142,6 +160,7 @@ class NavSolution:
     """Navigation solution, row k = the state after sample k.
 
     Attributes: t_s (n,), q_bn (n, 4), v_n_m_s (n, 3), lat_rad, lon_rad, h_m (n,);
+    with ``earth="flat"``, ``pos_m`` (n, 3) instead (the geodetic columns are NaN);
     ``euler_rad`` (n, 3) is computed on demand.
     """
 
@@ -151,6 +170,7 @@ class NavSolution:
     lat_rad: np.ndarray
     lon_rad: np.ndarray
     h_m: np.ndarray
+    pos_m: np.ndarray | None = None
     _euler: np.ndarray | None = field(default=None, repr=False)
 
     def __len__(self) -> int:
@@ -165,7 +185,15 @@ class NavSolution:
 
     def _rows(self, sl) -> "NavSolution":
         return NavSolution(self.t_s[sl].copy(), self.q_bn[sl].copy(), self.v_n_m_s[sl].copy(),
-                           self.lat_rad[sl].copy(), self.lon_rad[sl].copy(), self.h_m[sl].copy())
+                           self.lat_rad[sl].copy(), self.lon_rad[sl].copy(), self.h_m[sl].copy(),
+                           None if self.pos_m is None else self.pos_m[sl].copy())
+
+    @staticmethod
+    def _from_pos(t, q, v, pos, flat: bool) -> "NavSolution":
+        if flat:
+            nan = np.full(len(t), np.nan)
+            return NavSolution(t, q, v, nan, nan.copy(), nan.copy(), pos)
+        return NavSolution(t, q, v, pos[:, 0].copy(), pos[:, 1].copy(), pos[:, 2].copy())
 
 
 class Strapdown:
@@ -194,6 +222,10 @@ class Strapdown:
                                   float(initial.h_m), float(initial.t_s))
         check_status(status, "gf_sins_init (check the initial state: finite values, "
                              "height above -R/2)")
+        if self.config.earth == "flat":
+            pm = as_vector3("initial.pos_m", initial.pos_m if initial.pos_m is not None
+                            else (0.0, 0.0, 0.0), "m")
+            check_status(lib.gf_sins_set_flat_position(self._state, ptr(pm)), "flat position")
         self._backward = False
 
     @property
@@ -201,8 +233,10 @@ class Strapdown:
         """The current state (after the last sample)."""
         s = self._state
         sign = -1.0 if self._backward else 1.0
+        flat = self.config.earth == "flat"
         return NavState(np.array(list(s.q_bn)), sign * np.array(list(s.v_n_m_s)),
-                        float(s.lat_rad), float(s.lon_rad), float(s.h_m), float(s.time_s))
+                        float(s.lat_rad), float(s.lon_rad), float(s.h_m), float(s.time_s),
+                        np.array(list(s.flat_pos_m)) if flat else None)
 
     def reverse(self) -> None:
         """Turn around in time: following :meth:`run` calls take records backward (the
@@ -292,7 +326,11 @@ class Strapdown:
         finally:
             if bar:
                 bar.close()
-        sol.lat_rad[:], sol.lon_rad[:], sol.h_m[:] = pos[:, 0], pos[:, 1], pos[:, 2]
+        if self.config.earth == "flat":
+            sol.pos_m = pos
+            sol.lat_rad[:] = sol.lon_rad[:] = sol.h_m[:] = np.nan
+        else:
+            sol.lat_rad[:], sol.lon_rad[:], sol.h_m[:] = pos[:, 0], pos[:, 1], pos[:, 2]
         if status != lib.GF_OK:
             good = slice(bad + 1, n) if self._backward else slice(0, bad)
             partial = sol._rows(good)

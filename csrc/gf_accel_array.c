@@ -14,15 +14,9 @@
  * normalisation. */
 #define GF_THETA_NORM_TOL 1e-9
 
-/* 1 if all n values are finite. x - x is 0 for finite x and NaN for NaN or +-Inf, so
- * the sum tests every element without a branch per element. */
-static inline int all_finite(const double *x, size_t n)
-{
-    double acc = 0.0;
-    for (size_t i = 0; i < n; ++i)
-        acc += x[i] - x[i];
-    return acc == 0.0;
-}
+/* Smallest lever arm accepted: below a micrometre the 1/l of eq. 4 and 6 turns
+ * round-off of the outputs into absurd rates. */
+#define GF_MIN_LEVER_ARM_M 1e-6
 
 gf_status gf_array_geometry_set(gf_array_geometry *geometry, size_t n_sensors,
                                 const double *u_m, const double *theta,
@@ -63,7 +57,7 @@ gf_status gf9_geometry(double lever_arm_m, gf_array_geometry *geometry)
 {
     if (!geometry)
         return GF_ERR_NULL_POINTER;
-    if (!(lever_arm_m > 0.0) || !isfinite(lever_arm_m))
+    if (!(lever_arm_m >= GF_MIN_LEVER_ARM_M) || !isfinite(lever_arm_m))
         return GF_ERR_BAD_PARAMETER;
     const double l = lever_arm_m, r = 1.0 / GF_SQRT2;
     /* seed 000, section 1: positions u_i / l and directions theta_i */
@@ -101,7 +95,7 @@ gf_status gf_array_forward(const gf_array_geometry *geometry, size_t n_samples,
     for (size_t k = 0; k < n_samples; ++k) {
         const double *f = f_m_s2 + 3 * k, *w = omega_rad_s + 3 * k,
                      *wd = omega_dot_rad_s2 + 3 * k;
-        if (!all_finite(f, 3) || !all_finite(w, 3) || !all_finite(wd, 3)) {
+        if (!gf_all_finite(f, 3) || !gf_all_finite(w, 3) || !gf_all_finite(wd, 3)) {
             if (n_done)
                 *n_done = k;
             return GF_ERR_NONFINITE_INPUT;
@@ -118,6 +112,11 @@ gf_status gf_array_forward(const gf_array_geometry *geometry, size_t n_samples,
             gf_v3_add(a, t2, a);
             A[i] = gf_v3_dot(geometry->theta[i], a);
         }
+        if (!gf_all_finite(A, n_sensors)) { /* finite inputs too large for a double */
+            if (n_done)
+                *n_done = k;
+            return GF_ERR_OUT_OF_RANGE;
+        }
     }
     if (n_done)
         *n_done = n_samples;
@@ -128,9 +127,9 @@ gf_status gf9_init(gf9_state *state, double lever_arm_m, const double *omega_ini
 {
     if (!state)
         return GF_ERR_NULL_POINTER;
-    if (!(lever_arm_m > 0.0) || !isfinite(lever_arm_m))
+    if (!(lever_arm_m >= GF_MIN_LEVER_ARM_M) || !isfinite(lever_arm_m))
         return GF_ERR_BAD_PARAMETER;
-    if (omega_init_rad_s && !all_finite(omega_init_rad_s, 3))
+    if (omega_init_rad_s && !gf_all_finite(omega_init_rad_s, 3))
         return GF_ERR_BAD_PARAMETER;
     memset(state, 0, sizeof *state);
     state->lever_arm_m = lever_arm_m;
@@ -143,8 +142,8 @@ gf_status gf9_init(gf9_state *state, double lever_arm_m, const double *omega_ini
  * state from bytes it is handed). */
 static int state_is_valid(const gf9_state *s)
 {
-    return s->lever_arm_m > 0.0 && isfinite(s->lever_arm_m) &&
-           all_finite(s->omega_ref_rad_s, 3) && all_finite(s->omega_dot_rad_s2, 3);
+    return s->lever_arm_m >= GF_MIN_LEVER_ARM_M && isfinite(s->lever_arm_m) &&
+           gf_all_finite(s->omega_ref_rad_s, 3) && gf_all_finite(s->omega_dot_rad_s2, 3);
 }
 
 /* The solver for one sample; used by gf9_step and inlined in the gf9_solve loop.
@@ -205,14 +204,21 @@ gf_status gf9_step(gf9_state *state, const double *A_m_s2, double dt_s, gf9_outp
     const int first = state->n_samples == 0;
     if (!first && (!(dt_s > 0.0) || !isfinite(dt_s)))
         return GF_ERR_BAD_PARAMETER;
-    if (!all_finite(A_m_s2, 9))
+    if (!gf_all_finite(A_m_s2, 9))
         return GF_ERR_NONFINITE_INPUT;
     const double l = state->lever_arm_m;
-    gf9_solve_sample(A_m_s2, 0.25 / l, -0.5 / l, first, first ? 0.0 : 0.5 * dt_s,
-                     state->omega_ref_rad_s, state->omega_dot_rad_s2, out->f_m_s2,
-                     out->omega_rad_s, out->omega_dot_rad_s2, out->omega_sq_rad2_s2,
-                     &out->flags);
-    gf_v3_copy(out->omega_dot_rad_s2, state->omega_dot_rad_s2);
+    double ref[3];
+    gf_v3_copy(state->omega_ref_rad_s, ref);
+    gf9_output o;
+    gf9_solve_sample(A_m_s2, 0.25 / l, -0.5 / l, first, first ? 0.0 : 0.5 * dt_s, ref,
+                     state->omega_dot_rad_s2, o.f_m_s2, o.omega_rad_s, o.omega_dot_rad_s2,
+                     o.omega_sq_rad2_s2, &o.flags);
+    if (!gf_all_finite(o.f_m_s2, 3) || !gf_all_finite(o.omega_rad_s, 3) ||
+        !gf_all_finite(o.omega_dot_rad_s2, 3) || !gf_all_finite(o.omega_sq_rad2_s2, 3))
+        return GF_ERR_OUT_OF_RANGE; /* finite samples too large for a double; state kept */
+    *out = o;
+    gf_v3_copy(ref, state->omega_ref_rad_s);
+    gf_v3_copy(o.omega_dot_rad_s2, state->omega_dot_rad_s2);
     state->n_samples += 1;
     return GF_OK;
 }
@@ -241,15 +247,23 @@ gf_status gf9_solve(gf9_state *state, size_t n_samples, const double *A_m_s2, do
     size_t k = 0;
     for (; k < n_samples; ++k) {
         const double *A = A_m_s2 + 9 * k;
-        if (!all_finite(A, 9)) {
+        if (!gf_all_finite(A, 9)) {
             status = GF_ERR_NONFINITE_INPUT;
             break;
         }
         double *wd = omega_dot_rad_s2 + 3 * k;
         uint32_t fl;
         const int first = (n_before + k) == 0;
+        double ref_before[3];
+        gf_v3_copy(omega_ref, ref_before);
         gf9_solve_sample(A, inv_4l, minus_inv_2l, first, half_dt_s, omega_ref, omega_dot_prev,
                          f_m_s2 + 3 * k, omega_rad_s + 3 * k, wd, omega_sq_rad2_s2 + 3 * k, &fl);
+        if (!gf_all_finite(f_m_s2 + 3 * k, 3) || !gf_all_finite(omega_rad_s + 3 * k, 3) ||
+            !gf_all_finite(wd, 3) || !gf_all_finite(omega_sq_rad2_s2 + 3 * k, 3)) {
+            gf_v3_copy(ref_before, omega_ref); /* finite samples too large for a double */
+            status = GF_ERR_OUT_OF_RANGE;
+            break;
+        }
         flags[k] = (uint8_t)fl;
         gf_v3_copy(wd, omega_dot_prev);
     }

@@ -46,13 +46,14 @@ gf_status gf_array_geometry_set(gf_array_geometry *geometry, size_t n_sensors,
 
 /* The 9-accelerometer layout of seed 000 (table in eq. 1-2, with u_7..u_9 = l[...]
  * as the equations require; the scan's "sqrt(l)" is an OCR artefact).
- * Error: GF_ERR_BAD_PARAMETER unless 0 < lever_arm_m < inf. */
+ * Error: GF_ERR_BAD_PARAMETER unless 1e-6 m <= lever_arm_m < inf. */
 gf_status gf9_geometry(double lever_arm_m, gf_array_geometry *geometry);
 
 /* Forward model for n_samples samples: rows of f_m_s2, omega_rad_s, omega_dot_rad_s2
  * (each n x 3) -> A_m_s2 (n x n_sensors). On a non-finite input the run stops,
  * *n_done (may be NULL) = index of the bad sample, and GF_ERR_NONFINITE_INPUT is
- * returned; rows before it are valid. */
+ * returned (GF_ERR_OUT_OF_RANGE when finite inputs overflow the outputs); rows before
+ * it are valid. */
 gf_status gf_array_forward(const gf_array_geometry *geometry, size_t n_samples,
                            const double *f_m_s2, const double *omega_rad_s,
                            const double *omega_dot_rad_s2, double *A_m_s2,
@@ -73,11 +74,12 @@ gf_status gf_array_forward(const gf_array_geometry *geometry, size_t n_samples,
  * integrates omega_dot with the trapezoid rule from omega_init into a reference rate
  * omega_ref, which is never reset to the solved rate. Re-anchoring it to the solved
  * rate would feed the noise of sqrt(omega^2), large near omega_k = 0, back into the
- * sign and can lock a component on the wrong sign after a zero crossing (measured:
- * rate RMS error 0.8 rad/s instead of 0.01 rad/s in the demo scenario of gfins demo). The price is
+ * sign and can lock a component on the wrong sign after a zero crossing (measured in
+ * the gfins demo scenario: rate RMS error 0.12-2.0 rad/s per axis re-anchored, 1.2e-3 to
+ * 2.9e-3 rad/s with the pure integral). The price is
  * the drift of the integral (random walk of omega_dot noise, ramp of its bias), which
- * only matters where |omega_k| is below that drift; the fused estimator of the
- * gyro-free work bounds it. */
+ * only matters where |omega_k| is below that drift; the fused estimator of gf_gfins
+ * bounds it. */
 typedef struct gf9_state {
     double lever_arm_m;            /* l of seed 000, > 0 */
     double omega_ref_rad_s[3];     /* omega_init + integral of omega_dot (signs) */
@@ -96,14 +98,15 @@ typedef struct gf9_output {
 
 /* Initialises *state. omega_init_rad_s (may be NULL = zero) is the rate at the first
  * sample: its signs are the first signs and the integration of omega_dot starts from
- * it. Error: GF_ERR_BAD_PARAMETER unless 0 < lever_arm_m < inf and omega_init is
+ * it. Error: GF_ERR_BAD_PARAMETER unless 1e-6 m <= lever_arm_m < inf and omega_init is
  * finite. */
 gf_status gf9_init(gf9_state *state, double lever_arm_m, const double *omega_init_rad_s);
 
 /* Solves one sample A_m_s2[9] taken dt_s after the previous one (dt_s is ignored on
  * the first sample). The state is updated only on GF_OK.
  * Errors: GF_ERR_NONFINITE_INPUT, GF_ERR_BAD_PARAMETER (dt_s <= 0 or not finite after
- * the first sample), GF_ERR_NULL_POINTER. */
+ * the first sample), GF_ERR_OUT_OF_RANGE (finite samples whose solution overflows),
+ * GF_ERR_NULL_POINTER. */
 gf_status gf9_step(gf9_state *state, const double *A_m_s2, double dt_s, gf9_output *out);
 
 /* Batch solve of n_samples rows of A_m_s2 (n x 9) at a fixed interval dt_s, in one

@@ -4,6 +4,8 @@
 #include <math.h>
 #include <stddef.h>
 
+#include "gf_math.h"
+
 #define GF_WGS84_F (1.0 / GF_WGS84_INV_F)
 #define GF_WGS84_E2 (GF_WGS84_F * (2.0 - GF_WGS84_F))
 #define GF_WGS84_B_M (GF_WGS84_A_M * (1.0 - GF_WGS84_F))
@@ -22,10 +24,17 @@ static double gravity_of(double s2, double inv_sq, double h_m)
     return g0 * (1.0 - 2.0 / a * (1.0 + f + m - 2.0 * f * s2) * h_m + 3.0 / (a * a) * h_m * h_m);
 }
 
-double gf_earth_gravity(double lat_rad, double h_m)
+gf_status gf_earth_gravity(double lat_rad, double h_m, double *gravity_m_s2)
 {
+    if (!gravity_m_s2)
+        return GF_ERR_NULL_POINTER;
+    if (!isfinite(lat_rad) || !isfinite(h_m))
+        return GF_ERR_NONFINITE_INPUT;
+    if (!(fabs(lat_rad) <= 0.5 * GF_PI) || !(h_m > -0.5 * GF_WGS84_A_M))
+        return GF_ERR_BAD_PARAMETER;
     const double s = sin(lat_rad), s2 = s * s;
-    return gravity_of(s2, 1.0 / sqrt(1.0 - GF_WGS84_E2 * s2), h_m);
+    *gravity_m_s2 = gravity_of(s2, 1.0 / sqrt(1.0 - GF_WGS84_E2 * s2), h_m);
+    return GF_OK;
 }
 
 void gf_earth_from_sincos(gf_earth *earth, double sin_lat, double cos_lat, double h_m,
@@ -62,7 +71,7 @@ gf_status gf_earth_update(gf_earth *earth, double lat_rad, double h_m, const dou
     if (!isfinite(lat_rad) || !isfinite(h_m) || !isfinite(earth_rate_sign) ||
         (v_n_m_s && !(isfinite(v_n_m_s[0]) && isfinite(v_n_m_s[1]) && isfinite(v_n_m_s[2]))))
         return GF_ERR_NONFINITE_INPUT;
-    if (!(fabs(lat_rad) < 0.5 * 3.14159265358979323846))
+    if (!(fabs(lat_rad) < GF_HALF_PI))
         return GF_ERR_BAD_PARAMETER;
     /* R_N >= a: a height below -a/2 is absurd wherever it is */
     if (!(h_m > -0.5 * GF_WGS84_A_M))

@@ -47,19 +47,21 @@ typedef struct gf_earth {
 gf_status gf_earth_update(gf_earth *earth, double lat_rad, double h_m, const double *v_n_m_s,
                           double earth_rate_sign);
 
-/* As gf_earth_update, from sin and cos of the latitude (the mechanization keeps them
- * and so saves the trigonometry); no argument checks. */
-void gf_earth_from_sincos(gf_earth *earth, double sin_lat, double cos_lat, double h_m,
-                          const double *v_n_m_s, double earth_rate_sign);
-
-/* Normal gravity magnitude (m/s^2) at latitude lat_rad and height h_m. */
-double gf_earth_gravity(double lat_rad, double h_m);
+/* Normal gravity magnitude (m/s^2) at latitude lat_rad and height h_m. Errors as
+ * gf_earth_update. */
+gf_status gf_earth_gravity(double lat_rad, double h_m, double *gravity_m_s2);
 
 /* For n positions: radii of curvature (m), normal gravity (m/s^2); for Python and
  * checks. Errors as gf_earth_update; *n_done = positions done. */
 gf_status gf_earth_batch(size_t n, const double *lat_rad, const double *h_m, double *R_M_m,
                          double *R_N_m, double *gravity_m_s2, size_t *n_done);
 /* CDEF END */
+
+/* Internal to the core (not in the Python binding): gf_earth_update from sin and cos of
+ * the latitude, which the mechanization keeps to save the trigonometry. No argument
+ * checks: the caller has checked them. */
+void gf_earth_from_sincos(gf_earth *earth, double sin_lat, double cos_lat, double h_m,
+                          const double *v_n_m_s, double earth_rate_sign);
 
 #ifdef __cplusplus
 }

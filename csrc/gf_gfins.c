@@ -218,15 +218,16 @@ gf_status gf_layout_12(double l, gf_array_geometry *g)
 
 /* ---- rate strategies ---------------------------------------------------------------- */
 
-void gf_rate_config_default(gf_rate_config *cfg)
+gf_status gf_rate_config_default(gf_rate_config *cfg)
 {
     if (!cfg)
-        return;
+        return GF_ERR_NULL_POINTER;
     cfg->strategy = GF_RATE_INTEGRATE;
     cfg->accel_noise_m_s2 = 1e-4;
     cfg->bias_walk_rad_s2_sqrt_s = 1e-6;
     cfg->init_std_rad_s = 1e-2;
     cfg->init_bias_std_rad_s2 = 1e-3;
+    return GF_OK;
 }
 
 static int estimates(const gf_array_solver *s, uint32_t groups)
@@ -302,13 +303,6 @@ gf_status gf_gfins_init(gf_gfins_state *st, const gf_array_geometry *g, const gf
     return GF_OK;
 }
 
-static inline int all_finite_n(const double *x, size_t n)
-{
-    double acc = 0.0;
-    for (size_t i = 0; i < n; ++i)
-        acc += x[i] - x[i];
-    return acc == 0.0;
-}
 
 /* Pending results of one rate step (committed only if the whole sample succeeds). */
 typedef struct rate_step_result {
@@ -321,7 +315,7 @@ static gf_status rate_step(const gf_gfins_state *st, const double *A, double dt,
                            rate_step_result *r)
 {
     const gf_array_solver *s = &st->solver;
-    if (!all_finite_n(A, s->n_sensors))
+    if (!gf_all_finite(A, s->n_sensors))
         return GF_ERR_NONFINITE_INPUT;
     const int first = st->n_samples == 0;
     if (!first && !(dt > 0.0 && isfinite(dt)))
@@ -434,7 +428,7 @@ static gf_status rate_step(const gf_gfins_state *st, const double *A, double dt,
         gf_array_solve(s, A, r->w, x);
     gf_v3_copy(x, r->f);
     memcpy(r->W, x + 6, sizeof r->W);
-    if (!all_finite_n(r->w, 3) || !all_finite_n(r->f, 3))
+    if (!gf_all_finite(r->w, 3) || !gf_all_finite(r->f, 3))
         return GF_ERR_DIVERGED;
     return GF_OK;
 }

@@ -110,7 +110,7 @@ typedef struct gf_gfins_state {
     uint64_t n_samples;
 } gf_gfins_state;
 
-void gf_rate_config_default(gf_rate_config *cfg);
+gf_status gf_rate_config_default(gf_rate_config *cfg);
 
 /* Initialises the rate solver. Errors: the geometry's (see gf_array_solver_init);
  * GF_ERR_BAD_PARAMETER when the strategy needs what the array does not measure (SQRT:

@@ -17,10 +17,24 @@
 #define GF_MATH_H
 
 #include <math.h>
+#include <stddef.h>
 
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+#define GF_PI 3.14159265358979323846
+#define GF_HALF_PI (0.5 * GF_PI)
+
+/* 1 if all n values are finite. x - x is 0 for finite x and NaN for NaN or +-Inf, so
+ * one sum tests every element without a branch per element. */
+static inline int gf_all_finite(const double *x, size_t n)
+{
+    double acc = 0.0;
+    for (size_t i = 0; i < n; ++i)
+        acc += x[i] - x[i];
+    return acc == 0.0;
+}
 
 /* ---- 3-vectors ------------------------------------------------------------ */
 
@@ -75,7 +89,7 @@ static inline void gf_v3_cross(const double a[3], const double b[3], double out[
 
 static inline int gf_v3_isfinite(const double a[3])
 {
-    return isfinite(a[0]) && isfinite(a[1]) && isfinite(a[2]);
+    return gf_all_finite(a, 3);
 }
 
 /* ---- 3x3 matrices --------------------------------------------------------- */

@@ -6,13 +6,11 @@
 
 #include "gf_math.h"
 
-#define GF_PI 3.14159265358979323846
-#define GF_HALF_PI (0.5 * GF_PI)
 
-void gf_sins_config_default(gf_sins_config *cfg)
+gf_status gf_sins_config_default(gf_sins_config *cfg)
 {
     if (!cfg)
-        return;
+        return GF_ERR_NULL_POINTER;
     memset(cfg, 0, sizeof *cfg);
     cfg->input = GF_SINS_INPUT_INCREMENTS;
     cfg->coning = 1;
@@ -22,6 +20,7 @@ void gf_sins_config_default(gf_sins_config *cfg)
     cfg->baro_tau_s = 10.0;
     cfg->max_rate_rad_s = 50.0;
     cfg->max_specific_force_m_s2 = 1000.0;
+    return GF_OK;
 }
 
 static int config_is_valid(const gf_sins_config *c)
@@ -31,8 +30,10 @@ static int config_is_valid(const gf_sins_config *c)
            (c->vertical >= GF_SINS_VERTICAL_FREE && c->vertical <= GF_SINS_VERTICAL_BARO) &&
            (c->earth == GF_SINS_EARTH_WGS84 || c->earth == GF_SINS_EARTH_FLAT) &&
            c->flat_gravity_m_s2 >= 0.0 && isfinite(c->flat_gravity_m_s2) &&
-           isfinite(c->hold_height_m) && c->baro_tau_s > 0.0 && isfinite(c->baro_tau_s) &&
-           c->max_rate_rad_s > 0.0 && c->max_specific_force_m_s2 > 0.0;
+           isfinite(c->hold_height_m) && c->hold_height_m > -0.5 * GF_WGS84_A_M &&
+           c->baro_tau_s > 0.0 && isfinite(c->baro_tau_s) &&
+           c->max_rate_rad_s > 0.0 && isfinite(c->max_rate_rad_s) &&
+           c->max_specific_force_m_s2 > 0.0 && isfinite(c->max_specific_force_m_s2);
 }
 
 /* ---- attitude conventions (seed 002) ---------------------------------------------- */
@@ -44,8 +45,12 @@ static void quat_axis(int axis, double angle_rad, double q[4])
     q[1 + axis] = sin(0.5 * angle_rad);
 }
 
-void gf_euler_to_quat(const double *euler_rad, double *q_bn)
+gf_status gf_euler_to_quat(const double *euler_rad, double *q_bn)
 {
+    if (!euler_rad || !q_bn)
+        return GF_ERR_NULL_POINTER;
+    if (!gf_all_finite(euler_rad, 3))
+        return GF_ERR_NONFINITE_INPUT;
     /* C_b^n = Rz(-psi) Rx(theta) Ry(gamma) */
     double qz[4], qx[4], qy[4], t[4];
     quat_axis(2, -euler_rad[0], qz);
@@ -53,10 +58,21 @@ void gf_euler_to_quat(const double *euler_rad, double *q_bn)
     quat_axis(1, euler_rad[2], qy);
     gf_q_mul(qz, qx, t);
     gf_q_mul(t, qy, q_bn);
+    return GF_OK;
 }
 
-void gf_quat_to_euler(const double *q_bn, double *euler_rad)
+/* Tolerance on |q| for Euler angles: unit quaternions carry a few ulp; a caller's
+ * quaternion off by more is not an attitude (normalise it first). */
+#define GF_QUAT_UNIT_TOL 1e-6
+
+gf_status gf_quat_to_euler(const double *q_bn, double *euler_rad)
 {
+    if (!q_bn || !euler_rad)
+        return GF_ERR_NULL_POINTER;
+    if (!gf_all_finite(q_bn, 4))
+        return GF_ERR_NONFINITE_INPUT;
+    if (!(fabs(gf_q_norm(q_bn) - 1.0) <= GF_QUAT_UNIT_TOL))
+        return GF_ERR_BAD_PARAMETER;
     gf_mat3 C;
     gf_q_to_dcm(q_bn, &C);
     /* C[2][1] = sin(theta); C[2][0] = -cos(theta) sin(gamma), C[2][2] = cos(theta) cos(gamma);
@@ -78,14 +94,26 @@ void gf_quat_to_euler(const double *q_bn, double *euler_rad)
     euler_rad[0] = psi;
     euler_rad[1] = theta;
     euler_rad[2] = gamma;
+    return GF_OK;
 }
 
-gf_status gf_quat_to_euler_batch(size_t n, const double *q_bn, double *euler_rad)
+gf_status gf_quat_to_euler_batch(size_t n, const double *q_bn, double *euler_rad,
+                                 size_t *n_done)
 {
+    if (n_done)
+        *n_done = 0;
     if (!q_bn || !euler_rad)
         return GF_ERR_NULL_POINTER;
-    for (size_t k = 0; k < n; ++k)
-        gf_quat_to_euler(q_bn + 4 * k, euler_rad + 3 * k);
+    for (size_t k = 0; k < n; ++k) {
+        const gf_status st = gf_quat_to_euler(q_bn + 4 * k, euler_rad + 3 * k);
+        if (st != GF_OK) {
+            if (n_done)
+                *n_done = k;
+            return st;
+        }
+    }
+    if (n_done)
+        *n_done = n;
     return GF_OK;
 }
 
@@ -171,7 +199,7 @@ static inline void q_from_rotvec_fast(const double phi[3], double q[4])
 
 static inline int v3_finite(const double a[3])
 {
-    return (a[0] - a[0]) + (a[1] - a[1]) + (a[2] - a[2]) == 0.0;
+    return gf_all_finite(a, 3);
 }
 
 /* One update of *s by one sample. All checks come before any write, so an error leaves
@@ -310,13 +338,16 @@ static gf_status sins_update(gf_sins_state *s, const double gyro[3], const doubl
         v_new[2] = 0.0;
         h_new = cfg->hold_height_m;
     } else if (cfg->vertical == GF_SINS_VERTICAL_BARO && !isnan(h_ext_m)) {
+        /* h_ext is the height at t_k: compare it with the inertial prediction for t_k,
+         * then correct (predictor-corrector form of the loop in gf_sins.h) */
         const double tau = cfg->baro_tau_s;
-        const double err = s->h_m - h_ext_m;
+        const double h_pred = s->h_m + 0.5 * T * (s->v_n_m_s[2] + v_new[2]);
+        const double err = h_pred - h_ext_m;
         const double k1 = 3.0 / tau;
         const double k2 = 3.0 / (tau * tau) + 2.0 * e.gravity_m_s2 / (e.R_N_m + h_mid);
         const double k3 = 1.0 / (tau * tau * tau);
         v_new[2] -= (k2 * err + s->baro_accel_m_s2) * T;
-        h_new = s->h_m + 0.5 * T * (s->v_n_m_s[2] + v_new[2]) - k1 * err * T;
+        h_new = h_pred - k1 * err * T;
         b_new = s->baro_accel_m_s2 + k3 * err * T;
     } else {
         h_new = s->h_m + 0.5 * T * (s->v_n_m_s[2] + v_new[2]);

@@ -89,15 +89,18 @@ typedef struct gf_sins_state {
     uint64_t n_samples;
 } gf_sins_state;
 
-/* Defaults: increments, coning on, free vertical channel, tau 10 s, limits 50 rad/s
- * and 1000 m/s^2. */
-void gf_sins_config_default(gf_sins_config *cfg);
+/* Defaults: increments, coning on, free vertical channel, WGS-84, tau 10 s, limits
+ * 50 rad/s and 1000 m/s^2. */
+gf_status gf_sins_config_default(gf_sins_config *cfg);
 
-/* Euler angles (heading, pitch, roll; rad) <-> quaternion q_b^n, conventions above. */
-void gf_euler_to_quat(const double *euler_rad, double *q_bn);
-void gf_quat_to_euler(const double *q_bn, double *euler_rad);
-/* n quaternions (n x 4) to Euler angles (n x 3). */
-gf_status gf_quat_to_euler_batch(size_t n, const double *q_bn, double *euler_rad);
+/* Euler angles (heading, pitch, roll; rad) <-> quaternion q_b^n, conventions above.
+ * Errors: non-finite input; a quaternion whose norm differs from 1 by more than 1e-6
+ * (GF_ERR_BAD_PARAMETER: normalise it first). */
+gf_status gf_euler_to_quat(const double *euler_rad, double *q_bn);
+gf_status gf_quat_to_euler(const double *q_bn, double *euler_rad);
+/* n quaternions (n x 4) to Euler angles (n x 3); *n_done = rows converted. */
+gf_status gf_quat_to_euler_batch(size_t n, const double *q_bn, double *euler_rad,
+                                 size_t *n_done);
 
 /* Initialises *state at time t0_s with attitude q_bn (normalised here; error if it
  * cannot be), ENU velocity v_n_m_s, latitude/longitude (rad) and height (m).
@@ -111,7 +114,8 @@ gf_status gf_sins_init(gf_sins_state *state, const gf_sins_config *cfg, const do
  * at the new state time. Rates: gyro = w_ib^b (rad/s), accel = f^b (m/s^2) sampled
  * dt_s after the previous sample (the first sample only starts the record; its dt_s
  * is not used; gf_sins_run with t_s sets the state time to that sample's time). h_ext_m is
- * the external height for the BARO mode (NaN: no height this sample). The state is
+ * the external height at the new state time for the BARO mode (NaN: none this
+ * sample). The state is
  * changed only on GF_OK. Errors: GF_ERR_NONFINITE_INPUT, GF_ERR_OUT_OF_RANGE (|w| or
  * |f| beyond the limits), GF_ERR_BAD_TIME (dt_s <= 0), GF_ERR_DIVERGED. */
 gf_status gf_sins_step(gf_sins_state *state, const double *gyro, const double *accel,
@@ -126,7 +130,8 @@ gf_status gf_sins_set_flat_position(gf_sins_state *state, const double *pos_m);
 gf_status gf_sins_reverse(gf_sins_state *state);
 
 /* Batch: n samples (gyro, accel: n x 3) in one call. Sample spacing: t_s (n sample
- * times, strictly monotonic in the direction of travel) if not NULL, else dt_s.
+ * times, strictly increasing in recorded order; a backward increment run takes interval
+ * 0 as dt_s) if not NULL, else dt_s.
  * h_ext_m (n, may be NULL). backward = 1 processes samples n-1 .. 0 (after
  * gf_sins_reverse). Row k of the outputs is the state after sample k: q_bn (n x 4),
  * v_n_m_s (n x 3), pos (n x 3: lat rad, lon rad, h m; EARTH_FLAT: position in m),

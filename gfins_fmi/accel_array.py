@@ -9,7 +9,8 @@ direction ``theta_i``::
 ``omega`` the body rate (rad/s) and ``omega_dot`` its derivative (rad/s^2), all in body
 axes. The solver of the 9-accelerometer layout recovers f (eq. 3), omega^2 (eq. 4) and
 omega_dot (eq. 6) as linear combinations of the outputs; |omega| comes from omega^2 and
-its sign from omega_dot integrated from the previous solution.
+its sign from omega_dot integrated (trapezoid) from omega_init, the rate at the first
+sample.
 
 All numerics run in the C core, one call per record.
 """
@@ -38,7 +39,7 @@ FLAG_SIGN_UNKNOWN: tuple[int, int, int] = (int(lib.GF9_FLAG_SIGN_UNKNOWN_X),
                                            int(lib.GF9_FLAG_SIGN_UNKNOWN_Z))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ArrayGeometry:
     """Geometry of an array of N single-axis accelerometers.
 
@@ -70,14 +71,18 @@ class ArrayGeometry:
         status = lib.gf_array_geometry_set(c, u.shape[0], ptr(u), ptr(t), bad)
         if status != lib.GF_OK:
             i = int(bad[0])
-            reasons = {
-                lib.GF_ERR_BAD_SIZE: f"the array must have 1..{MAX_SENSORS} sensors; got {u.shape[0]}",
-                lib.GF_ERR_NONFINITE_INPUT: f"sensor {i}: position or direction is not finite",
-                lib.GF_ERR_SINGULAR_GEOMETRY: f"sensor {i}: the sensing direction is zero",
-                lib.GF_ERR_BAD_PARAMETER: (f"sensor {i}: the sensing direction {t[i].tolist()} has norm "
-                                           f"{np.linalg.norm(t[i]):.12g}; normalise it to 1"),
-            }
-            raise ValueError(reasons.get(status, status_text(status)))
+            if status == lib.GF_ERR_BAD_SIZE:
+                msg = f"the array must have 1..{MAX_SENSORS} sensors; got {u.shape[0]}"
+            elif status == lib.GF_ERR_NONFINITE_INPUT:
+                msg = f"sensor {i}: position or direction is not finite"
+            elif status == lib.GF_ERR_SINGULAR_GEOMETRY:
+                msg = f"sensor {i}: the sensing direction is zero"
+            elif status == lib.GF_ERR_BAD_PARAMETER:
+                msg = (f"sensor {i}: the sensing direction {t[i].tolist()} has norm "
+                       f"{np.linalg.norm(t[i]):.12g}; normalise it to 1")
+            else:
+                msg = status_text(status)
+            raise ValueError(msg)
         u.setflags(write=False)
         t.setflags(write=False)
         object.__setattr__(self, "u_m", u)
@@ -90,6 +95,14 @@ class ArrayGeometry:
         return int(self.u_m.shape[0])
 
 
+def _lever_arm(l_m) -> float:
+    l_m = as_positive_scalar("l_m (lever arm)", l_m, "m")
+    if l_m < 1e-6:
+        raise ValueError(f"l_m (lever arm) = {l_m!r} m is below 1e-6 m: the solution divides "
+                         "by l, so such an array only amplifies round-off")
+    return l_m
+
+
 def accel9_geometry(l_m: float) -> ArrayGeometry:
     """The 9-accelerometer layout of seed 000 with lever arm ``l_m`` (m).
 
@@ -97,7 +110,7 @@ def accel9_geometry(l_m: float) -> ArrayGeometry:
     sensing outward, 7-9 at l[1,-1,0], l[1,0,-1], l[0,1,-1] sensing along
     [1,1,0]/sqrt2, [1,0,1]/sqrt2, [0,1,1]/sqrt2.
     """
-    l_m = as_positive_scalar("l_m (lever arm)", l_m, "m")
+    l_m = _lever_arm(l_m)
     c = ffi.new("gf_array_geometry *")
     check_status(lib.gf9_geometry(l_m, c), "gf9_geometry")
     u = np.array([[c.u_m[i][k] for k in range(3)] for i in range(9)])
@@ -146,6 +159,11 @@ def forward_model(geometry: ArrayGeometry, f_m_s2, omega_rad_s, omega_dot_rad_s2
                 raise NonFiniteInputError(f"{name}[{k}, {col}] = {arr[k, col]} is not finite; "
                                           f"rows 0..{k - 1} were computed (see .partial)",
                                           k, col, A[:k].copy())
+    if status == lib.GF_ERR_OUT_OF_RANGE:
+        k = int(done[0])
+        raise NonFiniteInputError(f"sample {k}: the outputs overflow (inputs too large for a "
+                                  f"double); rows 0..{k - 1} were computed (see .partial)",
+                                  k, -1, A[:k].copy())
     check_status(status, "forward model")
     return A
 
@@ -201,12 +219,14 @@ class Accel9Solver:
     l_m : float
         Lever arm l (m), > 0.
     omega_init_rad_s : array_like, shape (3,)
-        Rate before the first sample (rad/s); only its signs matter, for the first
-        sample. Default zero (first signs positive, flagged where ambiguous).
+        Rate at the first sample (rad/s): its signs are the first signs and the
+        integral of omega_dot that gives every later sign starts from it, so give the
+        best value known, not just signs. Default zero (first signs positive, flagged
+        where ambiguous).
     """
 
     def __init__(self, l_m: float, omega_init_rad_s=(0.0, 0.0, 0.0)):
-        self.l_m = as_positive_scalar("l_m (lever arm)", l_m, "m")
+        self.l_m = _lever_arm(l_m)
         w0 = as_vector3("omega_init_rad_s", omega_init_rad_s, "rad/s")
         self._state = ffi.new("gf9_state *")
         check_status(lib.gf9_init(self._state, self.l_m, ptr(w0)), "gf9_init")
@@ -252,6 +272,11 @@ class Accel9Solver:
             raise NonFiniteInputError(
                 f"A_m_s2[{k}, {col}] = {A[k, col]} (accelerometer {col + 1}) is not finite; "
                 f"samples 0..{k - 1} were solved (see .partial)", k, col, out._head(k))
+        if status == lib.GF_ERR_OUT_OF_RANGE:
+            k = int(done[0])
+            raise NonFiniteInputError(
+                f"sample {k}: the solution overflows (A_m_s2[{k}] = {A[k].tolist()} too large "
+                f"for a double); samples 0..{k - 1} were solved (see .partial)", k, -1, out._head(k))
         check_status(status, "gf9_solve")
         return out
 
@@ -269,7 +294,8 @@ def solve_accel9(A_m_s2, dt_s: float, l_m: float,
     l_m : float
         Lever arm, m.
     omega_init_rad_s : array_like, shape (3,)
-        Rate before the first sample (rad/s), giving the first signs.
+        Rate at the first sample (rad/s): the first signs and the start of the
+        omega_dot integral that gives the later signs.
 
     Returns
     -------

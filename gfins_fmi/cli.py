@@ -28,6 +28,10 @@ def _navigate(args) -> int:
                          f"[, h_ext]); found {data.shape[1]}")
     t, gyro, accel = data[:, 0], data[:, 1:4], data[:, 4:7]
     h_ext = data[:, 7] if data.shape[1] == 8 else None
+    if args.vertical == "baro" and h_ext is None:
+        raise ValueError("--vertical baro needs the external height as an 8th column (h_ext, m)")
+    if args.input_kind == "increments" and len(t) < 2 and args.t0 is None:
+        raise ValueError("a record of one increment needs --t0 (the time its interval starts)")
     if args.input_kind == "increments":
         # row k is the increment over (t_(k-1), t_k]; the navigator starts one interval
         # before the first row unless --t0 says otherwise
@@ -158,7 +162,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--dt", type=float, required=True, help="sampling interval, s")
     p.add_argument("--lever-arm", type=float, required=True, help="lever arm l, m")
     p.add_argument("--omega-init", default="0,0,0",
-                   help="rate before the first sample, rad/s, as x,y,z (gives the first signs)")
+                   help="rate at the first sample, rad/s, as x,y,z: the first signs and the start "
+                        "of the omega_dot integral that gives the later signs")
     p.set_defaults(func=_solve9)
 
     p = sub.add_parser("navigate", help="strapdown navigation of a CSV record "
@@ -206,9 +211,10 @@ def main(argv: list[str] | None = None) -> int:
     p.set_defaults(func=_info)
 
     args = parser.parse_args(argv)
+    from gfins_fmi._lib import GfinsError
     try:
         return args.func(args)
-    except (ValueError, TypeError, OSError) as exc:
+    except (ValueError, TypeError, OSError, GfinsError) as exc:
         print(f"gfins {args.command}: error: {exc}", file=sys.stderr)
         return 2
 

@@ -205,7 +205,7 @@ def _plot(png: pathlib.Path, m: Motion, sol, gains, noise_m_s2: float) -> None:
         ax[2].plot(m.t_s, ((sol.flags >> k) & 1) * (k + 1), ".", color=colors[k], ms=2,
                    label=f"$\\omega_{axis}^2<0$")
     # first-order prediction of the rate noise, sigma_w2 / (2|w|), per axis
-    sd = np.array([gains.omega_std(noise_m_s2, w) for w in m.omega_rad_s])
+    sd = gains.omega_std(noise_m_s2, m.omega_rad_s)   # broadcasts over (n, 3)
     for k in range(3):
         ax[1].semilogy(m.t_s, sd[:, k], color="k", lw=1.0, ls=(0, (4, 2)), zorder=3)
     ax[0].set_ylabel("rate (rad/s)")

@@ -50,8 +50,9 @@ def fmu_path(model: str = "accel9", fmi_version: int = 2) -> pathlib.Path:
     """
     if model not in MODELS:
         raise ValueError(f"unknown FMU model {model!r}; choose one of {sorted(MODELS)}")
-    if fmi_version not in (2, 3):
+    if fmi_version not in (2, 3) or isinstance(fmi_version, bool):
         raise ValueError(f"fmi_version must be 2 or 3; got {fmi_version!r}")
+    fmi_version = int(fmi_version)
     res = importlib.resources.files("gfins_fmi") / "fmus" / f"fmi{fmi_version}" / f"{MODELS[model]}.fmu"
     path = pathlib.Path(str(res))
     if not path.is_file():
@@ -212,7 +213,13 @@ def run_fmu(model: str, inputs: Mapping[str, np.ndarray], outputs: list[str], dt
     n = n.pop()
     path = pathlib.Path(path) if path else fmu_path(model, fmi_version)
     log = _Log(echo)
-    slave = _Slave(path, fmi_version, log, logging_on)
+    from fmpy.fmi1 import FMICallException
+    try:
+        slave = _Slave(path, fmi_version, log, logging_on)
+    except FMICallException as exc:
+        raise FmuRunError(f"FMI {fmi_version}.0 {model} FMU could not be instantiated: {exc} "
+                          f"FMU log: {'; '.join(log.messages) or 'no message logged'}",
+                          log.messages, {}) from exc
     out = {name: np.empty((n, slave.refs(name)[1])) for name in outputs}
     k = 0
     bar = None
@@ -220,7 +227,6 @@ def run_fmu(model: str, inputs: Mapping[str, np.ndarray], outputs: list[str], dt
         from tqdm import tqdm
         bar = tqdm(total=n, unit="step", unit_scale=True, desc=f"{model} FMU")
     try:
-        from fmpy.fmi1 import FMICallException
         try:
             slave.initialize(start_time_s, start_time_s + n * dt_s, parameters or {})
             for k in range(n):
@@ -233,6 +239,8 @@ def run_fmu(model: str, inputs: Mapping[str, np.ndarray], outputs: list[str], dt
                 if bar and k % 1000 == 999:
                     bar.update(1000)
             k = n
+            if bar:
+                bar.update(n - bar.n)
         except FMICallException as exc:
             detail = "; ".join(log.messages) or "no message logged"
             raise FmuRunError(f"FMI {fmi_version}.0 {model} FMU failed at sample {k}: {exc} "
@@ -289,14 +297,17 @@ def run_sins_fmu(gyro, accel, dt_s: float, initial, *, config=None, h_ext_m=None
 
     Returns a :class:`gfins_fmi.NavSolution`.
     """
-    from gfins_fmi.sins import NavSolution, SinsConfig
+    from gfins_fmi.sins import _INPUTS, _VERTICAL, NavSolution, SinsConfig
     cfg = config or SinsConfig()
+    cfg._c()  # validates the configuration with the same messages as Strapdown
+    if cfg.earth != "wgs84":
+        raise ValueError("the SINS FMU navigates on WGS-84 only (earth='wgs84')")
     g = as_rows("gyro", gyro, 3, "rad or rad/s")
     a = as_rows("accel", accel, 3, "m/s or m/s^2")
     n = g.shape[0]
     t0 = initial.t_s if start_time_s is None else start_time_s
-    params = {"input_mode": {"increments": 0, "rates": 1}[cfg.input], "coning": int(cfg.coning),
-              "vertical_mode": {"free": 0, "hold": 1, "baro": 2}[cfg.vertical],
+    params = {"input_mode": int(_INPUTS[cfg.input]), "coning": int(cfg.coning),
+              "vertical_mode": int(_VERTICAL[cfg.vertical]),
               "hold_height": cfg.hold_height_m, "baro_tau": cfg.baro_tau_s,
               "max_rate": cfg.max_rate_rad_s, "max_specific_force": cfg.max_specific_force_m_s2,
               "q0": np.asarray(initial.q_bn, float), "v0": np.asarray(initial.v_n_m_s, float),
@@ -310,8 +321,19 @@ def run_sins_fmu(gyro, accel, dt_s: float, initial, *, config=None, h_ext_m=None
     else:
         ins = {"gyro_rate": g, "specific_force": a, "dtheta": np.zeros((n, 3)),
                "dv": np.zeros((n, 3)), "h_ext": he}
-    d = run_fmu("sins", ins, ["q", "v", "lat", "lon", "h", "time_s"], dt_s, parameters=params,
-                fmi_version=fmi_version, start_time_s=t0, progress=progress, **kwargs)
-    sl = slice(1, None) if cfg.input == "increments" else slice(None)
-    return NavSolution(d["time_s"][sl, 0], d["q"][sl], d["v"][sl], d["lat"][sl, 0],
-                       d["lon"][sl, 0], d["h"][sl, 0])
+    shift = 1 if cfg.input == "increments" else 0   # FMU step k takes record row k - shift
+
+    def solution(d):
+        sl = slice(shift, None)
+        return NavSolution(d["time_s"][sl, 0], d["q"][sl], d["v"][sl], d["lat"][sl, 0],
+                           d["lon"][sl, 0], d["h"][sl, 0])
+    try:
+        d = run_fmu("sins", ins, ["q", "v", "lat", "lon", "h", "time_s"], dt_s, parameters=params,
+                    fmi_version=fmi_version, start_time_s=t0, progress=progress, **kwargs)
+    except FmuRunError as exc:
+        k = len(exc.partial.get("q", [])) if exc.partial else 0
+        exc.partial = solution(exc.partial) if exc.partial else None
+        if k >= shift:
+            exc.args = (f"record row {k - shift}: " + exc.args[0],)
+        raise
+    return solution(d)

@@ -108,7 +108,8 @@ def euler_to_quat(euler_rad) -> np.ndarray:
     if e.shape != (3,):
         raise ValueError(f"euler_rad must be (heading, pitch, roll); got shape {e.shape}")
     q = np.empty(4)
-    lib.gf_euler_to_quat(ptr(e), ptr(q))
+    if lib.gf_euler_to_quat(ptr(e), ptr(q)) != lib.GF_OK:
+        raise ValueError(f"euler_rad must be finite; got {e.tolist()}")
     return q
 
 
@@ -118,7 +119,13 @@ def quat_to_euler(q_bn) -> np.ndarray:
     single = q.ndim == 1
     q = as_rows("q_bn", q.reshape(1, 4) if single else q, 4, "unit quaternions")
     out = np.empty((q.shape[0], 3))
-    check_status(lib.gf_quat_to_euler_batch(q.shape[0], ptr(q), ptr(out)), "quat_to_euler")
+    done = ffi.new("size_t *")
+    status = lib.gf_quat_to_euler_batch(q.shape[0], ptr(q), ptr(out), done)
+    if status != lib.GF_OK:
+        k = int(done[0])
+        raise ValueError(f"q_bn[{k}] = {q[k].tolist()} is not a unit quaternion (norm "
+                         f"{np.linalg.norm(q[k]):.17g}; non-finite or off by more than 1e-6): "
+                         "normalise it first")
     return out[0] if single else out
 
 
@@ -211,9 +218,16 @@ class Strapdown:
         v = np.ascontiguousarray(initial.v_n_m_s, dtype=float)
         if q.shape != (4,) or v.shape != (3,):
             raise ValueError("initial.q_bn must have 4 elements and initial.v_n_m_s 3")
+        for name in ("lat_rad", "lon_rad", "h_m", "t_s"):
+            if not np.isfinite(getattr(initial, name)):
+                raise ValueError(f"initial.{name} = {getattr(initial, name)!r} must be finite")
+        if not np.all(np.isfinite(v)):
+            raise ValueError(f"initial.v_n_m_s = {v.tolist()} must be finite")
         if abs(initial.lat_rad) >= np.pi / 2:
             raise ValueError(f"initial latitude {np.degrees(initial.lat_rad):.6g} deg is outside "
                              "(-90, 90) deg: the ENU frame is singular at the poles")
+        if initial.h_m <= -0.5 * 6378137.0:
+            raise ValueError(f"initial.h_m = {initial.h_m!r} m is below -a/2: absurd height")
         if not (np.all(np.isfinite(q)) and np.linalg.norm(q) > 0):
             raise ValueError(f"initial attitude quaternion {q.tolist()} cannot be normalised")
         self._state = ffi.new("gf_sins_state *")
@@ -227,6 +241,7 @@ class Strapdown:
                             else (0.0, 0.0, 0.0), "m")
             check_status(lib.gf_sins_set_flat_position(self._state, ptr(pm)), "flat position")
         self._backward = False
+        self._origin_t_s = float(initial.t_s)   # where a backward increment record starts
 
     @property
     def state(self) -> NavState:
@@ -257,9 +272,16 @@ class Strapdown:
         t_s : array_like (n,), optional
             Sample times (s), strictly increasing. For increments, t_k ends interval k.
         h_ext_m : array_like (n,), optional
-            External height for ``vertical="baro"`` (NaN where there is none).
+            External height at the sample times for ``vertical="baro"`` (NaN where
+            there is none); required in that mode.
         progress : bool
             Show a progress bar (tqdm) while running.
+        chunk : int
+            Samples per C call (default 10^6; the record is always cut into chunks of
+            this size, which gives the same result as one call).
+
+        For a backward run of increments with ``t_s``, interval 0 is taken to start at
+        the navigator's initial time (its ``initial.t_s``).
 
         Raises
         ------
@@ -271,6 +293,11 @@ class Strapdown:
         n = g.shape[0]
         if a.shape[0] != n:
             raise ValueError(f"gyro has {n} samples but accel has {a.shape[0]}")
+        if isinstance(chunk, bool) or not isinstance(chunk, (int, np.integer)) or chunk < 1:
+            raise ValueError(f"chunk must be an integer >= 1; got {chunk!r}")
+        if self.config.vertical == "baro" and h_ext_m is None:
+            raise ValueError('vertical="baro" needs h_ext_m, the external height per sample '
+                             "(NaN where there is none)")
         if (dt_s is None) == (t_s is None):
             raise ValueError("give exactly one of dt_s (fixed interval, s) and t_s (sample times, s)")
         dt = 0.0
@@ -309,9 +336,9 @@ class Strapdown:
                 if tt is not None:
                     tptr = ptr(tt[lo:hi])
                     if self._backward and self.config.input == "increments":
-                        # the C core needs the length of the chunk's first interval; for
-                        # the record's first one it is taken equal to the second
-                        dt_chunk = tt[lo] - tt[lo - 1] if lo > 0 else (tt[1] - tt[0] if n > 1 else 0.0)
+                        # the C core needs the length of the chunk's first interval; the
+                        # record's first interval starts at the navigator's initial time
+                        dt_chunk = tt[lo] - tt[lo - 1] if lo > 0 else tt[0] - self._origin_t_s
                 status = lib.gf_sins_run(
                     self._state, m, ptr(g[lo:hi]), ptr(a[lo:hi]), dt_chunk, tptr,
                     ptr(he[lo:hi]) if he is not None else ffi.NULL, int(self._backward),

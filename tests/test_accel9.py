@@ -185,3 +185,20 @@ def test_forward_model_nonfinite_names_input():
     with pytest.raises(gf.NonFiniteInputError, match=r"omega_rad_s\[3, 2\]") as exc:
         gf.forward_model(g, f, w, np.zeros((5, 3)))
     assert exc.value.partial.shape == (3, 9)
+
+
+
+def test_overflowing_samples_are_refused_not_inf():
+    with pytest.raises(gf.NonFiniteInputError, match="overflows") as exc:
+        gf.solve_accel9(np.r_[np.zeros((3, 9)), np.full((2, 9), 1e308)], 0.01, 0.1)
+    assert exc.value.index == 3 and len(exc.value.partial) == 3
+    with pytest.raises(gf.NonFiniteInputError, match="overflow"):
+        gf.forward_model(gf.accel9_geometry(0.1), np.zeros((2, 3)), np.full((2, 3), 1e200),
+                         np.zeros((2, 3)))
+    with pytest.raises(ValueError, match="below 1e-6 m"):
+        gf.solve_accel9(np.ones((2, 9)), 0.01, 1e-320)
+
+
+def test_empty_geometry_message():
+    with pytest.raises(ValueError, match="1..64 sensors; got 0"):
+        gf.ArrayGeometry(np.zeros((0, 3)), np.zeros((0, 3)))

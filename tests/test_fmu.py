@@ -43,10 +43,9 @@ def test_installed_fmu_is_valid(version):
 
 @pytest.mark.parametrize("version", [2, 3])
 def test_fmu_equals_cffi(record, version):
-    """Same C core, same inputs: the results must agree to 1e-12 relative. They are
-    bitwise equal except where a rate is propagated from omega_dot (flagged samples):
-    the FMU's dt is a difference of communication points, t_k - t_(k-1), which can
-    differ from DT by an ulp."""
+    """Same C core, same inputs: the results must agree to 1e-12 relative (measured:
+    bitwise; the FMU integrates omega_dot over the previous communication step, which
+    fmpy's fixed step makes equal to DT)."""
     ref = gf.solve_accel9(record, DT, L, W0)
     out = gf.run_accel9_fmu(record, DT, L, W0, fmi_version=version)
     assert ref.flag_counts()["neg_omega_sq_x"] > 0  # the policy path is exercised
@@ -242,3 +241,29 @@ def test_sins_fmu_bad_parameters_and_input(circle, version):
     x0 = gf.NavState.from_trajectory(tr, 0)
     with pytest.raises(gf.FmuRunError, match=r"t = 0.21 s: input dtheta = \[inf"):
         run_sins_fmu(g, tr.dv_m_s[:50], 0.01, x0, fmi_version=version)
+
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_sins_fmu_baro_without_height_keeps_the_height(circle, version):
+    """h_ext starts as NaN ("none"): an unconnected baro input must not pull the height
+    to 0 m."""
+    tr = circle
+    x0 = gf.NavState.from_trajectory(tr, 0)
+    out = run_fmu("sins", {"dtheta": np.r_[np.zeros((1, 3)), tr.dtheta_rad[:200]],
+                           "dv": np.r_[np.zeros((1, 3)), tr.dv_m_s[:200]]}, ["h"], 0.01,
+                  parameters={"vertical_mode": 2, "q0": x0.q_bn, "v0": x0.v_n_m_s,
+                              "lat0": x0.lat_rad, "lon0": x0.lon_rad, "h0": x0.h_m},
+                  fmi_version=version)
+    assert np.abs(out["h"][:, 0] - x0.h_m).max() < 0.01
+
+
+def test_sins_fmu_error_partial_is_a_solution(circle):
+    tr = circle
+    g = tr.dtheta_rad[:60].copy()
+    g[50, 1] = np.nan
+    x0 = gf.NavState.from_trajectory(tr, 0)
+    with pytest.raises(gf.FmuRunError, match="record row 50") as exc:
+        run_sins_fmu(g, tr.dv_m_s[:60], 0.01, x0, fmi_version=3)
+    ref = gf.Strapdown(x0).run(tr.dtheta_rad[:50], tr.dv_m_s[:50], dt_s=0.01)
+    assert np.array_equal(exc.value.partial.lat_rad, ref.lat_rad)

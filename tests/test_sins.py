@@ -9,7 +9,7 @@ import pytest
 import gfins_fmi as gf
 from gfins_fmi import trajectory as tj
 from gfins_fmi._lib import ffi, lib
-from conftest import attitude_error_rad, horizontal_error_m
+from conftest import attitude_error_rad, horizontal_error_m, numpy_outputs
 
 DEG = np.pi / 180
 
@@ -45,12 +45,16 @@ def test_earth_model_matches_independent_and_published_values():
     np.testing.assert_allclose(g, tj.gravity(lat, h), rtol=4e-16)
     # published WGS-84 values (NIMA TR8350.2): normal gravity on the ellipsoid at the
     # equator and the pole; R_N at the equator is a, R_M there is a (1 - e^2)
-    assert lib.gf_earth_gravity(0.0, 0.0) == pytest.approx(9.7803253359, abs=1e-10)
-    assert lib.gf_earth_gravity(np.pi / 2 - 1e-12, 0.0) == pytest.approx(9.8321849378, abs=1e-9)
+    def grav(lat, h):
+        g = ffi.new("double *")
+        assert lib.gf_earth_gravity(lat, h, g) == lib.GF_OK
+        return g[0]
+    assert grav(0.0, 0.0) == pytest.approx(9.7803253359, abs=1e-10)
+    assert grav(np.pi / 2 - 1e-12, 0.0) == pytest.approx(9.8321849378, abs=1e-9)
     assert RN[0] == pytest.approx(6378137.0, abs=1e-6)
     assert RM[0] == pytest.approx(6378137.0 * (1 - 0.00669437999014), abs=1e-3)
     # free-air gradient ~ -3.086e-6 s^-2 at the surface
-    assert (lib.gf_earth_gravity(0.0, 1.0) - lib.gf_earth_gravity(0.0, 0.0)) == pytest.approx(-3.086e-6, rel=2e-3)
+    assert (grav(0.0, 1.0) - grav(0.0, 0.0)) == pytest.approx(-3.086e-6, rel=2e-3)
 
 
 def test_euler_conventions_of_seed_002():
@@ -334,9 +338,15 @@ def test_generator_array_outputs(motion):
     tr = tj.sample(motion, 30.0, dt)
     wd = motion.gyro_dot(tr.t_s)
     cd = (tr.gyro_rad_s[2:] - tr.gyro_rad_s[:-2]) / (2 * dt)
+    # highest angular frequency in the rates: coning 5 Hz; airdrop swing 2 pi/6 s rad/s
+    # (x1.5 margin covers the other motions' slower terms)
     W = 2 * np.pi * 5.0 if isinstance(motion, tj.Coning) else 2 * np.pi / 6.0 * 1.5
     assert np.abs(wd[1:-1] - cd).max() <= 2 * (W * dt) ** 2 / 6 * np.abs(wd).max()
-    A = tr.array_outputs(gf.accel9_geometry(0.1))
+    g = gf.accel9_geometry(0.1)
+    A = tr.array_outputs(g)
+    # the trajectory's array outputs = the independent numpy forward model
+    A_ref = numpy_outputs(g.u_m, g.theta, tr.accel_m_s2, tr.gyro_rad_s, wd)
+    assert np.abs(A - A_ref).max() <= 64 * np.finfo(float).eps * np.abs(A_ref).max()
     sol = gf.solve_accel9(A, dt, 0.1, tr.gyro_rad_s[0])
     S = np.abs(A).max()
     eps = np.finfo(float).eps
@@ -345,3 +355,96 @@ def test_generator_array_outputs(motion):
     big = np.abs(tr.gyro_rad_s) > 1e-3
     tol = 64 * eps * S / 0.1 / (2 * np.maximum(np.abs(tr.gyro_rad_s), 1e-3))
     assert np.all((np.abs(sol.omega_rad_s - tr.gyro_rad_s) <= tol)[big])
+
+
+
+# ---- review findings: chunking, backward with times, rate reverse, baro timing --------
+
+def test_chunked_runs_equal_one_call_and_bad_chunk():
+    tr = tj.sample(tj.Circle(), 20.0, 0.01)
+    x0 = gf.NavState.from_trajectory(tr, 0)
+    one = gf.Strapdown(x0).run(tr.dtheta_rad, tr.dv_m_s, dt_s=0.01)
+    for chunk in (1, 7, 333):
+        part = gf.Strapdown(x0).run(tr.dtheta_rad, tr.dv_m_s, dt_s=0.01, chunk=chunk)
+        assert np.array_equal(part.lat_rad, one.lat_rad) and np.array_equal(part.q_bn, one.q_bn)
+    for bad in (0, -5, 2.5, True):
+        with pytest.raises(ValueError, match="chunk must be an integer >= 1"):
+            gf.Strapdown(x0).run(tr.dtheta_rad, tr.dv_m_s, dt_s=0.01, chunk=bad)
+
+
+def test_backward_with_non_uniform_times_returns_to_start():
+    """Increments on a non-uniform grid (first interval 0.02 s, then 0.01 s), forward
+    then backward with the same t_s: back at the initial time and state."""
+    tr = tj.sample(tj.Circle(), 60.0, 0.01)
+    dth = np.r_[tr.dtheta_rad[:1] + tr.dtheta_rad[1:2], tr.dtheta_rad[2:]]
+    dv = np.r_[tr.dv_m_s[:1] + tr.dv_m_s[1:2], tr.dv_m_s[2:]]
+    t = tr.t_s[2:]
+    x0 = gf.NavState.from_trajectory(tr, 0)
+    nav = gf.Strapdown(x0)
+    nav.run(dth, dv, t_s=t)
+    nav.reverse()
+    nav.run(dth, dv, t_s=t)
+    s = nav.state
+    assert s.t_s == pytest.approx(0.0, abs=1e-12)
+    assert np.abs(s.v_n_m_s - x0.v_n_m_s).max() < 1e-4   # truncation of the merged step
+    # one sample backward with times: interval from the initial time
+    nav1 = gf.Strapdown(x0)
+    nav1.run(dth[:1], dv[:1], t_s=t[:1])
+    nav1.reverse()
+    nav1.run(dth[:1], dv[:1], t_s=t[:1])
+    assert nav1.state.t_s == pytest.approx(0.0, abs=1e-15)
+
+
+def test_rate_input_reverse_round_trip():
+    tr = tj.sample(tj.Circle(), 60.0, 0.01)
+    x0 = gf.NavState.from_trajectory(tr, 0)
+    nav = gf.Strapdown(x0, gf.SinsConfig(input="rates"))
+    nav.run(tr.gyro_rad_s, tr.accel_m_s2, dt_s=0.01)
+    nav.reverse()
+    back = nav.run(tr.gyro_rad_s, tr.accel_m_s2, dt_s=0.01)
+    s = nav.state
+    assert s.t_s == pytest.approx(0.0, abs=1e-9)
+    assert np.linalg.norm(attitude_error_rad(s.q_bn, x0.q_bn)) < 1e-9
+    assert horizontal_error_m(np.array([s.lat_rad]), np.array([s.lon_rad]),
+                              np.array([x0.lat_rad]), np.array([x0.lon_rad]))[0] < 1e-3
+    np.testing.assert_allclose(back.t_s, tr.t_s, atol=1e-9)   # row k: the state at t_k
+
+
+def test_baro_loop_follows_a_climbing_height():
+    """A 10 m/s climb with exact increments and an exact external height: the loop
+    compares heights at the same instant, so it adds no lag (the free channel over
+    this minute is itself accurate to millimetres)."""
+    tr = tj.sample(tj.SineVelocity(amplitude_m_s=(2.0, 3.0, 10.0)), 300.0, 0.01)
+    x0 = gf.NavState.from_trajectory(tr, 0)
+    sol = gf.Strapdown(x0, gf.SinsConfig(vertical="baro", baro_tau_s=10.0)).run(
+        tr.dtheta_rad, tr.dv_m_s, dt_s=0.01, h_ext_m=tr.h_m[1:])
+    err = np.abs(sol.h_m - tr.h_m[1:])
+    print(f"baro, 10 m/s vertical amplitude: max height error {err.max():.3g} m")
+    assert err.max() < 1e-3
+
+
+def test_baro_without_external_height_is_refused():
+    x0 = gf.NavState.from_euler([0, 0, 0], [0, 0, 0], 0.5, 1.0, 0.0)
+    with pytest.raises(ValueError, match='vertical="baro" needs h_ext_m'):
+        gf.Strapdown(x0, gf.SinsConfig(vertical="baro")).run(np.zeros((3, 3)), np.zeros((3, 3)),
+                                                               dt_s=0.01)
+
+
+@pytest.mark.parametrize("q, match", [([np.nan, 0, 0, 0], "not a unit quaternion"),
+                                      ([1.0, 0.5, 0, 0], "not a unit quaternion"),
+                                      ([0.0, 0, 0, 0], "not a unit quaternion")])
+def test_quat_to_euler_refuses_non_unit(q, match):
+    with pytest.raises(ValueError, match=match):
+        gf.quat_to_euler(q)
+    with pytest.raises(ValueError, match=r"q_bn\[1\]"):
+        gf.quat_to_euler([[1.0, 0, 0, 0], q])
+
+
+@pytest.mark.parametrize("field, value, match", [
+    ("lat_rad", np.nan, "initial.lat_rad"), ("h_m", -4e6, "below -a/2"),
+    ("lon_rad", np.inf, "initial.lon_rad")])
+def test_bad_initial_fields_are_named(field, value, match):
+    x0 = gf.NavState.from_euler([0, 0, 0], [0, 0, 0], 0.5, 1.0, 0.0)
+    setattr(x0, field, value)
+    with pytest.raises(ValueError, match=match):
+        gf.Strapdown(x0)

@@ -429,9 +429,13 @@ FmuStatus fmu_state_deserialize(FmuInstance *instance, const uint8_t *buffer, si
         fmu_log_error(instance, "deserializeFMUState: the state holds a non-finite time");
         return FMU_ERROR;
     }
-    FmuStatus status = fmu_state_get(instance, state);
-    if (status != FMU_OK)
-        return status;
-    *(FmuSnapshot *)*state = snapshot;
+    /* always a new state: *state may hold anything (or a state the importer keeps) */
+    FmuSnapshot *copy = malloc(sizeof *copy);
+    if (!copy) {
+        fmu_log_error(instance, "deserializeFMUState: out of memory");
+        return FMU_ERROR;
+    }
+    *copy = snapshot;
+    *state = copy;
     return FMU_OK;
 }

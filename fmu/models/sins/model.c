@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "fmu_model.h"
+#include "gf_math.h"
 #include "model.h"
 
 static void publish(ModelData *d)
@@ -50,7 +51,7 @@ FmuStatus model_exit_initialization(FmuInstance *instance, ModelData *d, double 
             fmu_log_error(instance, "parameters baro_tau, max_rate and max_specific_force must "
                           "be > 0 (got %g s, %g rad/s, %g m/s2)", d->baro_tau_s,
                           d->max_rate_rad_s, d->max_specific_force_m_s2);
-        else if (!(fabs(d->lat0_rad) < 1.5707963267948966))
+        else if (!(fabs(d->lat0_rad) < GF_HALF_PI))
             fmu_log_error(instance, "parameter lat0 = %g rad is outside (-pi/2, pi/2)", d->lat0_rad);
         else
             fmu_log_error(instance, "initial state rejected (%s): q0 must be a finite, non-zero "
@@ -58,7 +59,7 @@ FmuStatus model_exit_initialization(FmuInstance *instance, ModelData *d, double 
         return FMU_ERROR;
     }
     d->previous_step_s = 0.0;
-    d->steps = 0;
+    d->started = 0;
     publish(d);
     return FMU_OK;
 }
@@ -66,9 +67,9 @@ FmuStatus model_exit_initialization(FmuInstance *instance, ModelData *d, double 
 FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double h_s)
 {
     const int increments = d->nav.cfg.input == GF_SINS_INPUT_INCREMENTS;
-    if (increments && d->steps == 0) { /* no increment ends at the start time */
+    if (increments && !d->started) { /* no increment ends at the start time */
         d->previous_step_s = h_s;
-        d->steps = 1;
+        d->started = 1;
         return FMU_OK;
     }
     gf_sins_state next = d->nav;
@@ -93,7 +94,7 @@ FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double 
     }
     d->nav = next;
     d->previous_step_s = h_s;
-    d->steps += 1;
+    d->started = 1;
     publish(d);
     return FMU_OK;
 }

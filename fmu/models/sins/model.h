@@ -17,7 +17,7 @@ typedef struct ModelData {
     double q_bn[4], euler_rad[3], v_n_m_s[3], lat_rad, lon_rad, h_m, nav_time_s;
     /* internal */
     double previous_step_s;   /* communication step that ended at this sample: its dt */
-    int32_t steps;            /* doSteps taken */
+    int32_t started;          /* 1 once a doStep has been taken */
     gf_sins_state nav;
 } ModelData;
 

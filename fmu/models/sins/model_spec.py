@@ -68,8 +68,9 @@ MODEL = dict(
              type="Float64", shape=(3,), unit="m/s2", start=0.0, field="accel_m_s2",
              description="Specific force f^b now; used when input_mode = 1"),
         dict(name="h_ext", causality="input", variability="continuous", type="Float64",
-             shape=(), unit="m", start=0.0, field="h_ext_m",
-             description="External (barometric) height for vertical_mode = 2; NaN: none"),
+             shape=(), unit="m", start=float("nan"), field="h_ext_m",
+             description="External (barometric) height at the communication point for "
+                         "vertical_mode = 2; NaN (the start value): none"),
         dict(name="q", causality="output", variability="discrete", type="Float64",
              shape=(4,), field="q_bn", description="Attitude quaternion q_b^n"),
         dict(name="euler", causality="output", variability="discrete", type="Float64",

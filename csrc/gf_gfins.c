@@ -49,16 +49,13 @@ static size_t try_columns(gf_array_solver *s, const int32_t *cols, size_t k, dou
     if (null_w)
         for (int j = 0; j < GF_X_N; ++j)
             null_w[j] = 0.0;
-    if (m < k) { /* fewer equations than unknowns: pad with zero rows for the SVD */
-        if (null_w)
-            for (size_t j = 0; j < k; ++j)
-                null_w[cols[j]] = 1.0;
-        return m;
-    }
-    for (size_t i = 0; i < m; ++i)
+    /* fewer equations than unknowns: zero rows pad the system for the SVD, so that the
+     * null space (and with it the unobservable unknowns) is still found */
+    const size_t mm = m < k ? k : m;
+    for (size_t i = 0; i < mm; ++i)
         for (size_t j = 0; j < k; ++j)
-            a[i * k + j] = s->H[i * GF_X_N + (size_t)cols[j]];
-    if (gf_svd(m, k, a, sv, v) != GF_OK)
+            a[i * k + j] = i < m ? s->H[i * GF_X_N + (size_t)cols[j]] : 0.0;
+    if (gf_svd(mm, k, a, sv, v) != GF_OK)
         return 0;
     /* relative rank tolerance: geometry typed to ~1e-12 m must not count as singular,
      * a genuinely dependent column (coincident sensors) gives s ~ 1e-16 s_max */

@@ -79,6 +79,13 @@ gf_status gf_kalman_update(gf_kalman *kf, size_t m, const double *residual, cons
     for (size_t i = 0; i < m; ++i)
         if (!isfinite(residual[i]))
             return GF_ERR_NONFINITE_INPUT;
+    {   /* R must be positive definite itself, not only S = H P H^T + R */
+        double LR[MMAX * MMAX];
+        memcpy(LR, R, m * m * sizeof *R);
+        const gf_status st_r = gf_cholesky(m, LR);
+        if (st_r != GF_OK)
+            return st_r;
+    }
     /* PHt = P H^T (n x m), S = H P H^T + R (m x m) */
     double PHt[NMAX * MMAX], S[MMAX * MMAX], L[MMAX * MMAX];
     for (size_t i = 0; i < n; ++i)

@@ -39,7 +39,7 @@ gf_status gf_kalman_predict(gf_kalman *kf, const double *F, const double *Q, int
 
 /* Update with m measurements: residual r = z - h(x) (m), H (m x n), R (m x m, positive
  * definite). nis (may be NULL) receives r^T S^-1 r. Errors: GF_ERR_BAD_SIZE,
- * GF_ERR_NONFINITE_INPUT, GF_ERR_SINGULAR_GEOMETRY (S not positive definite); the
+ * GF_ERR_NONFINITE_INPUT, GF_ERR_SINGULAR_GEOMETRY (R or S not positive definite); the
  * filter is unchanged on error. */
 gf_status gf_kalman_update(gf_kalman *kf, size_t m, const double *residual, const double *H,
                            const double *R, double *nis);

@@ -30,7 +30,8 @@ gf_status gf_svd(size_t m, size_t n, double *a, double *s, double *v)
                 }
                 if (gamma == 0.0)
                     continue;
-                const double rel = fabs(gamma) / sqrt(alpha * beta);
+                /* sqrt of each: alpha * beta overflows for entries ~1e77 */
+                const double rel = fabs(gamma) / (sqrt(alpha) * sqrt(beta));
                 if (rel > off)
                     off = rel;
                 if (rel < 1e-15)

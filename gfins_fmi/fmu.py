@@ -20,11 +20,12 @@ import numpy as np
 from gfins_fmi._lib import GfinsError, as_positive_scalar, as_rows, as_vector3
 from gfins_fmi.accel_array import Accel9Solution
 
-__all__ = ["MODELS", "fmu_path", "validate", "run_fmu", "run_accel9_fmu", "run_sins_fmu",
+__all__ = ["MODELS", "fmu_path", "validate", "run_fmu", "run_accel9_fmu", "run_sins_fmu", "run_gfnav_fmu",
            "FmuRunError"]
 
 #: model name -> model identifier of the FMUs shipped
-MODELS = {"accel9": "gfins_accel9", "sins": "gfins_sins"}
+MODELS = {"accel9": "gfins_accel9", "sins": "gfins_sins", "gfnav_cube6": "gfins_gfnav_cube6",
+          "gfnav_qin9": "gfins_gfnav_qin9", "gfnav_12": "gfins_gfnav_12"}
 
 
 class FmuRunError(GfinsError):
@@ -337,3 +338,41 @@ def run_sins_fmu(gyro, accel, dt_s: float, initial, *, config=None, h_ext_m=None
             exc.args = (f"record row {k - shift}: " + exc.args[0],)
         raise
     return solution(d)
+
+
+def run_gfnav_fmu(layout_name: str, A_m_s2, dt_s: float, initial, *, l_m: float = 0.1,
+                  strategy: str = "integrate", omega_init_rad_s=(0.0, 0.0, 0.0),
+                  accel_noise_m_s2: float = 1e-4, sins=None, fmi_version: int = 2, **kwargs):
+    """Run an array record through the gyro-free navigator FMU of a layout ("cube6",
+    "qin9", "12"); the result lines up with :meth:`gfins_fmi.GyroFreeNavigator.run` on
+    the same record (row k: the state at sample k).
+
+    Returns (NavSolution, omega_rad_s (n, 3), f_m_s2 (n, 3), flags (n,)).
+    """
+    from gfins_fmi.gyrofree import STRATEGIES
+    from gfins_fmi.sins import _EARTH, _VERTICAL, NavSolution, SinsConfig
+    model = f"gfnav_{layout_name}"
+    if model not in MODELS:
+        raise ValueError(f"no navigator FMU for layout {layout_name!r}; choose cube6, qin9 or 12")
+    n_in = {"cube6": 6, "qin9": 9, "12": 12}[layout_name]
+    A = as_rows("A_m_s2", A_m_s2, n_in, "m/s^2")
+    sc = sins or SinsConfig()
+    sc._c()
+    if strategy not in STRATEGIES:
+        raise ValueError(f"strategy must be one of {sorted(STRATEGIES)}; got {strategy!r}")
+    flat = sc.earth == "flat"
+    params = {"l": float(l_m), "strategy": int(STRATEGIES[strategy]),
+              "accel_noise": float(accel_noise_m_s2),
+              "omega_init": as_vector3("omega_init_rad_s", omega_init_rad_s, "rad/s"),
+              "earth": int(_EARTH[sc.earth]), "flat_gravity": sc.flat_gravity_m_s2,
+              "vertical_mode": int(_VERTICAL[sc.vertical]), "hold_height": sc.hold_height_m,
+              "baro_tau": sc.baro_tau_s, "q0": np.asarray(initial.q_bn, float),
+              "v0": np.asarray(initial.v_n_m_s, float), "lat0": initial.lat_rad,
+              "lon0": initial.lon_rad, "h0": initial.h_m,
+              "pos0": np.asarray(initial.pos_m if initial.pos_m is not None else (0, 0, 0), float)}
+    d = run_fmu(model, {"A": A}, ["q", "v", "lat", "lon", "h", "pos", "omega", "f", "flags",
+                                  "time_s"], dt_s, parameters=params, fmi_version=fmi_version,
+                start_time_s=initial.t_s, **kwargs)
+    sol = NavSolution._from_pos(d["time_s"][:, 0], d["q"], d["v"],
+                                d["pos"] if flat else np.c_[d["lat"], d["lon"], d["h"]], flat)
+    return sol, d["omega"], d["f"], d["flags"][:, 0].astype(np.uint8)

@@ -267,3 +267,47 @@ def test_sins_fmu_error_partial_is_a_solution(circle):
         run_sins_fmu(g, tr.dv_m_s[:60], 0.01, x0, fmi_version=3)
     ref = gf.Strapdown(x0).run(tr.dtheta_rad[:50], tr.dv_m_s[:50], dt_s=0.01)
     assert np.array_equal(exc.value.partial.lat_rad, ref.lat_rad)
+
+
+# ---- gyro-free navigator FMUs (one per layout) ---------------------------------------
+
+from gfins_fmi.fmu import MODELS, run_gfnav_fmu  # noqa: E402
+
+
+@pytest.mark.parametrize("model", sorted(MODELS))
+@pytest.mark.parametrize("version", [2, 3])
+def test_every_fmu_is_valid(model, version):
+    assert validate_fmu(str(gf.fmu_path(model, version))) == []
+
+
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("layout_name, strategy", [("cube6", "integrate"), ("qin9", "sqrt"),
+                                                   ("qin9", "fused"), ("12", "eigen")])
+def test_gfnav_fmu_equals_batch(circle, version, layout_name, strategy):
+    """Same C code, same samples, interval = the previous communication step = dt:
+    equal to 1e-12 relative (measured: bitwise, except the reported time, which the FMU
+    accumulates and the batch API computes as t0 + k dt: 2e-13 s apart)."""
+    tr = circle
+    x0 = gf.NavState.from_trajectory(tr, 0)
+    g = gf.layout(layout_name, 0.1)
+    A = tr.array_outputs(g) + np.random.default_rng(3).normal(0, 1e-5, (tr.t_s.size, g.n_sensors))
+    ref, rates = gf.GyroFreeNavigator(g, x0, strategy, tr.gyro_rad_s[0]).run(A, tr.dt_s)
+    sol, w, f, flags = run_gfnav_fmu(layout_name, A, tr.dt_s, x0, strategy=strategy,
+                                     omega_init_rad_s=tr.gyro_rad_s[0], fmi_version=version)
+    for name in ("q_bn", "v_n_m_s", "lat_rad", "lon_rad", "h_m", "t_s"):
+        x, y = getattr(sol, name), getattr(ref, name)
+        assert np.all(np.abs(x - y) <= 1e-12 * np.maximum(np.abs(y), 1e-300)), name
+    assert np.array_equal(w, rates.omega_rad_s) and np.array_equal(f, rates.f_m_s2)
+    assert np.array_equal(flags, rates.flags)
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_gfnav_fmu_errors(circle, version):
+    tr = circle
+    x0 = gf.NavState.from_trajectory(tr, 0)
+    A = tr.array_outputs(gf.layout("cube6", 0.1))[:20]
+    with pytest.raises(gf.FmuRunError, match="strategy = 1 needs products"):
+        run_gfnav_fmu("cube6", A, 0.01, x0, strategy="sqrt", fmi_version=version)
+    A[7, 2] = np.nan
+    with pytest.raises(gf.FmuRunError, match="A\\[i\\] is not finite"):
+        run_gfnav_fmu("cube6", A, 0.01, x0, fmi_version=version)

@@ -1,0 +1,115 @@
+/* model.c — the gyro-free navigator as an FMU model (FMI-agnostic): one array sample per
+ * doStep through gf_gfnav_run. The sample set at t is solved and navigated; the
+ * outputs after the step describe t (the first sample starts the record, as in the
+ * batch navigator); the interval is the previous communication step, so a fixed step h
+ * reproduces GyroFreeNavigator.run(A, h) exactly. */
+#include <math.h>
+#include <string.h>
+
+#include "fmu_model.h"
+#include "gf_math.h"
+#include "model.h"
+
+#ifndef GFNAV_LAYOUT
+#error "GFNAV_LAYOUT must be defined (0 cube6, 1 qin9, 2 twelve)"
+#endif
+
+static gf_status make_geometry(double l, gf_array_geometry *g)
+{
+#if GFNAV_LAYOUT == 0
+    return gf_layout_cube6(l, g);
+#elif GFNAV_LAYOUT == 1
+    return gf9_geometry(l, g);
+#else
+    return gf_layout_12(l, g);
+#endif
+}
+
+static void publish(ModelData *d)
+{
+    const gf_sins_state *s = &d->nav.nav;
+    memcpy(d->q_bn, s->q_bn, sizeof d->q_bn);
+    gf_quat_to_euler(s->q_bn, d->euler_rad);
+    memcpy(d->v_n_m_s, s->v_n_m_s, sizeof d->v_n_m_s);
+    d->lat_rad = s->lat_rad;
+    d->lon_rad = s->lon_rad;
+    d->h_m = s->h_m;
+    memcpy(d->pos_m, s->flat_pos_m, sizeof d->pos_m);
+    d->nav_time_s = s->time_s;
+}
+
+FmuStatus model_exit_initialization(FmuInstance *instance, ModelData *d, double start_time_s)
+{
+    gf_array_geometry g;
+    if (make_geometry(d->lever_arm_m, &g) != GF_OK) {
+        fmu_log_error(instance, "parameter l = %g m: the lever arm must be finite and >= 1e-6 m",
+                      d->lever_arm_m);
+        return FMU_ERROR;
+    }
+    gf_rate_config rc;
+    gf_rate_config_default(&rc);
+    rc.strategy = d->strategy;
+    rc.accel_noise_m_s2 = d->accel_noise_m_s2;
+    gf_sins_config sc;
+    gf_sins_config_default(&sc);
+    sc.input = GF_SINS_INPUT_RATES;
+    sc.earth = d->earth;
+    sc.flat_gravity_m_s2 = d->flat_gravity_m_s2;
+    sc.vertical = d->vertical_mode;
+    sc.hold_height_m = d->hold_height_m;
+    sc.baro_tau_s = d->baro_tau_s;
+    uint32_t unobservable = 0;
+    gf_status st = gf_gfnav_init(&d->nav, &g, &rc, d->omega_init_rad_s, &sc, d->q0, d->v0_m_s,
+                                 d->lat0_rad, d->lon0_rad, d->h0_m, start_time_s, &unobservable);
+    if (st == GF_OK && d->earth == GF_SINS_EARTH_FLAT)
+        st = gf_sins_set_flat_position(&d->nav.nav, d->pos0_m);
+    if (st != GF_OK) {
+        if (d->strategy < 0 || d->strategy > 3)
+            fmu_log_error(instance, "parameter strategy = %d must be 0..3", (int)d->strategy);
+        else if (st == GF_ERR_BAD_PARAMETER && (d->strategy == GF_RATE_SQRT || d->strategy == GF_RATE_FUSED ||
+                                                 d->strategy == GF_RATE_EIGEN))
+            fmu_log_error(instance, "parameter strategy = %d needs products w w^T that this layout "
+                          "does not measure (or a bad parameter: accel_noise > 0, earth 0/1, "
+                          "vertical_mode 0..2, lat0 in (-pi/2, pi/2), finite q0/v0)", (int)d->strategy);
+        else
+            fmu_log_error(instance, "initialisation refused (%s): check accel_noise > 0, earth 0/1, "
+                          "flat_gravity >= 0, vertical_mode 0..2, baro_tau > 0, lat0 in "
+                          "(-pi/2, pi/2), a finite non-zero q0 and finite v0, omega_init",
+                          gf_status_string(st));
+        return FMU_ERROR;
+    }
+    memset(d->omega_rad_s, 0, sizeof d->omega_rad_s);
+    memcpy(d->omega_rad_s, d->omega_init_rad_s, sizeof d->omega_rad_s);
+    memset(d->f_m_s2, 0, sizeof d->f_m_s2);
+    d->flags = 0;
+    d->previous_step_s = 0.0;
+    d->started = 0;
+    publish(d);
+    return FMU_OK;
+}
+
+FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double h_s)
+{
+    double q[4], v[3], pos[3], w[3], f[3];
+    uint8_t flags = 0;
+    size_t done = 0;
+    const double dt = d->started ? d->previous_step_s : h_s; /* first: dt unused */
+    const gf_status st = gf_gfnav_run(&d->nav, 1, d->A_m_s2, dt, &d->h_ext_m, q, v, pos, w, f,
+                                      &flags, &done);
+    if (st != GF_OK) {
+        if (st == GF_ERR_NONFINITE_INPUT)
+            fmu_log_error(instance, "t = %.9g s: an input A[i] is not finite (or h_ext is "
+                          "infinite); the outputs keep the last good sample", t_s);
+        else
+            fmu_log_error(instance, "t = %.9g s: navigation step failed: %s", t_s,
+                          gf_status_string(st));
+        return FMU_ERROR;
+    }
+    memcpy(d->omega_rad_s, w, sizeof w);
+    memcpy(d->f_m_s2, f, sizeof f);
+    d->flags = flags;
+    d->previous_step_s = h_s;
+    d->started = 1;
+    publish(d);
+    return FMU_OK;
+}

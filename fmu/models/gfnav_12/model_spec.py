@@ -1,0 +1,5 @@
+"""Gyro-free navigator FMU, layout 12: the spec is built by fmu/models/gfnav/spec.py."""
+import pathlib
+import runpy
+
+MODEL = runpy.run_path(str(pathlib.Path(__file__).resolve().parent.parent / "gfnav" / "spec.py"))["make"]("12", 12)

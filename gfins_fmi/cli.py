@@ -53,13 +53,69 @@ def _navigate(args) -> int:
         print(f"error: {exc}; writing the {len(exc.partial)} samples navigated before it",
               file=sys.stderr)
         sol, status = exc.partial, 1
-    e = sol.euler_rad / deg
-    table = np.column_stack([sol.t_s, sol.lat_rad / deg, sol.lon_rad / deg, sol.h_m, sol.v_n_m_s,
-                             e, sol.q_bn])
-    header = ("t_s,lat_deg,lon_deg,h_m,v_e_m_s,v_n_m_s,v_u_m_s,heading_deg,pitch_deg,roll_deg,"
-              "q0,q1,q2,q3")
-    np.savetxt(args.output, table, delimiter=",", header=header, comments="", fmt="%.12g")
-    print(f"{len(sol)} samples navigated -> {args.output}")
+    _write_solution(args.output, sol)
+    return status
+
+
+def _write_solution(path, sol, extra=None, extra_header=""):
+    """Navigation solution CSV: time, position (deg, m; or m in a fixed frame), ENU
+    velocity, Euler angles (deg), quaternion [, extra columns]."""
+    import numpy as np
+    deg = np.pi / 180
+    e = sol.euler_rad / deg if len(sol) else np.empty((0, 3))
+    if sol.pos_m is not None:
+        pos, pos_header = sol.pos_m, "x_m,y_m,z_m"
+    else:
+        pos, pos_header = np.c_[sol.lat_rad / deg, sol.lon_rad / deg, sol.h_m], "lat_deg,lon_deg,h_m"
+    cols = [sol.t_s, pos, sol.v_n_m_s, e, sol.q_bn] + ([extra] if extra is not None else [])
+    table = np.column_stack(cols) if len(sol) else np.empty((0, 14 + (0 if extra is None else extra.shape[1])))
+    header = (f"t_s,{pos_header},v_e_m_s,v_n_m_s,v_u_m_s,heading_deg,pitch_deg,roll_deg,"
+              "q0,q1,q2,q3" + extra_header)
+    np.savetxt(path, table, delimiter=",", header=header, comments="", fmt="%.12g")
+    print(f"{len(sol)} samples navigated -> {path}")
+
+
+def _gfnav(args) -> int:
+    import numpy as np
+    from gfins_fmi import GyroFreeNavigator, NavState, SinsConfig, layout
+    from gfins_fmi._lib import NonFiniteInputError
+    from gfins_fmi.sins import SampleError
+    g = layout(args.layout, args.lever_arm)
+    n = g.n_sensors
+    data = np.loadtxt(args.input, delimiter=",", ndmin=2, comments="#",
+                      skiprows=1 if args.header else 0)
+    if data.shape[1] not in (n + 1, n + 2):
+        raise ValueError(f"{args.input}: layout {args.layout} needs {n + 1} or {n + 2} columns "
+                         f"(t, A1..A{n} [, h_ext]); found {data.shape[1]}")
+    t, A = data[:, 0], data[:, 1:n + 1]
+    h_ext = data[:, n + 1] if data.shape[1] == n + 2 else None
+    if args.vertical == "baro" and h_ext is None:
+        raise ValueError(f"--vertical baro needs the external height as column {n + 2}")
+    if len(t) < 2:
+        raise ValueError("the record needs at least two samples (the interval comes from t)")
+    dt = float(np.median(np.diff(t)))
+    if not np.allclose(np.diff(t), dt, rtol=1e-6, atol=1e-9):
+        raise ValueError("the gyro-free navigator needs a fixed sampling interval; the time "
+                         "column is not uniform")
+    deg = np.pi / 180
+    v0 = [float(x) for x in args.v0.split(",")]
+    w0 = [float(x) for x in args.omega_init.split(",")]
+    x0 = NavState.from_euler([args.heading0 * deg, args.pitch0 * deg, args.roll0 * deg], v0,
+                             args.lat0 * deg, args.lon0 * deg, args.h0, float(t[0]))
+    nav = GyroFreeNavigator(g, x0, args.strategy, w0, accel_noise_m_s2=args.accel_noise,
+                            sins=SinsConfig(vertical=args.vertical, hold_height_m=args.h0,
+                                            baro_tau_s=args.baro_tau))
+    status = 0
+    try:
+        sol, rates = nav.run(A, dt, h_ext_m=h_ext)
+        extra = np.c_[rates.omega_rad_s, rates.f_m_s2, rates.flags]
+    except (NonFiniteInputError, SampleError) as exc:
+        print(f"error: {exc}; writing the {len(exc.partial)} samples navigated before it",
+              file=sys.stderr)
+        sol, status, extra = exc.partial, 1, None
+    _write_solution(args.output, sol, extra,
+                    ",omega_x_rad_s,omega_y_rad_s,omega_z_rad_s,f_x_m_s2,f_y_m_s2,f_z_m_s2,flags"
+                    if extra is not None else "")
     return status
 
 
@@ -191,6 +247,31 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                    help="progress bar (default: on for records of 10^6 samples or more)")
     p.set_defaults(func=_navigate)
+
+    p = sub.add_parser("gfnav", help="gyro-free navigation of a CSV record of accelerometer-array "
+                       "outputs (t, A1..AN [, h_ext]) -> solution CSV")
+    p.add_argument("input", type=pathlib.Path)
+    p.add_argument("output", type=pathlib.Path)
+    p.add_argument("--layout", choices=["cube6", "qin9", "12"], required=True)
+    p.add_argument("--lever-arm", type=float, required=True, help="lever arm l, m")
+    p.add_argument("--strategy", choices=["integrate", "sqrt", "eigen", "fused"],
+                   default="integrate", help="angular-rate strategy (default integrate)")
+    p.add_argument("--accel-noise", type=float, default=1e-4,
+                   help="accelerometer white-noise std, m/s^2 (fused strategy)")
+    p.add_argument("--omega-init", default="0,0,0",
+                   help="rate at the first sample, rad/s, x,y,z (write --omega-init=-1,0,0 "
+                        "when it starts with -)")
+    p.add_argument("--header", action="store_true", help="the CSV's first line is a header")
+    p.add_argument("--lat0", type=float, required=True, help="initial latitude, deg")
+    p.add_argument("--lon0", type=float, required=True, help="initial longitude, deg")
+    p.add_argument("--h0", type=float, default=0.0, help="initial height, m")
+    p.add_argument("--heading0", type=float, default=0.0, help="initial heading, deg")
+    p.add_argument("--pitch0", type=float, default=0.0, help="initial pitch, deg")
+    p.add_argument("--roll0", type=float, default=0.0, help="initial roll, deg")
+    p.add_argument("--v0", default="0,0,0", help="initial velocity E,N,U, m/s")
+    p.add_argument("--vertical", choices=["free", "hold", "baro"], default="free")
+    p.add_argument("--baro-tau", type=float, default=10.0, help="baro loop time constant, s")
+    p.set_defaults(func=_gfnav)
 
     p = sub.add_parser("reproduce", help="reproduce a published experiment (qin: the 6- vs "
                        "9-accelerometer comparison of seed 000, as a Monte Carlo)")

@@ -116,3 +116,27 @@ def test_navigate_csv_and_bad_sample(tmp_path):
     proc = run(*[a for a in args if a != "--header"], check=False)
     assert proc.returncode == 1 and "accel[1000, 1]" in proc.stderr
     assert np.loadtxt(dst, delimiter=",", skiprows=1).shape[0] == 1000
+
+
+def test_gfnav_csv(tmp_path):
+    """gfins gfnav on a CSV of qin9 outputs reproduces GyroFreeNavigator.run."""
+    from gfins_fmi import trajectory as tj
+    tr = tj.sample(tj.Circle(), 20.0, 0.01)
+    g = gf.layout("qin9", 0.1)
+    A = tr.array_outputs(g)
+    src, dst = tmp_path / "arr.csv", tmp_path / "sol.csv"
+    np.savetxt(src, np.c_[tr.t_s, A], delimiter=",", fmt="%.17g")
+    e = np.degrees(gf.quat_to_euler(tr.q_bn[0]))
+    run("gfnav", str(src), str(dst), "--layout", "qin9", "--lever-arm", "0.1", "--strategy", "sqrt",
+        "--omega-init=" + ",".join(repr(float(x)) for x in tr.gyro_rad_s[0]),
+        "--lat0", repr(float(np.degrees(tr.lat_rad[0]))), "--lon0", repr(float(np.degrees(tr.lon_rad[0]))),
+        "--h0", repr(float(tr.h_m[0])), "--heading0", repr(float(e[0])), "--pitch0", repr(float(e[1])),
+        "--roll0", repr(float(e[2])), "--v0=" + ",".join(repr(float(x)) for x in tr.v_n_m_s[0]))
+    sol = np.loadtxt(dst, delimiter=",", skiprows=1)
+    ref, _ = gf.GyroFreeNavigator(g, gf.NavState.from_trajectory(tr, 0), "sqrt",
+                                  tr.gyro_rad_s[0]).run(A, 0.01)
+    assert sol.shape == (len(A), 21)
+    np.testing.assert_allclose(np.radians(sol[:, 1]), ref.lat_rad, rtol=0, atol=5e-12)
+    proc = run("gfnav", str(src), str(dst), "--layout", "cube6", "--lever-arm", "0.1",
+               "--lat0", "30", "--lon0", "114", check=False)
+    assert proc.returncode == 2 and "needs 7 or 8 columns" in proc.stderr

@@ -5,8 +5,12 @@
  * from north in [0, 2 pi), pitch theta in [-pi/2, pi/2] (nose up +), roll gamma in
  * (-pi, pi] (right wing down +), with C_b^n = Rz(-psi) Rx(theta) Ry(gamma).
  *
- * One update from t_(k-1) to t_k = t_(k-1) + T (Savage, Strapdown Analytics ch. 7;
- * Titterton & Weston ch. 11; seed 002 sections 2.2-2.4 in quaternion form):
+ * One update from t_(k-1) to t_k = t_(k-1) + T. Seed 002 (section 1.2) gives the steps:
+ * initial quaternion from the Euler angles (its eq. 12-20), attitude update through
+ * w_in^n = w_ie^n + w_en^n (eq. 5-11, here as rotation vectors instead of its Picard
+ * approximation), specific-force equation with Coriolis and gravity (eq. 21-25), then
+ * the position update; the two-sample corrections and the mid-point evaluation follow
+ * Savage (Strapdown Analytics ch. 7) and Titterton & Weston (ch. 11):
  *   rotation vector  phi  = dtheta_k + C (coning)         C = dtheta_(k-1) x dtheta_k / 12
  *   velocity (body)  dv_b = dv_k + dtheta_k x dv_k / 2 + S  S = (dtheta_(k-1) x dv_k
  *                                                              + dv_(k-1) x dtheta_k) / 12
@@ -54,7 +58,9 @@ extern "C" {
                                         idealised setting of seed 000's simulation.
                                         Vertical modes do not apply. */
 
-/* Configuration (set once, before gf_sins_init). The baro loop, with e = h - h_ext:
+/* Configuration (set once, before gf_sins_init). The baro loop (a standard
+ * third-order baro-inertial loop; seed 004 feeds the barometric altimeter to its filter
+ * instead), with e = h - h_ext:
  *   h' = v_U - k1 e,  v_U' = a_U - k2 e - b,  b' = k3 e,
  *   k1 = 3/tau, k2 = 3/tau^2 + 2 g/R, k3 = 1/tau^3: the height error then has a
  *   triple pole at s = -1/tau (2 g/R cancels the free channel's instability). */

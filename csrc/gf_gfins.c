@@ -565,13 +565,7 @@ gf_status gf_gfnav_run(gf_gfnav_state *st, size_t n, const double *A, double dt,
         st->nav = nav;
         memcpy(q_bn + 4 * k, nav.q_bn, sizeof nav.q_bn);
         gf_v3_copy(nav.v_n_m_s, v_n + 3 * k);
-        if (nav.cfg.earth == GF_SINS_EARTH_FLAT) {
-            gf_v3_copy(nav.flat_pos_m, pos + 3 * k);
-        } else {
-            pos[3 * k] = nav.lat_rad;
-            pos[3 * k + 1] = nav.lon_rad;
-            pos[3 * k + 2] = nav.h_m;
-        }
+        gf_sins_position(&nav, pos + 3 * k);
         if (w_out)
             gf_v3_copy(r.w, w_out + 3 * k);
         if (f_out)

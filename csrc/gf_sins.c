@@ -154,6 +154,20 @@ gf_status gf_sins_init(gf_sins_state *state, const gf_sins_config *cfg, const do
     return GF_OK;
 }
 
+gf_status gf_sins_position(const gf_sins_state *s, double *pos)
+{
+    if (!s || !pos)
+        return GF_ERR_NULL_POINTER;
+    if (s->cfg.earth == GF_SINS_EARTH_FLAT) {
+        gf_v3_copy(s->flat_pos_m, pos);
+    } else {
+        pos[0] = s->lat_rad;
+        pos[1] = s->lon_rad;
+        pos[2] = s->h_m;
+    }
+    return GF_OK;
+}
+
 gf_status gf_sins_set_flat_position(gf_sins_state *state, const double *pos_m)
 {
     if (!state || !pos_m)
@@ -200,6 +214,28 @@ static inline void q_from_rotvec_fast(const double phi[3], double q[4])
 static inline int v3_finite(const double a[3])
 {
     return gf_all_finite(a, 3);
+}
+
+/* sin and cos of (x + d) from sin x, cos x for |d| < 1e-4 rad by the angle-sum formulas
+ * with sin d = d - d^3/6, cos d = 1 - d^2/2 (remainders d^5/120, d^4/24 < 5e-18) */
+static inline void sincos_shift(double s, double c, double d, double *s_out, double *c_out)
+{
+    const double cd = 1.0 - 0.5 * d * d, sd = d * (1.0 - d * d / 6.0);
+    const double s_new = s * cd + c * sd;
+    *c_out = c * cd - s * sd;
+    *s_out = s_new;
+}
+
+/* What every successful update ends with: the sample becomes the previous one, time
+ * moves by T in the direction of travel. */
+static inline void finish_update(gf_sins_state *s, const double gyro[3], const double accel[3],
+                                 double T)
+{
+    gf_v3_copy(gyro, s->prev_gyro);
+    gf_v3_copy(accel, s->prev_accel);
+    s->have_prev = 1;
+    s->time_s += s->earth_rate_sign > 0 ? T : -T;
+    s->n_samples += 1;
 }
 
 /* One update of *s by one sample. All checks come before any write, so an error leaves
@@ -282,11 +318,7 @@ static gf_status sins_update(gf_sins_state *s, const double gyro[3], const doubl
         }
         memcpy(s->q_bn, q, sizeof q);
         gf_v3_copy(v_new, s->v_n_m_s);
-        gf_v3_copy(gyro, s->prev_gyro);
-        gf_v3_copy(accel, s->prev_accel);
-        s->have_prev = 1;
-        s->time_s += s->earth_rate_sign > 0 ? T : -T;
-        s->n_samples += 1;
+        finish_update(s, gyro, accel, T);
         return GF_OK;
     }
 
@@ -305,9 +337,7 @@ static gf_status sins_update(gf_sins_state *s, const double gyro[3], const doubl
         const double d = d_mid;
         double s_mid, c_mid;
         if (fabs(d) < 1e-4) {
-            const double cd = 1.0 - 0.5 * d * d, sd = d * (1.0 - d * d / 6.0);
-            s_mid = s->sin_lat * cd + s->cos_lat * sd;
-            c_mid = s->cos_lat * cd - s->sin_lat * sd;
+            sincos_shift(s->sin_lat, s->cos_lat, d, &s_mid, &c_mid);
         } else {
             s_mid = sin(lat_mid);
             c_mid = cos(lat_mid);
@@ -396,10 +426,7 @@ static gf_status sins_update(gf_sins_state *s, const double gyro[3], const doubl
          * cannot accumulate */
         const double d = lat_new - lat_mid;
         if ((s->n_samples & 63u) != 0 && fabs(d) < 1e-4) {
-            const double cd = 1.0 - 0.5 * d * d, sd = d * (1.0 - d * d / 6.0);
-            const double s_new = e.sin_lat * cd + e.cos_lat * sd;
-            s->cos_lat = e.cos_lat * cd - e.sin_lat * sd;
-            s->sin_lat = s_new;
+            sincos_shift(e.sin_lat, e.cos_lat, d, &s->sin_lat, &s->cos_lat);
         } else {
             s->sin_lat = sin(lat_new);
             s->cos_lat = cos(lat_new);
@@ -407,11 +434,7 @@ static gf_status sins_update(gf_sins_state *s, const double gyro[3], const doubl
     }
     s->R_M_m = e.R_M_m; /* at the mid point: within 1e-9 relative of R_M(lat_new) */
     s->baro_accel_m_s2 = b_new;
-    gf_v3_copy(gyro, s->prev_gyro);
-    gf_v3_copy(accel, s->prev_accel);
-    s->have_prev = 1;
-    s->time_s += s->earth_rate_sign > 0 ? T : -T;
-    s->n_samples += 1;
+    finish_update(s, gyro, accel, T);
     return GF_OK;
 }
 
@@ -490,13 +513,7 @@ gf_status gf_sins_run(gf_sins_state *state, size_t n, const double *gyro, const 
         gf_v3_copy(s.v_n_m_s, v_n_m_s + 3 * k);
         if (backward)
             gf_v3_scale(v_n_m_s + 3 * k, -1.0, v_n_m_s + 3 * k); /* report true-time velocity */
-        if (s.cfg.earth == GF_SINS_EARTH_FLAT) {
-            gf_v3_copy(s.flat_pos_m, pos + 3 * k);
-        } else {
-            pos[3 * k] = s.lat_rad;
-            pos[3 * k + 1] = s.lon_rad;
-            pos[3 * k + 2] = s.h_m;
-        }
+        gf_sins_position(&s, pos + 3 * k);
         if (time_s)
             time_s[k] = s.time_s;
     }

@@ -127,6 +127,10 @@ gf_status gf_sins_init(gf_sins_state *state, const gf_sins_config *cfg, const do
 gf_status gf_sins_step(gf_sins_state *state, const double *gyro, const double *accel,
                        double dt_s, double h_ext_m);
 
+/* The state's position as the batch calls report it: (lat rad, lon rad, h m), or
+ * (x, y, z) m with EARTH_FLAT. */
+gf_status gf_sins_position(const gf_sins_state *state, double *pos);
+
 /* EARTH_FLAT: sets the position (m); the geodetic fields are then unused. */
 gf_status gf_sins_set_flat_position(gf_sins_state *state, const double *pos_m);
 

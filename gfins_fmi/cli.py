@@ -193,6 +193,21 @@ def _solve9(args) -> int:
     return status
 
 
+def _initial_state_args(p) -> None:
+    """Initial state and vertical channel, shared by the navigation commands."""
+    p.add_argument("--lat0", type=float, required=True, help="initial latitude, deg")
+    p.add_argument("--lon0", type=float, required=True, help="initial longitude, deg")
+    p.add_argument("--h0", type=float, default=0.0, help="initial height, m (also the held height)")
+    p.add_argument("--heading0", type=float, default=0.0, help="initial heading, deg clockwise from north")
+    p.add_argument("--pitch0", type=float, default=0.0, help="initial pitch, deg")
+    p.add_argument("--roll0", type=float, default=0.0, help="initial roll, deg")
+    p.add_argument("--v0", default="0,0,0",
+                   help="initial velocity E,N,U in m/s (write --v0=-1,2,0 when it starts with -)")
+    p.add_argument("--vertical", choices=["free", "hold", "baro"], default="free",
+                   help="vertical channel (baro needs the external height as the last column)")
+    p.add_argument("--baro-tau", type=float, default=10.0, help="baro loop time constant, s")
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="gfins",
@@ -229,20 +244,10 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--input-kind", choices=["increments", "rates"], default="increments",
                    help="increments: rad and m/s over (t_(k-1), t_k]; rates: rad/s and m/s^2 at t_k")
     p.add_argument("--header", action="store_true", help="the CSV's first line is a header")
-    p.add_argument("--lat0", type=float, required=True, help="initial latitude, deg")
-    p.add_argument("--lon0", type=float, required=True, help="initial longitude, deg")
-    p.add_argument("--h0", type=float, default=0.0, help="initial height, m (also the held height)")
-    p.add_argument("--heading0", type=float, default=0.0, help="initial heading, deg clockwise from north")
-    p.add_argument("--pitch0", type=float, default=0.0, help="initial pitch, deg")
-    p.add_argument("--roll0", type=float, default=0.0, help="initial roll, deg")
-    p.add_argument("--v0", default="0,0,0",
-                   help="initial velocity E,N,U in m/s (write --v0=-1,2,0 when it starts with -)")
+    _initial_state_args(p)
     p.add_argument("--t0", type=float, default=None,
                    help="time of the initial state, s (default: one interval before the first "
                         "increment, or the first rate sample)")
-    p.add_argument("--vertical", choices=["free", "hold", "baro"], default="free",
-                   help="vertical channel (baro needs the 8th column h_ext)")
-    p.add_argument("--baro-tau", type=float, default=10.0, help="baro loop time constant, s")
     p.add_argument("--no-coning", action="store_true", help="one-sample algorithm")
     p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                    help="progress bar (default: on for records of 10^6 samples or more)")
@@ -262,15 +267,7 @@ def main(argv: list[str] | None = None) -> int:
                    help="rate at the first sample, rad/s, x,y,z (write --omega-init=-1,0,0 "
                         "when it starts with -)")
     p.add_argument("--header", action="store_true", help="the CSV's first line is a header")
-    p.add_argument("--lat0", type=float, required=True, help="initial latitude, deg")
-    p.add_argument("--lon0", type=float, required=True, help="initial longitude, deg")
-    p.add_argument("--h0", type=float, default=0.0, help="initial height, m")
-    p.add_argument("--heading0", type=float, default=0.0, help="initial heading, deg")
-    p.add_argument("--pitch0", type=float, default=0.0, help="initial pitch, deg")
-    p.add_argument("--roll0", type=float, default=0.0, help="initial roll, deg")
-    p.add_argument("--v0", default="0,0,0", help="initial velocity E,N,U, m/s")
-    p.add_argument("--vertical", choices=["free", "hold", "baro"], default="free")
-    p.add_argument("--baro-tau", type=float, default=10.0, help="baro loop time constant, s")
+    _initial_state_args(p)
     p.set_defaults(func=_gfnav)
 
     p = sub.add_parser("reproduce", help="reproduce a published experiment (qin: the 6- vs "

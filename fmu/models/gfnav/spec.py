@@ -2,6 +2,11 @@
 number of inputs, which FMI 2.0 cannot change at run time). ``make(layout, n)`` returns
 the spec; ``fmu/models/gfnav_<layout>/model_spec.py`` call it."""
 
+import pathlib
+import runpy
+
+_COMMON = runpy.run_path(str(pathlib.Path(__file__).resolve().parent.parent / "common" / "nav_params.py"))
+
 _NAMES = {"cube6": "6-accelerometer cube (Tan & Park)", "qin9": "9-accelerometer layout of "
           "Qin, Xu, Li (seed 000)", "12": "12-accelerometer layout (Qin's nine plus three "
           "tangential sensors)"}
@@ -38,38 +43,15 @@ def make(layout: str, n: int) -> dict:
             dict(name="flat_gravity", causality="parameter", variability="fixed", type="Float64",
                  shape=(), unit="m/s2", start=0.0, field="flat_gravity_m_s2",
                  description="Gravity of the fixed frame (earth = 1), >= 0"),
-            dict(name="vertical_mode", causality="parameter", variability="fixed", type="Int32",
-                 shape=(), start=0, field="vertical_mode",
-                 description="WGS-84 vertical channel: 0 free, 1 held at hold_height, 2 baro (h_ext)"),
-            dict(name="hold_height", causality="parameter", variability="fixed", type="Float64",
-                 shape=(), unit="m", start=0.0, field="hold_height_m",
-                 description="Height held when vertical_mode = 1"),
-            dict(name="baro_tau", causality="parameter", variability="fixed", type="Float64",
-                 shape=(), unit="s", start=10.0, field="baro_tau_s",
-                 description="Time constant of the baro loop, > 0"),
-            dict(name="q0", causality="parameter", variability="fixed", type="Float64",
-                 shape=(4,), start=[1.0, 0.0, 0.0, 0.0], field="q0",
-                 description="Initial attitude quaternion q_b^n (scalar first)"),
-            dict(name="v0", causality="parameter", variability="fixed", type="Float64",
-                 shape=(3,), unit="m/s", start=0.0, field="v0_m_s",
-                 description="Initial velocity (East-North-Up, or the fixed frame's axes)"),
-            dict(name="lat0", causality="parameter", variability="fixed", type="Float64",
-                 shape=(), unit="rad", start=0.5235987755982988, field="lat0_rad",
-                 description="Initial latitude (earth = 0)"),
-            dict(name="lon0", causality="parameter", variability="fixed", type="Float64",
-                 shape=(), unit="rad", start=1.9896753472735356, field="lon0_rad",
-                 description="Initial longitude (earth = 0)"),
-            dict(name="h0", causality="parameter", variability="fixed", type="Float64",
-                 shape=(), unit="m", start=0.0, field="h0_m", description="Initial height (earth = 0)"),
+            *_COMMON["vertical_channel"](),
+            *_COMMON["initial_state"](),
             dict(name="pos0", causality="parameter", variability="fixed", type="Float64",
                  shape=(3,), unit="m", start=0.0, field="pos0_m",
                  description="Initial position in the fixed frame (earth = 1)"),
             dict(name="A", causality="input", variability="continuous", type="Float64",
                  shape=(n,), unit="m/s2", start=0.0, field="A_m_s2",
                  description=f"Outputs of accelerometers 1..{n} of the layout"),
-            dict(name="h_ext", causality="input", variability="continuous", type="Float64",
-                 shape=(), unit="m", start=float("nan"), field="h_ext_m",
-                 description="External height for vertical_mode = 2; NaN (the start value): none"),
+            _COMMON["external_height"](),
             dict(name="q", causality="output", variability="discrete", type="Float64",
                  shape=(4,), field="q_bn", description="Attitude quaternion q_b^n"),
             dict(name="euler", causality="output", variability="discrete", type="Float64",

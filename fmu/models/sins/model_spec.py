@@ -2,7 +2,11 @@
 the one place its variables are listed; fmu/tools/fmugen.py makes the FMI 2.0 and 3.0
 modelDescription.xml and the C table from it."""
 
+import pathlib
+import runpy
+
 _RAD = "rad"
+_COMMON = runpy.run_path(str(pathlib.Path(__file__).resolve().parent.parent / "common" / "nav_params.py"))
 
 MODEL = dict(
     model_name="gfins.StrapdownINS",
@@ -21,16 +25,7 @@ MODEL = dict(
         dict(name="coning", causality="parameter", variability="fixed", type="Int32",
              shape=(), start=1, field="coning",
              description="1: two-sample coning and sculling corrections; 0: none"),
-        dict(name="vertical_mode", causality="parameter", variability="fixed", type="Int32",
-             shape=(), start=0, field="vertical_mode",
-             description="0: free; 1: height held at hold_height; 2: damped by h_ext "
-                         "(third-order loop, triple pole at -1/baro_tau)"),
-        dict(name="hold_height", causality="parameter", variability="fixed", type="Float64",
-             shape=(), unit="m", start=0.0, field="hold_height_m",
-             description="Height held when vertical_mode = 1"),
-        dict(name="baro_tau", causality="parameter", variability="fixed", type="Float64",
-             shape=(), unit="s", start=10.0, field="baro_tau_s",
-             description="Time constant of the baro loop (vertical_mode = 2), > 0"),
+        *_COMMON["vertical_channel"](),
         dict(name="max_rate", causality="parameter", variability="fixed", type="Float64",
              shape=(), unit="rad/s", start=50.0, field="max_rate_rad_s",
              description="Samples with a larger angular rate are refused as absurd"),
@@ -38,21 +33,7 @@ MODEL = dict(
              type="Float64", shape=(), unit="m/s2", start=1000.0,
              field="max_specific_force_m_s2",
              description="Samples with a larger specific force are refused as absurd"),
-        dict(name="q0", causality="parameter", variability="fixed", type="Float64",
-             shape=(4,), start=[1.0, 0.0, 0.0, 0.0], field="q0",
-             description="Initial attitude quaternion q_b^n (scalar first; normalised)"),
-        dict(name="v0", causality="parameter", variability="fixed", type="Float64",
-             shape=(3,), unit="m/s", start=0.0, field="v0_m_s",
-             description="Initial velocity, East-North-Up"),
-        dict(name="lat0", causality="parameter", variability="fixed", type="Float64",
-             shape=(), unit=_RAD, start=0.5235987755982988, field="lat0_rad",
-             description="Initial geodetic latitude, |lat0| < pi/2"),
-        dict(name="lon0", causality="parameter", variability="fixed", type="Float64",
-             shape=(), unit=_RAD, start=1.9896753472735356, field="lon0_rad",
-             description="Initial longitude"),
-        dict(name="h0", causality="parameter", variability="fixed", type="Float64",
-             shape=(), unit="m", start=0.0, field="h0_m",
-             description="Initial height above the WGS-84 ellipsoid"),
+        *_COMMON["initial_state"](),
         dict(name="dtheta", causality="input", variability="continuous", type="Float64",
              shape=(3,), unit=_RAD, start=0.0, field="dtheta_rad",
              description="Gyro angle increment over the step ending now, body axes "
@@ -67,10 +48,7 @@ MODEL = dict(
         dict(name="specific_force", causality="input", variability="continuous",
              type="Float64", shape=(3,), unit="m/s2", start=0.0, field="accel_m_s2",
              description="Specific force f^b now; used when input_mode = 1"),
-        dict(name="h_ext", causality="input", variability="continuous", type="Float64",
-             shape=(), unit="m", start=float("nan"), field="h_ext_m",
-             description="External (barometric) height at the communication point for "
-                         "vertical_mode = 2; NaN (the start value): none"),
+        _COMMON["external_height"](),
         dict(name="q", causality="output", variability="discrete", type="Float64",
              shape=(4,), field="q_bn", description="Attitude quaternion q_b^n"),
         dict(name="euler", causality="output", variability="discrete", type="Float64",

@@ -1,0 +1,169 @@
+"""IMU error model (C core ``gf_imu_error``) in datasheet units: one definition for
+simulation (:meth:`ImuErrors.apply`) and compensation (:meth:`ImuErrors.compensate`).
+Model and seed equations: ``csrc/gf_imu_error.h``.
+
+Units at this boundary (SI inside): gyro bias in deg/h, accelerometer bias in ug
+(1 ug = 9.80665e-6 m/s^2), scale factors in ppm, misalignments in arcsec, K2 in ug/g^2,
+inner lever arms in cm, temperatures in degC; temperature coefficients in the same unit
+per degC^(k+1).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from gfins_fmi._lib import NonFiniteInputError, as_rows, ffi, lib, ptr
+
+__all__ = ["ImuErrors", "G0", "DEG_H", "UG", "PPM", "ARCSEC"]
+
+G0 = 9.80665                          #: standard gravity, m/s^2
+DEG_H = np.pi / 180.0 / 3600.0        #: 1 deg/h in rad/s
+UG = 1e-6 * G0                        #: 1 ug in m/s^2
+PPM = 1e-6                            #: 1 ppm
+ARCSEC = np.pi / 180.0 / 3600.0       #: 1 arcsec in rad
+
+_FIELDS = {1: "gyro_scale_ppm (|s| < 0.5 = 500000 ppm)",
+           2: "gyro_misalignment_arcsec (|N| < 0.1 rad = 20626 arcsec, zero diagonal)",
+           3: "accel_scale_ppm (|s| < 500000 ppm)",
+           4: "accel_misalignment_arcsec (|N| < 20626 arcsec, zero diagonal)",
+           5: "accel_k2_ug_g2 (|K2| * 1000 m/s^2 < 0.1)",
+           6: "lever_arm_cm (|r| < 100 cm)",
+           7: "temperature order (at most 4 coefficients)"}
+
+
+def _vec(name, value, shape):
+    arr = np.zeros(shape) if value is None else np.asarray(value, float)
+    if arr.shape != shape:
+        raise ValueError(f"{name} must have shape {shape}; got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must be finite")
+    return arr
+
+
+@dataclass
+class ImuErrors:
+    """Deterministic errors of a gyro triad and an accelerometer triad (datasheet units).
+
+    Parameters
+    ----------
+    gyro_bias_deg_h, gyro_scale_ppm : (3,)
+    gyro_misalignment_arcsec : (3, 3)
+        Cross-coupling N_g (zero diagonal): w_out = (I + diag s)(I + N) w + b.
+    accel_bias_ug, accel_scale_ppm, accel_k2_ug_g2 : (3,)
+    accel_misalignment_arcsec : (3, 3)
+    lever_arm_cm : (3,)
+        Inner lever arm of each accelerometer along its own axis (seed 001).
+    t0_C : float
+        Reference temperature of the biases and scale factors.
+    gyro_bias_tc, gyro_scale_tc, accel_bias_tc, accel_scale_tc : (order, 3)
+        Temperature coefficients: row k multiplies (T - t0)^(k+1), in the unit of the
+        quantity per degC^(k+1); at most 4 rows, all four with the same number of rows.
+    """
+
+    gyro_bias_deg_h: np.ndarray | None = None
+    gyro_scale_ppm: np.ndarray | None = None
+    gyro_misalignment_arcsec: np.ndarray | None = None
+    accel_bias_ug: np.ndarray | None = None
+    accel_scale_ppm: np.ndarray | None = None
+    accel_misalignment_arcsec: np.ndarray | None = None
+    accel_k2_ug_g2: np.ndarray | None = None
+    lever_arm_cm: np.ndarray | None = None
+    t0_C: float = 20.0
+    gyro_bias_tc: np.ndarray | None = None
+    gyro_scale_tc: np.ndarray | None = None
+    accel_bias_tc: np.ndarray | None = None
+    accel_scale_tc: np.ndarray | None = None
+    _c: object = field(default=None, repr=False, compare=False)
+
+    def __post_init__(self):
+        c = ffi.new("gf_imu_errors *")
+        c.g_bias_rad_s = list(_vec("gyro_bias_deg_h", self.gyro_bias_deg_h, (3,)) * DEG_H)
+        c.g_scale = list(_vec("gyro_scale_ppm", self.gyro_scale_ppm, (3,)) * PPM)
+        c.g_misalign_rad = list(_vec("gyro_misalignment_arcsec", self.gyro_misalignment_arcsec,
+                                     (3, 3)).ravel() * ARCSEC)
+        c.a_bias_m_s2 = list(_vec("accel_bias_ug", self.accel_bias_ug, (3,)) * UG)
+        c.a_scale = list(_vec("accel_scale_ppm", self.accel_scale_ppm, (3,)) * PPM)
+        c.a_misalign_rad = list(_vec("accel_misalignment_arcsec", self.accel_misalignment_arcsec,
+                                     (3, 3)).ravel() * ARCSEC)
+        # K2 [ug/g^2]: error = K2 u^2 with u in g  ->  K2 * 1e-6 g / g^2 = K2 * 1e-6 / g per m/s^2
+        c.a_k2_s2_m = list(_vec("accel_k2_ug_g2", self.accel_k2_ug_g2, (3,)) * 1e-6 / G0)
+        c.a_lever_m = list(_vec("lever_arm_cm", self.lever_arm_cm, (3,)) * 0.01)
+        c.t0 = float(self.t0_C)
+        tcs = {"gyro_bias_tc": DEG_H, "gyro_scale_tc": PPM, "accel_bias_tc": UG,
+               "accel_scale_tc": PPM}
+        orders = {np.asarray(getattr(self, k)).shape[0] for k in tcs if getattr(self, k) is not None}
+        if len(orders) > 1:
+            raise ValueError("the temperature coefficient arrays must have the same number of rows")
+        order = orders.pop() if orders else 0
+        if order > int(lib.GF_IMU_TEMP_ORDER_MAX):
+            raise ValueError(f"at most {int(lib.GF_IMU_TEMP_ORDER_MAX)} temperature coefficients "
+                             f"per quantity; got {order}")
+        c.temp_order = order
+        for name, unit in tcs.items():
+            arr = _vec(name, getattr(self, name), (order, 3)) if order else np.zeros((0, 3))
+            flat = np.zeros(3 * int(lib.GF_IMU_TEMP_ORDER_MAX))
+            flat[:arr.size] = arr.ravel() * unit
+            setattr(c, {"gyro_bias_tc": "g_bias_tc", "gyro_scale_tc": "g_scale_tc",
+                        "accel_bias_tc": "a_bias_tc", "accel_scale_tc": "a_scale_tc"}[name], list(flat))
+        bad = ffi.new("int *")
+        status = lib.gf_imu_errors_check(c, bad)
+        if status != lib.GF_OK:
+            raise ValueError(f"IMU error parameter out of its physical range: "
+                             f"{_FIELDS.get(int(bad[0]), 'a non-finite value')}")
+        object.__setattr__(self, "_c", c)
+
+    @classmethod
+    def random(cls, rng: np.random.Generator, gyro_bias_deg_h=0.0, gyro_scale_ppm=0.0,
+               gyro_misalignment_arcsec=0.0, accel_bias_ug=0.0, accel_scale_ppm=0.0,
+               accel_misalignment_arcsec=0.0, accel_k2_ug_g2=0.0, lever_arm_cm=0.0,
+               temp_order: int = 0, temp_scale_per_C: float = 0.01, t0_C: float = 20.0):
+        """A set drawn from zero-mean normals with the given stds (datasheet units);
+        temperature coefficients of order k get std temp_scale_per_C^(k+1) times the
+        quantity's std."""
+        def off(std):
+            m = rng.normal(0, std, (3, 3))
+            np.fill_diagonal(m, 0.0)
+            return m
+        tc = {}
+        for name, std in (("gyro_bias_tc", gyro_bias_deg_h), ("gyro_scale_tc", gyro_scale_ppm),
+                          ("accel_bias_tc", accel_bias_ug), ("accel_scale_tc", accel_scale_ppm)):
+            tc[name] = np.array([rng.normal(0, std * temp_scale_per_C ** (k + 1), 3)
+                                 for k in range(temp_order)]).reshape(temp_order, 3)
+        return cls(rng.normal(0, gyro_bias_deg_h, 3), rng.normal(0, gyro_scale_ppm, 3),
+                   off(gyro_misalignment_arcsec), rng.normal(0, accel_bias_ug, 3),
+                   rng.normal(0, accel_scale_ppm, 3), off(accel_misalignment_arcsec),
+                   rng.normal(0, accel_k2_ug_g2, 3), rng.normal(0, lever_arm_cm, 3), t0_C,
+                   **(tc if temp_order else {}))
+
+    def _run(self, fn, a, b, temp_C, names):
+        x = as_rows(names[0], a, 3, "rad/s")
+        y = as_rows(names[1], b, 3, "m/s^2")
+        if x.shape[0] != y.shape[0]:
+            raise ValueError(f"{names[0]} and {names[1]} must have the same number of rows")
+        n = x.shape[0]
+        t = None
+        if temp_C is not None:
+            t = np.ascontiguousarray(np.broadcast_to(np.asarray(temp_C, float), (n,)))
+        out_w, out_f = np.empty((n, 3)), np.empty((n, 3))
+        done = ffi.new("size_t *")
+        status = fn(self._c, n, ptr(x), ptr(y), ptr(t) if t is not None else ffi.NULL,
+                    ptr(out_w), ptr(out_f), done)
+        if status != lib.GF_OK:
+            k = int(done[0])
+            what = ("is not finite" if status == lib.GF_ERR_NONFINITE_INPUT else
+                    "is beyond the K2 model (no real specific force gives this output)")
+            raise NonFiniteInputError(f"sample {k} ({names[0]}, {names[1]}, temperature) {what}; "
+                                      "rows before it are in .partial", k, -1,
+                                      (out_w[:k].copy(), out_f[:k].copy()))
+        return out_w, out_f
+
+    def apply(self, omega_rad_s, f_m_s2, temp_C=None):
+        """Sensor outputs (rad/s, m/s^2) of true rates and specific forces (n, 3) at the
+        temperatures ``temp_C`` (scalar or (n,); default t0)."""
+        return self._run(lib.gf_imu_apply, omega_rad_s, f_m_s2, temp_C, ("omega_rad_s", "f_m_s2"))
+
+    def compensate(self, gyro_out_rad_s, accel_out_m_s2, temp_C=None):
+        """Rates and specific forces from sensor outputs: the exact inverse of apply."""
+        return self._run(lib.gf_imu_compensate, gyro_out_rad_s, accel_out_m_s2, temp_C,
+                         ("gyro_out_rad_s", "accel_out_m_s2"))

@@ -9,7 +9,7 @@ from gfins_fmi.accel_array import (FLAG_NEG_OMEGA_SQ, FLAG_SIGN_UNKNOWN, MAX_SEN
                                    accel9_geometry, forward_model, solve_accel9)
 from gfins_fmi.fmu import FmuRunError, fmu_path, run_accel9_fmu
 from gfins_fmi.array_errors import ArraySensorErrors
-from gfins_fmi.imu_errors import ImuErrors
+from gfins_fmi.imu_errors import ImuErrors, ImuNoise
 from gfins_fmi.gyrofree import (GeometryReport, GyroFreeNavigator, RateSolution, RateSolver,
                                 geometry_report, layout)
 from gfins_fmi.sins import (NavSolution, NavState, SampleError, SinsConfig, Strapdown,
@@ -24,7 +24,7 @@ __all__ = [
     "FLAG_NEG_OMEGA_SQ", "FLAG_SIGN_UNKNOWN", "MAX_SENSORS",
     "fmu_path", "run_accel9_fmu",
     "layout", "geometry_report", "GeometryReport", "RateSolver", "RateSolution",
-    "GyroFreeNavigator", "ArraySensorErrors", "ImuErrors",
+    "GyroFreeNavigator", "ArraySensorErrors", "ImuErrors", "ImuNoise",
     "SinsConfig", "NavState", "NavSolution", "Strapdown", "SampleError",
     "euler_to_quat", "quat_to_euler", "__version__",
 ]

@@ -15,7 +15,7 @@ import numpy as np
 
 from gfins_fmi._lib import NonFiniteInputError, as_rows, ffi, lib, ptr
 
-__all__ = ["ImuErrors", "G0", "DEG_H", "UG", "PPM", "ARCSEC"]
+__all__ = ["ImuErrors", "ImuNoise", "G0", "DEG_H", "UG", "PPM", "ARCSEC"]
 
 G0 = 9.80665                          #: standard gravity, m/s^2
 DEG_H = np.pi / 180.0 / 3600.0        #: 1 deg/h in rad/s
@@ -167,3 +167,67 @@ class ImuErrors:
         """Rates and specific forces from sensor outputs: the exact inverse of apply."""
         return self._run(lib.gf_imu_compensate, gyro_out_rad_s, accel_out_m_s2, temp_C,
                          ("gyro_out_rad_s", "accel_out_m_s2"))
+
+
+@dataclass
+class ImuNoise:
+    """Random errors of a gyro and an accelerometer triad, for simulation.
+
+    Parameters (per axis, scalars apply to all three)
+    ----------
+    gyro_arw_deg_sqrt_h : angle random walk N: the rate noise per sample has std
+        N / sqrt(dt) (N in rad/sqrt(s)); the integrated angle grows as N sqrt(t).
+    gyro_bias_instability_deg_h, gyro_correlation_time_s : first-order Gauss-Markov
+        bias: stationary std and correlation time.
+    gyro_rrw_deg_h_sqrt_h : rate random walk K: the bias wanders as K sqrt(t).
+    accel_vrw_ug_sqrt_hz : white specific-force noise as a one-sided amplitude spectral
+        density; std per sample = ASD sqrt(fs / 2).
+    accel_bias_instability_ug, accel_correlation_time_s : Gauss-Markov accelerometer bias.
+    accel_rrw_ug_sqrt_s : random walk of the accelerometer bias (ug/sqrt(s)).
+    """
+
+    gyro_arw_deg_sqrt_h: float = 0.0
+    gyro_bias_instability_deg_h: float = 0.0
+    gyro_correlation_time_s: float = 100.0
+    gyro_rrw_deg_h_sqrt_h: float = 0.0
+    accel_vrw_ug_sqrt_hz: float = 0.0
+    accel_bias_instability_ug: float = 0.0
+    accel_correlation_time_s: float = 100.0
+    accel_rrw_ug_sqrt_s: float = 0.0
+
+    def __post_init__(self):
+        for k, v in self.__dict__.items():
+            if not (np.isfinite(v) and v >= 0):
+                raise ValueError(f"{k} must be finite and >= 0; got {v!r}")
+        for k in ("gyro_correlation_time_s", "accel_correlation_time_s"):
+            if not getattr(self, k) > 0:
+                raise ValueError(f"{k} must be > 0")
+
+    @staticmethod
+    def _gauss_markov(n, dt, sigma, tau, rng):
+        if sigma == 0:
+            return np.zeros((n, 3))
+        from scipy.signal import lfilter
+        a = np.exp(-dt / tau)
+        w = rng.normal(0.0, sigma * np.sqrt(1 - a * a), (n, 3))
+        x0 = rng.normal(0.0, sigma, 3)                      # stationary from the start
+        y, _ = lfilter([1.0], [1.0, -a], w, axis=0, zi=(a * x0)[None, :])
+        return y
+
+    def sample(self, n: int, dt_s: float, rng: np.random.Generator):
+        """Noise to add to rates (rad/s) and specific forces (m/s^2): two (n, 3) arrays."""
+        if n < 0 or not (np.isfinite(dt_s) and dt_s > 0):
+            raise ValueError("n must be >= 0 and dt_s finite and > 0")
+        deg = np.pi / 180.0
+        g = rng.normal(0.0, self.gyro_arw_deg_sqrt_h * deg / 60.0 / np.sqrt(dt_s), (n, 3))
+        g += self._gauss_markov(n, dt_s, self.gyro_bias_instability_deg_h * DEG_H,
+                                self.gyro_correlation_time_s, rng)
+        if self.gyro_rrw_deg_h_sqrt_h:
+            K = self.gyro_rrw_deg_h_sqrt_h * DEG_H / 60.0     # rad/s per sqrt(s)
+            g += np.cumsum(rng.normal(0.0, K * np.sqrt(dt_s), (n, 3)), axis=0)
+        a = rng.normal(0.0, self.accel_vrw_ug_sqrt_hz * UG * np.sqrt(0.5 / dt_s), (n, 3))
+        a += self._gauss_markov(n, dt_s, self.accel_bias_instability_ug * UG,
+                                self.accel_correlation_time_s, rng)
+        if self.accel_rrw_ug_sqrt_s:
+            a += np.cumsum(rng.normal(0.0, self.accel_rrw_ug_sqrt_s * UG * np.sqrt(dt_s), (n, 3)), axis=0)
+        return g, a

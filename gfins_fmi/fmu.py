@@ -290,11 +290,15 @@ def run_accel9_fmu(A_m_s2, dt_s: float, l_m: float, omega_init_rad_s=(0.0, 0.0, 
 
 def run_sins_fmu(gyro, accel, dt_s: float, initial, *, config=None, h_ext_m=None,
                  fmi_version: int = 2, start_time_s: float | None = None,
-                 progress: bool = False, **kwargs):
+                 progress: bool = False, imu_errors=None, lowpass_sos=None, **kwargs):
     """Run a record through the strapdown FMU; the result lines up with
     :meth:`gfins_fmi.Strapdown.run` on the same record (for increments, the FMU takes
     the increment over (t_(k-1), t_k] at t_k, so the record is shifted by one step
     internally and its first step only starts the run).
+
+    ``imu_errors`` (:class:`gfins_fmi.ImuErrors`) switches on the FMU's compensation of
+    its inputs; ``lowpass_sos`` (n_sections <= 8, 6) its low-pass after it (the same as
+    ``ImuErrors.compensate`` followed by ``filters.BiquadFilter`` on the six channels).
 
     Returns a :class:`gfins_fmi.NavSolution`.
     """
@@ -313,6 +317,21 @@ def run_sins_fmu(gyro, accel, dt_s: float, initial, *, config=None, h_ext_m=None
               "max_rate": cfg.max_rate_rad_s, "max_specific_force": cfg.max_specific_force_m_s2,
               "q0": np.asarray(initial.q_bn, float), "v0": np.asarray(initial.v_n_m_s, float),
               "lat0": initial.lat_rad, "lon0": initial.lon_rad, "h0": initial.h_m}
+    if imu_errors is not None:
+        c = imu_errors._c
+        params.update(imu_comp=1, gyro_bias=list(c.g_bias_rad_s), gyro_scale=list(c.g_scale),
+                      gyro_misalign=list(c.g_misalign_rad), accel_bias=list(c.a_bias_m_s2),
+                      accel_scale=list(c.a_scale), accel_misalign=list(c.a_misalign_rad),
+                      accel_k2=list(c.a_k2_s2_m), lever_arm=list(c.a_lever_m))
+        if imu_errors._c.temp_order:
+            raise ValueError("the SINS FMU compensates at the reference temperature only: "
+                             "temperature coefficients are not passed to it")
+    if lowpass_sos is not None:
+        sos = np.asarray(lowpass_sos, float)
+        if sos.ndim != 2 or sos.shape[1] != 6 or not 1 <= sos.shape[0] <= 8:
+            raise ValueError(f"lowpass_sos must have shape (1..8, 6); got {sos.shape}")
+        params.update(lowpass_sections=sos.shape[0],
+                      lowpass_sos=np.r_[sos.ravel(), np.zeros(48 - sos.size)])
     he = np.full(n, np.nan) if h_ext_m is None else np.asarray(h_ext_m, float)
     if cfg.input == "increments":
         # sample j of the record covers (t_j, t_(j+1)]: set it at t_(j+1)

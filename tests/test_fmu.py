@@ -311,3 +311,48 @@ def test_gfnav_fmu_errors(circle, version):
     A[7, 2] = np.nan
     with pytest.raises(gf.FmuRunError, match="A\\[i\\] is not finite"):
         run_gfnav_fmu("cube6", A, 0.01, x0, fmi_version=version)
+
+
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("mode", ["rates", "increments"])
+def test_sins_fmu_compensation_and_lowpass_equal_the_batch_pipeline(circle, version, mode):
+    """imu_comp + lowpass in the FMU = ImuErrors.compensate -> BiquadFilter -> Strapdown
+    (increments are compensated as mean rates over the step, exactly as the FMU does)."""
+    from gfins_fmi import filters
+    tr = circle
+    x0 = gf.NavState.from_trajectory(tr, 0)
+    e = gf.ImuErrors.random(np.random.default_rng(4), gyro_bias_deg_h=10, gyro_scale_ppm=1000,
+                            gyro_misalignment_arcsec=100, accel_bias_ug=1000, accel_scale_ppm=1000,
+                            accel_misalignment_arcsec=100, accel_k2_ug_g2=50, lever_arm_cm=3)
+    sos = filters.design_cheby2(20.0, 100.0, order=4)
+    dt = tr.dt_s
+    if mode == "rates":
+        g_out, a_out = e.apply(tr.gyro_rad_s, tr.accel_m_s2)
+        g_c, a_c = e.compensate(g_out, a_out)
+    else:
+        g_out, a_out = e.apply(tr.dtheta_rad / dt, tr.dv_m_s / dt)
+        g_out, a_out = g_out * dt, a_out * dt
+        k = 1.0 / dt                                  # the FMU's arithmetic, to the bit
+        g_c, a_c = e.compensate(g_out * k, a_out * k)
+        g_c, a_c = g_c / k, a_c / k
+    y = filters.BiquadFilter(sos, 6).filter(np.c_[g_c, a_c])
+    cfg = gf.SinsConfig(input=mode)
+    ref = gf.Strapdown(x0, cfg).run(y[:, :3], y[:, 3:], dt_s=dt)
+    out = run_sins_fmu(g_out, a_out, dt, x0, config=cfg, imu_errors=e, lowpass_sos=sos,
+                       fmi_version=version)
+    for name in ("q_bn", "v_n_m_s", "lat_rad", "lon_rad", "h_m"):
+        x, r = getattr(out, name), getattr(ref, name)
+        assert np.all(np.abs(x - r) <= 1e-12 * np.maximum(np.abs(r), 1e-300)), name
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_sins_fmu_refuses_bad_error_parameters(circle, version):
+    x0 = gf.NavState.from_trajectory(circle, 0)
+    with pytest.raises(gf.FmuRunError, match="gyro_scale"):
+        run_fmu("sins", {"dtheta": np.zeros((3, 3))}, ["q"], 0.01,
+                parameters={"imu_comp": 1, "gyro_scale": [0.7, 0, 0], "q0": x0.q_bn},
+                fmi_version=version)
+    with pytest.raises(gf.FmuRunError, match="lowpass_sos section 0: unstable"):
+        run_fmu("sins", {"dtheta": np.zeros((3, 3))}, ["q"], 0.01,
+                parameters={"lowpass_sections": 1, "lowpass_sos": [1, 0, 0, 1, -2.5, 1.5] + [0] * 42},
+                fmi_version=version)

@@ -58,10 +58,84 @@ FmuStatus model_exit_initialization(FmuInstance *instance, ModelData *d, double 
                           "quaternion and v0, lat0, lon0, h0 finite", gf_status_string(st));
         return FMU_ERROR;
     }
+    memset(&d->imu, 0, sizeof d->imu);
+    if (d->imu_comp != 0 && d->imu_comp != 1) {
+        fmu_log_error(instance, "parameter imu_comp = %d must be 0 or 1", (int)d->imu_comp);
+        return FMU_ERROR;
+    }
+    if (d->imu_comp) {
+        static const char *const field_names[] = {"a non-finite value", "gyro_scale (|s| < 0.5)",
+            "gyro_misalign (|N| < 0.1 rad, zero diagonal)", "accel_scale (|s| < 0.5)",
+            "accel_misalign (|N| < 0.1 rad, zero diagonal)", "accel_k2 (|K2| * 1000 m/s2 < 0.1)",
+            "lever_arm (|r| < 1 m)", "temperature order"};
+        memcpy(d->imu.g_bias_rad_s, d->gyro_bias_rad_s, sizeof d->imu.g_bias_rad_s);
+        memcpy(d->imu.g_scale, d->gyro_scale, sizeof d->imu.g_scale);
+        memcpy(d->imu.g_misalign_rad, d->gyro_misalign_rad, sizeof d->imu.g_misalign_rad);
+        memcpy(d->imu.a_bias_m_s2, d->accel_bias_m_s2, sizeof d->imu.a_bias_m_s2);
+        memcpy(d->imu.a_scale, d->accel_scale, sizeof d->imu.a_scale);
+        memcpy(d->imu.a_misalign_rad, d->accel_misalign_rad, sizeof d->imu.a_misalign_rad);
+        memcpy(d->imu.a_k2_s2_m, d->accel_k2_s2_m, sizeof d->imu.a_k2_s2_m);
+        memcpy(d->imu.a_lever_m, d->lever_arm_m, sizeof d->imu.a_lever_m);
+        int bad = 0;
+        if (gf_imu_errors_check(&d->imu, &bad) != GF_OK) {
+            fmu_log_error(instance, "IMU error parameter out of range: %s",
+                          field_names[bad >= 0 && bad <= 7 ? bad : 0]);
+            return FMU_ERROR;
+        }
+    }
+    if (d->lowpass_sections < 0 || d->lowpass_sections > 8) {
+        fmu_log_error(instance, "parameter lowpass_sections = %d must be 0..8",
+                      (int)d->lowpass_sections);
+        return FMU_ERROR;
+    }
+    if (d->lowpass_sections > 0) {
+        size_t bad = 0;
+        const gf_status fs = gf_biquad_init(&d->lowpass, (size_t)d->lowpass_sections,
+                                            d->lowpass_sos, 6, &bad);
+        if (fs != GF_OK) {
+            fmu_log_error(instance, "lowpass_sos section %d: %s", (int)bad,
+                          fs == GF_ERR_SINGULAR_GEOMETRY ? "unstable (a pole on or outside the unit circle)"
+                          : fs == GF_ERR_BAD_PARAMETER ? "a0 must be 1" : "non-finite coefficient");
+            return FMU_ERROR;
+        }
+    }
     d->previous_step_s = 0.0;
     d->started = 0;
     publish(d);
     return FMU_OK;
+}
+
+/* Compensation (exact inverse of the error model) and low-pass of one sample. Increments
+ * are compensated as mean rates over the step (exact for the linear terms; K2 and the
+ * lever arms then act on the mean). On error the filter state is left unchanged. */
+static gf_status condition(ModelData *d, int increments, double dt, const double *gyro_in,
+                           const double *accel_in, double gyro[3], double accel[3])
+{
+    double x[6];
+    memcpy(x, gyro_in, 3 * sizeof *x);
+    memcpy(x + 3, accel_in, 3 * sizeof *x);
+    if (d->imu_comp) {
+        const double k = increments ? 1.0 / dt : 1.0;
+        double w_in[3] = {x[0] * k, x[1] * k, x[2] * k}, f_in[3] = {x[3] * k, x[4] * k, x[5] * k};
+        double w[3], f[3];
+        size_t done = 0;
+        const gf_status st = gf_imu_compensate(&d->imu, 1, w_in, f_in, NULL, w, f, &done);
+        if (st != GF_OK)
+            return st;
+        for (int i = 0; i < 3; ++i) {
+            x[i] = w[i] / k;
+            x[3 + i] = f[i] / k;
+        }
+    }
+    if (d->lowpass_sections > 0) {
+        size_t done = 0;
+        const gf_status st = gf_biquad_run(&d->lowpass, 1, x, x, &done);
+        if (st != GF_OK)
+            return st;
+    }
+    memcpy(gyro, x, 3 * sizeof *x);
+    memcpy(accel, x + 3, 3 * sizeof *x);
+    return GF_OK;
 }
 
 FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double h_s)
@@ -75,7 +149,23 @@ FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double 
     gf_sins_state next = d->nav;
     const double *gyro = increments ? d->dtheta_rad : d->gyro_rad_s;
     const double *accel = increments ? d->dv_m_s : d->accel_m_s2;
-    const gf_status st = gf_sins_step(&next, gyro, accel, d->previous_step_s, d->h_ext_m);
+    double g_c[3], a_c[3], z_backup[8 * 6 * 2]; /* filter state: sections x 6 channels x 2 */
+    const size_t z_used = (size_t)d->lowpass_sections * 6 * 2;
+    if (z_used)
+        memcpy(z_backup, d->lowpass.z, z_used * sizeof *z_backup);
+    const double dt = d->previous_step_s > 0.0 ? d->previous_step_s : h_s;
+    gf_status st = GF_OK;
+    if (d->imu_comp || d->lowpass_sections > 0) {
+        st = condition(d, increments, dt, gyro, accel, g_c, a_c);
+        if (st == GF_OK) {
+            gyro = g_c;
+            accel = a_c;
+        }
+    }
+    if (st == GF_OK)
+        st = gf_sins_step(&next, gyro, accel, d->previous_step_s, d->h_ext_m);
+    if (st != GF_OK && z_used) /* a failed sample leaves the filter as it was */
+        memcpy(d->lowpass.z, z_backup, z_used * sizeof *z_backup);
     if (st != GF_OK) {
         const char *g = increments ? "dtheta" : "gyro_rate", *a = increments ? "dv" : "specific_force";
         if (st == GF_ERR_NONFINITE_INPUT)

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gfins_fmi.accel_array import ArrayGeometry, forward_model
+from gfins_fmi.noise import first_order_lowpass_noise
 
 __all__ = ["ArraySensorErrors"]
 
@@ -121,14 +122,8 @@ class ArraySensorErrors:
         out = rng.normal(0.0, self.white_noise_m_s2, (n_samples, self.n_sensors)) \
             if self.white_noise_m_s2 > 0 else np.zeros((n_samples, self.n_sensors))
         if self.band_noise_m_s2 > 0:
-            from scipy.signal import lfilter
-            a = np.exp(-2 * np.pi * self.band_hz * dt_s)
-            # y_k = a y_(k-1) + (1 - a) x_k has variance sx^2 (1 - a)/(1 + a)
-            sx = self.band_noise_m_s2 / np.sqrt((1 - a) / (1 + a))
-            x = rng.normal(0.0, sx, (n_samples, self.n_sensors))
-            y0 = rng.normal(0.0, self.band_noise_m_s2, self.n_sensors)
-            y, _ = lfilter([1 - a], [1, -a], x, axis=0, zi=(a * y0)[None, :])
-            out += y
+            out += first_order_lowpass_noise(n_samples, self.n_sensors, self.band_noise_m_s2,
+                                             self.band_hz, dt_s, rng)
         return out
 
     def apply(self, nominal: ArrayGeometry, f_m_s2, omega_rad_s, omega_dot_rad_s2, dt_s: float,

@@ -14,8 +14,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from gfins_fmi._lib import NonFiniteInputError, as_rows, ffi, lib, ptr
+from gfins_fmi.noise import first_order_lowpass_noise
 
-__all__ = ["ImuErrors", "ImuNoise", "G0", "DEG_H", "UG", "PPM", "ARCSEC"]
+__all__ = ["ImuErrors", "ImuNoise", "G0", "DEG_H", "UG", "PPM", "ARCSEC",
+           "seed001_gyro_misalignment", "seed001_accel_misalignment"]
 
 G0 = 9.80665                          #: standard gravity, m/s^2
 DEG_H = np.pi / 180.0 / 3600.0        #: 1 deg/h in rad/s
@@ -184,6 +186,8 @@ class ImuNoise:
         density; std per sample = ASD sqrt(fs / 2).
     accel_bias_instability_ug, accel_correlation_time_s : Gauss-Markov accelerometer bias.
     accel_rrw_ug_sqrt_s : random walk of the accelerometer bias (ug/sqrt(s)).
+    gyro_band_deg_h, accel_band_ug, band_hz : band-limited noise: white noise through a
+        first-order low-pass of corner band_hz, scaled to the given std.
     """
 
     gyro_arw_deg_sqrt_h: float = 0.0
@@ -194,25 +198,22 @@ class ImuNoise:
     accel_bias_instability_ug: float = 0.0
     accel_correlation_time_s: float = 100.0
     accel_rrw_ug_sqrt_s: float = 0.0
+    gyro_band_deg_h: float = 0.0
+    accel_band_ug: float = 0.0
+    band_hz: float = 1.0
 
     def __post_init__(self):
         for k, v in self.__dict__.items():
             if not (np.isfinite(v) and v >= 0):
                 raise ValueError(f"{k} must be finite and >= 0; got {v!r}")
-        for k in ("gyro_correlation_time_s", "accel_correlation_time_s"):
+        for k in ("gyro_correlation_time_s", "accel_correlation_time_s", "band_hz"):
             if not getattr(self, k) > 0:
                 raise ValueError(f"{k} must be > 0")
 
     @staticmethod
     def _gauss_markov(n, dt, sigma, tau, rng):
-        if sigma == 0:
-            return np.zeros((n, 3))
-        from scipy.signal import lfilter
-        a = np.exp(-dt / tau)
-        w = rng.normal(0.0, sigma * np.sqrt(1 - a * a), (n, 3))
-        x0 = rng.normal(0.0, sigma, 3)                      # stationary from the start
-        y, _ = lfilter([1.0], [1.0, -a], w, axis=0, zi=(a * x0)[None, :])
-        return y
+        # the first-order low-pass recursion with a = exp(-dt/tau), i.e. corner 1/(2 pi tau)
+        return first_order_lowpass_noise(n, 3, sigma, 1.0 / (2 * np.pi * tau), dt, rng)
 
     def sample(self, n: int, dt_s: float, rng: np.random.Generator):
         """Noise to add to rates (rad/s) and specific forces (m/s^2): two (n, 3) arrays."""
@@ -230,4 +231,26 @@ class ImuNoise:
                                 self.accel_correlation_time_s, rng)
         if self.accel_rrw_ug_sqrt_s:
             a += np.cumsum(rng.normal(0.0, self.accel_rrw_ug_sqrt_s * UG * np.sqrt(dt_s), (n, 3)), axis=0)
+        g += first_order_lowpass_noise(n, 3, self.gyro_band_deg_h * DEG_H, self.band_hz, dt_s, rng)
+        a += first_order_lowpass_noise(n, 3, self.accel_band_ug * UG, self.band_hz, dt_s, rng)
         return g, a
+
+
+def seed001_gyro_misalignment(gamma_yz: float, gamma_zy: float, gamma_zx: float) -> np.ndarray:
+    """Cross-coupling N_g (3 x 3, same unit as the angles) of seed 001's three gyro
+    angles: x_g = x_m; y_g turned about z_m by gamma_yz; z_g turned about x_m by gamma_zx
+    and about y_m by gamma_zy (right-handed rotations of the m axes; the seed's matrix
+    image is lost, so this states the convention used). Gyro i measures the rate along
+    its axis e_g,i, so row i of I + N is e_g,i in m axes, to first order."""
+    return np.array([[0.0, 0.0, 0.0],
+                     [-gamma_yz, 0.0, 0.0],
+                     [gamma_zy, -gamma_zx, 0.0]])
+
+
+def seed001_accel_misalignment(a_xz: float, a_xy: float, a_yz: float, a_yx: float,
+                               a_zy: float, a_zx: float) -> np.ndarray:
+    """Cross-coupling N_a of seed 001's six accelerometer angles (alpha_ij: axis i turned
+    about the m frame's axis j, right-handed), first order, same unit as the angles."""
+    return np.array([[0.0, a_xz, -a_xy],
+                     [-a_yz, 0.0, a_yx],
+                     [a_zy, -a_zx, 0.0]])

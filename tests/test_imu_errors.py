@@ -125,3 +125,39 @@ def test_noise_processes_statistics():
     assert ends.std() == pytest.approx(10.0 * 9.80665e-6 * np.sqrt(2000 * dt), rel=0.25)
     with pytest.raises(ValueError, match="gyro_arw_deg_sqrt_h must be finite and >= 0"):
         gf.ImuNoise(gyro_arw_deg_sqrt_h=-1.0)
+
+
+def _rot(axis, angle):
+    c, s = np.cos(angle), np.sin(angle)
+    R = np.eye(3)
+    i, j = [(1, 2), (2, 0), (0, 1)][axis]
+    R[i, i], R[i, j], R[j, i], R[j, j] = c, -s, s, c
+    return R
+
+
+def test_seed001_misalignment_angles_are_small_rotations():
+    """Row i of I + N is sensor axis i in m axes: compare with the axes actually turned by
+    the rotations the seed describes (independent rotation matrices), to second order in
+    the angles (1e-4 rad -> 1e-8)."""
+    from gfins_fmi.imu_errors import seed001_accel_misalignment, seed001_gyro_misalignment
+    g = np.array([1.0, -2.0, 1.5]) * 1e-4          # gamma_yz, gamma_zy, gamma_zx
+    N = seed001_gyro_misalignment(*g)
+    e = np.eye(3)
+    y_g = _rot(2, g[0]) @ e[1]
+    z_g = _rot(1, g[1]) @ (_rot(0, g[2]) @ e[2])
+    np.testing.assert_allclose((np.eye(3) + N)[1], y_g, atol=1e-8)
+    np.testing.assert_allclose((np.eye(3) + N)[2], z_g, atol=1e-8)
+    a = np.array([1.0, -1.0, 2.0, 0.5, -1.5, 1.2]) * 1e-4  # xz, xy, yz, yx, zy, zx
+    Na = seed001_accel_misalignment(*a)
+    rows = [_rot(1, a[1]) @ (_rot(2, a[0]) @ e[0]), _rot(0, a[3]) @ (_rot(2, a[2]) @ e[1]),
+            _rot(0, a[5]) @ (_rot(1, a[4]) @ e[2])]
+    np.testing.assert_allclose(np.eye(3) + Na, np.array(rows), atol=1e-8)
+
+
+def test_band_limited_imu_noise():
+    rng = np.random.default_rng(5)
+    g, a = gf.ImuNoise(gyro_band_deg_h=2.0, accel_band_ug=30.0, band_hz=5.0).sample(300_000, 0.01, rng)
+    assert g.std() == pytest.approx(2.0 * np.pi / 180 / 3600, rel=0.03)
+    assert a.std() == pytest.approx(30.0 * 9.80665e-6, rel=0.03)
+    r1 = np.mean(a[1:, 0] * a[:-1, 0]) / np.mean(a[:, 0] ** 2)
+    assert r1 == pytest.approx(np.exp(-2 * np.pi * 5.0 * 0.01), rel=0.03)

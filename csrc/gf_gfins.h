@@ -51,7 +51,7 @@ typedef struct gf_array_solver {
     size_t rank;                 /* rank of the estimated columns (= n_est when solvable) */
     double cond;                 /* their condition number s_max / s_min */
     double noise_gain[GF_X_N];   /* std of each estimated unknown per unit output noise */
-    double pinv[GF_X_N * GF_ARRAY_MAX_SENSORS];   /* n_est x n_sensors */
+    double pinv[GF_X_N * GF_ARRAY_MAX_SENSORS];   /* n_est rows, stride GF_ARRAY_MAX_SENSORS */
     double H[GF_ARRAY_MAX_SENSORS * GF_X_N];      /* n_sensors x 12 */
 } gf_array_solver;
 

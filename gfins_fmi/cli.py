@@ -157,6 +157,16 @@ def _validate(args) -> int:
     return 1 if bad else 0
 
 
+def _analyze(args) -> int:
+    import time
+    from gfins_fmi.error_report import write_report
+    t0 = time.perf_counter()
+    configs = args.config or ["sins", "cube6", "qin9", "12"]
+    path = write_report(args.out, configs, runs=args.runs, seed=args.seed, progress=not args.quiet)
+    print(f"report -> {path} ({time.perf_counter() - t0:.1f} s)")
+    return 0
+
+
 def _info(args) -> int:
     import gfins_fmi
     from gfins_fmi.fmu import MODELS, fmu_path
@@ -282,6 +292,17 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--out", type=pathlib.Path, default=pathlib.Path("gfins_reproduce"),
                    help="folder for the figure and the table")
     p.set_defaults(func=_reproduce)
+
+    p = sub.add_parser("analyze", help="error growth: python-control predictions against a "
+                       "Monte Carlo of the C core, as a markdown report with figures")
+    p.add_argument("--config", action="append", choices=["sins", "cube6", "qin9", "12"],
+                   help="configuration (repeatable; default: all four)")
+    p.add_argument("--runs", type=int, default=1000, help="Monte-Carlo runs per configuration (default 1000)")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--out", type=pathlib.Path, default=pathlib.Path("gfins_analysis"),
+                   help="folder for report.md and the figures")
+    p.add_argument("--quiet", action="store_true", help="no progress bars")
+    p.set_defaults(func=_analyze)
 
     p = sub.add_parser("validate", help="run fmpy's validation on every shipped FMU")
     p.set_defaults(func=_validate)

@@ -22,9 +22,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["SINS_STATES", "sins_error_model", "covariance", "SinsErrorStd"]
+__all__ = ["SINS_STATES", "GYROFREE_STATES", "sins_error_model", "gyrofree_error_model",
+           "covariance", "propagate", "ErrorStd", "with_bias_states", "observability",
+           "Observability", "frequency_response"]
 
 SINS_STATES = ("phi_E", "phi_N", "phi_U", "dv_E", "dv_N", "dL", "dlon")
+GYROFREE_STATES = ("dw_x", "dw_y", "dw_z", "phi_x", "phi_y", "phi_z",
+                   "dv_x", "dv_y", "dv_z", "dp_x", "dp_y", "dp_z")
 _OMEGA_IE = 7.292115e-5
 
 
@@ -49,9 +53,7 @@ def sins_error_model(lat_rad: float, q_bn, h_m: float = 0.0):
     C = quat_to_dcm(np.asarray(q_bn, float))
     A = np.zeros((7, 7))
 
-    def skew(v):
-        return np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
-    A[0:3, 0:3] = -skew(w_ie)
+    A[0:3, 0:3] = -_skew(w_ie)
     # d(w_in): columns dv_E (3), dv_N (4), dL (5)
     A[0, 4] = -1.0 / RM
     A[1, 3] = 1.0 / RN
@@ -59,8 +61,8 @@ def sins_error_model(lat_rad: float, q_bn, h_m: float = 0.0):
     A[2, 3] = sL / cL / RN
     A[2, 5] = W * cL
     f_n = np.array([0.0, 0.0, g])
-    A[3:5, 0:3] = skew(f_n)[0:2]                      # (f^n x phi), horizontal rows
-    A[3:5, 3:5] = -2 * skew(w_ie)[0:2, 0:2]           # -2 w_ie x dv, horizontal
+    A[3:5, 0:3] = _skew(f_n)[0:2]                      # (f^n x phi), horizontal rows
+    A[3:5, 3:5] = -2 * _skew(w_ie)[0:2, 0:2]           # -2 w_ie x dv, horizontal
     A[5, 4] = 1.0 / RM
     A[6, 3] = 1.0 / (RN * cL)
     B = np.zeros((7, 6))
@@ -76,36 +78,118 @@ def sins_error_model(lat_rad: float, q_bn, h_m: float = 0.0):
                       states=list(SINS_STATES))
 
 
+def _skew(v):
+    return np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
+
+
+def gyrofree_error_model(geometry, q_bn=(1.0, 0.0, 0.0, 0.0), gravity_m_s2: float = 9.8):
+    """Error model of a gyro-free INS at rest, rate strategy ``"integrate"``, as a
+    ``control.StateSpace``.
+
+    The array solver's least-squares pseudo-inverse P (``gf_array_solver.pinv``) maps
+    the accelerometer errors b (one per sensor, m/s^2) to errors of the estimated
+    unknowns; at zero rate the products w w^T contribute only to second order, so
+
+        dw'  = P_wdot b                 (the integrated angular acceleration, rad/s)
+        phi' = -C_b^n dw                (attitude, rad; C(computed) = (I - [phi x]) C)
+        dv'  = f^n x phi + C_b^n P_f b  (velocity, m/s; f^n = [0, 0, g])
+        dp'  = dv                       (position, m)
+
+    in the non-rotating flat frame of ``SinsConfig(earth="flat")``. A constant b gives
+    attitude ~ t^2 and position ~ t^4 (seed 000 sec. 3: the 6-accelerometer scheme's
+    divergence); white noise on b gives attitude ~ t^1.5. Any layout works: the
+    9- and 12-accelerometer arrays navigated with ``"integrate"`` obey the same
+    model with their own P.
+
+    Parameters
+    ----------
+    geometry : ArrayGeometry
+    q_bn : (4,) attitude at rest
+    gravity_m_s2 : the flat frame's gravity (SinsConfig.flat_gravity_m_s2)
+
+    Returns
+    -------
+    control.StateSpace
+        States ``GYROFREE_STATES``; inputs ``b_0..b_{N-1}`` (m/s^2); outputs the states.
+    """
+    import control
+    from gfins_fmi._lib import lib
+    from gfins_fmi.gyrofree import _solver_c
+    from gfins_fmi.trajectory import quat_to_dcm
+    s = _solver_c(geometry)
+    ns, n_est = int(s.n_sensors), int(s.n_est)
+    est = [int(s.est[r]) for r in range(n_est)]
+    stride = int(lib.GF_ARRAY_MAX_SENSORS)          # rows of pinv are padded to the maximum
+    pinv = np.array([[s.pinv[r * stride + i] for i in range(ns)] for r in range(n_est)])
+    if not all(j in est for j in range(6)):
+        raise ValueError("the array does not estimate f and omega_dot linearly; "
+                         "gyrofree_error_model needs both (see geometry_report)")
+    P_f = pinv[[est.index(j) for j in range(3)]]
+    P_wdot = pinv[[est.index(j) for j in range(3, 6)]]
+    g = float(gravity_m_s2)
+    if not (np.isfinite(g) and g > 0):
+        raise ValueError("gravity_m_s2 must be a positive finite number (m/s^2)")
+    C = quat_to_dcm(np.asarray(q_bn, float))
+    A = np.zeros((12, 12))
+    A[3:6, 0:3] = -C
+    A[6:9, 3:6] = _skew(np.array([0.0, 0.0, g]))
+    A[9:12, 6:9] = np.eye(3)
+    B = np.zeros((12, ns))
+    B[0:3] = P_wdot
+    B[6:9] = C @ P_f
+    return control.ss(A, B, np.eye(12), np.zeros((12, ns)),
+                      inputs=[f"b_{i}" for i in range(ns)], outputs=list(GYROFREE_STATES),
+                      states=list(GYROFREE_STATES))
+
+
 @dataclass
-class SinsErrorStd:
-    """1-sigma of the outputs at the requested times: t_s (m,), std (m, 7) in the output
-    order of ``sins_error_model`` (rad, m/s, m)."""
+class ErrorStd:
+    """1-sigma of a model's outputs at the requested times: t_s (m,), std (m, n_out) in
+    the model's output order (rad, m/s, m)."""
     t_s: np.ndarray
     std: np.ndarray
 
 
 def covariance(sys, t_s, gyro_bias_std_rad_s=0.0, accel_bias_std_m_s2=0.0,
                gyro_white_rad_s_sqrt_hz=0.0, accel_white_m_s2_sqrt_hz=0.0,
-               dt_s: float = 1.0) -> SinsErrorStd:
-    """Covariance of a linear error model driven by random-constant biases and white
-    noise, from zero initial error, by Van Loan's discretisation over steps of dt_s.
+               dt_s: float = 1.0) -> ErrorStd:
+    """``propagate`` for ``sins_error_model``: the same bias and white-noise level on
+    the three gyros and on the three accelerometers.
 
     White noise is given as the (two-sided) density q with E[w(t) w(s)] = q^2 delta(t-s):
     an angle random walk N (rad/sqrt(s)) is q = N for the gyro.
     """
+    return propagate(sys, t_s, np.r_[np.full(3, float(gyro_bias_std_rad_s)),
+                                     np.full(3, float(accel_bias_std_m_s2))],
+                     np.r_[np.full(3, float(gyro_white_rad_s_sqrt_hz)),
+                           np.full(3, float(accel_white_m_s2_sqrt_hz))], dt_s)
+
+
+def propagate(sys, t_s, bias_std, white_density, dt_s: float = 1.0) -> ErrorStd:
+    """Covariance of a linear error model whose inputs are independent random-constant
+    biases (std ``bias_std``, one per input) plus white noise (density
+    ``white_density``, one per input: E[w(t) w(s)] = q^2 delta(t-s)), from zero initial
+    error, by Van Loan's discretisation over steps of dt_s. A sampled white noise of
+    std sigma at interval T has q = sigma sqrt(T).
+    """
     from scipy.linalg import expm
     A, B, C = np.asarray(sys.A), np.asarray(sys.B), np.asarray(sys.C)
     n, m = A.shape[0], B.shape[1]
-    t_s = np.asarray(t_s, float)
+    bias_std = np.broadcast_to(np.asarray(bias_std, float), (m,))
+    q = np.broadcast_to(np.asarray(white_density, float), (m,)) ** 2
+    if not (np.all(np.isfinite(bias_std)) and np.all(np.isfinite(q))):
+        raise ValueError("bias_std and white_density must be finite")
+    t_s = np.atleast_1d(np.asarray(t_s, float))
     if np.any(np.diff(t_s) <= 0) or t_s[0] < 0:
         raise ValueError("t_s must be increasing and >= 0")
+    if not dt_s > 0:
+        raise ValueError("dt_s must be > 0 (s)")
     # augmented state: [error (n), biases (m)], biases constant
     Aa = np.zeros((n + m, n + m))
     Aa[:n, :n] = A
     Aa[:n, n:] = B
     Ga = np.zeros((n + m, m))
     Ga[:n] = B
-    q = np.r_[np.full(3, float(gyro_white_rad_s_sqrt_hz)), np.full(3, float(accel_white_m_s2_sqrt_hz))] ** 2
     Qc = Ga @ np.diag(q) @ Ga.T
     # Van Loan: exp([[-A, Q], [0, A^T]] dt) -> Phi, Qd
     N = n + m
@@ -117,8 +201,7 @@ def covariance(sys, t_s, gyro_bias_std_rad_s=0.0, accel_bias_std_m_s2=0.0,
     Phi = E[N:, N:].T
     Qd = Phi @ E[:N, N:]
     P = np.zeros((N, N))
-    P[n:n + 3, n:n + 3] = np.eye(3) * float(gyro_bias_std_rad_s) ** 2
-    P[n + 3:, n + 3:] = np.eye(3) * float(accel_bias_std_m_s2) ** 2
+    P[n:, n:] = np.diag(bias_std ** 2)
     Caug = np.zeros((C.shape[0], N))
     Caug[:, :n] = C
     out = np.empty((t_s.size, C.shape[0]))
@@ -129,4 +212,128 @@ def covariance(sys, t_s, gyro_bias_std_rad_s=0.0, accel_bias_std_m_s2=0.0,
             P = Phi @ P @ Phi.T + Qd
         t += steps * dt_s
         out[k] = np.sqrt(np.maximum(np.diag(Caug @ P @ Caug.T), 0.0))
-    return SinsErrorStd(t_s, out)
+    return ErrorStd(t_s, out)
+
+
+def with_bias_states(sys):
+    """The model with its inputs turned into random-constant states (appended after the
+    error states, named after the inputs): the form a Kalman filter or an
+    observability study uses. The original inputs remain, entering the error states
+    as before: they are now the white-noise parts of the sensor errors."""
+    import control
+    A, B, C = np.asarray(sys.A), np.asarray(sys.B), np.asarray(sys.C)
+    n, m = A.shape[0], B.shape[1]
+    Aa = np.zeros((n + m, n + m))
+    Aa[:n, :n], Aa[:n, n:] = A, B
+    Ba = np.zeros((n + m, m))
+    Ba[:n] = B
+    Ca = np.zeros((C.shape[0], n + m))
+    Ca[:, :n] = C
+    return control.ss(Aa, Ba, Ca, np.zeros((C.shape[0], m)), inputs=list(sys.input_labels),
+                      outputs=list(sys.output_labels),
+                      states=list(sys.state_labels) + list(sys.input_labels))
+
+
+@dataclass
+class Observability:
+    """Finite-horizon observability of the states of a model through some measurements.
+
+    Attributes
+    ----------
+    gramian : (n, n) W = sum_k Phi_k^T H^T H Phi_k dt over the horizon
+    singular_values : (n,) of W, descending
+    rank : int, numerical rank (relative tolerance ``tol``)
+    unobservable : (n, n - rank) unit vectors spanning the unobservable directions, in
+        the states' units
+    states : the model's state names
+    scale : (n,) the normalisation 1 / sqrt(W_ii) (0 for states never seen)
+    """
+    gramian: np.ndarray
+    singular_values: np.ndarray
+    rank: int
+    unobservable: np.ndarray
+    states: tuple
+    scale: np.ndarray
+
+    def describe(self, threshold: float = 0.05) -> list[str]:
+        """Each unobservable direction as a combination of states in their own units;
+        a state is listed when its part of the direction, measured unit-free (times
+        sqrt(W_ii)), exceeds ``threshold`` of the largest part."""
+        out = []
+        w = np.where(self.scale > 0, 1.0 / np.where(self.scale > 0, self.scale, 1.0), 1.0)
+        for v in self.unobservable.T:
+            weight = np.abs(v * w)
+            v = v / v[np.argmax(weight)]
+            out.append(" ".join(f"{c:+.3g} {name}" for c, name, wt in zip(v, self.states, weight)
+                                if wt > threshold * weight.max()))
+        return out
+
+
+def observability(A, H, t_s, states=None, tol: float = 1e-9) -> Observability:
+    """Observability Gramian over a finite horizon along a trajectory.
+
+    Parameters
+    ----------
+    A : (n, n) array, or callable t -> (n, n)
+        Error dynamics (constant, or evaluated along the trajectory: time-varying).
+    H : (p, n) array, or callable t -> (p, n)
+        Which combinations of states are measured (e.g. velocity of a zero-velocity
+        update or of GNSS).
+    t_s : (K,) increasing measurement times (s); the transition between them is
+        exp(A dt) with A at the interval's start.
+    states : names of the n states (default: ``x0..``).
+    tol : relative rank tolerance on the singular values of the Gramian normalised
+        by its diagonal (so the states' units do not matter).
+
+    python-control's Gramians are infinite-horizon and need a stable system; an INS
+    error model is marginally stable (Schuler, Earth rate) or unstable, hence this.
+    """
+    from scipy.linalg import expm, svd
+    t_s = np.atleast_1d(np.asarray(t_s, float))
+    if t_s.ndim != 1 or t_s.size < 1 or np.any(np.diff(t_s) <= 0):
+        raise ValueError("t_s must be a non-empty increasing sequence of times (s)")
+    At = A if callable(A) else (lambda t, A=np.asarray(A, float): A)
+    Ht = H if callable(H) else (lambda t, H=np.asarray(H, float): H)
+    n = np.asarray(At(t_s[0])).shape[0]
+    if np.asarray(At(t_s[0])).shape != (n, n) or np.asarray(Ht(t_s[0])).shape[-1] != n:
+        raise ValueError("A must be (n, n) and H (p, n)")
+    W = np.zeros((n, n))
+    Phi = np.eye(n)
+    dts = np.diff(t_s, append=t_s[-1] + (t_s[-1] - t_s[-2] if t_s.size > 1 else 1.0))
+    for k, t in enumerate(t_s):
+        Hk = np.atleast_2d(np.asarray(Ht(t), float))
+        M = Hk @ Phi
+        W += M.T @ M * dts[k]
+        Phi = expm(np.asarray(At(t), float) * dts[k]) @ Phi
+    # unit-free: scale each state by its own observability (states never seen stay 0),
+    # so rad, m/s and m/s^2 do not decide the rank between them
+    d = np.sqrt(np.diag(W))
+    scale = np.where(d > 0, 1.0 / np.where(d > 0, d, 1.0), 0.0)
+    _, sv, vt = svd(W * np.outer(scale, scale))
+    rank = int(np.sum(sv > tol * sv[0])) if sv[0] > 0 else 0
+    basis = vt[rank:].T * scale[:, None]       # back to the states' own units
+    never = np.flatnonzero(d == 0)              # states with no effect at all: there the
+    keep = np.linalg.norm(basis, axis=0) > 0    # scaled vectors vanish; use unit vectors
+    basis = np.column_stack([basis[:, keep]] + [np.eye(n)[:, j] for j in never])[:, :n - rank]
+    basis = basis / np.linalg.norm(basis, axis=0)
+    names = tuple(states) if states is not None else tuple(f"x{i}" for i in range(n))
+    return Observability(W, sv, rank, basis, names, scale)
+
+
+def frequency_response(sys, omega_rad_s, inputs=None, outputs=None):
+    """Gain and phase from sensor errors to navigation errors at the angular
+    frequencies ``omega_rad_s`` (rad/s): ``control.frequency_response`` of the selected
+    input/output channels (names from the model's labels). Returns the
+    ``control.FrequencyResponseData`` (``.magnitude``, ``.phase``, ``.plot()``)."""
+    import control
+    sub = sys
+    if inputs is not None or outputs is not None:
+        ins = list(sys.input_labels) if inputs is None else list(inputs)
+        outs = list(sys.output_labels) if outputs is None else list(outputs)
+        for name in ins + outs:
+            if name not in sys.input_labels + sys.output_labels:
+                raise ValueError(f"no channel {name!r}; inputs {sys.input_labels}, "
+                                 f"outputs {sys.output_labels}")
+        sub = sys[[sys.output_labels.index(o) for o in outs],
+                  [sys.input_labels.index(i) for i in ins]]
+    return control.frequency_response(sub, np.asarray(omega_rad_s, float))

@@ -161,7 +161,8 @@ def _analyze(args) -> int:
     import time
     from gfins_fmi.error_report import write_report
     t0 = time.perf_counter()
-    configs = args.config or ["sins", "cube6", "qin9", "12"]
+    from gfins_fmi.error_report import CONFIGS
+    configs = args.config or list(CONFIGS)
     path = write_report(args.out, configs, runs=args.runs, seed=args.seed, progress=not args.quiet)
     print(f"report -> {path} ({time.perf_counter() - t0:.1f} s)")
     return 0
@@ -295,8 +296,9 @@ def main(argv: list[str] | None = None) -> int:
 
     p = sub.add_parser("analyze", help="error growth: python-control predictions against a "
                        "Monte Carlo of the C core, as a markdown report with figures")
-    p.add_argument("--config", action="append", choices=["sins", "cube6", "qin9", "12"],
-                   help="configuration (repeatable; default: all four)")
+    p.add_argument("--config", action="append",
+                   choices=["sins", "cube6", "qin9", "12", "qin9-sqrt", "12-sqrt"],
+                   help="configuration (repeatable; default: all); see gfins_fmi.error_report")
     p.add_argument("--runs", type=int, default=1000, help="Monte-Carlo runs per configuration (default 1000)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.add_argument("--out", type=pathlib.Path, default=pathlib.Path("gfins_analysis"),

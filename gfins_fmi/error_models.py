@@ -22,13 +22,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["SINS_STATES", "GYROFREE_STATES", "sins_error_model", "gyrofree_error_model",
+__all__ = ["SINS_STATES", "GYROFREE_OUTPUTS", "TimeVaryingModel", "sins_error_model", "gyrofree_error_model",
            "covariance", "propagate", "ErrorStd", "with_bias_states", "observability",
            "Observability", "frequency_response"]
 
 SINS_STATES = ("phi_E", "phi_N", "phi_U", "dv_E", "dv_N", "dL", "dlon")
-GYROFREE_STATES = ("dw_x", "dw_y", "dw_z", "phi_x", "phi_y", "phi_z",
-                   "dv_x", "dv_y", "dv_z", "dp_x", "dp_y", "dp_z")
+GYROFREE_OUTPUTS = ("phi_x", "phi_y", "phi_z", "dv_x", "dv_y", "dv_z", "dp_x", "dp_y", "dp_z")
 _OMEGA_IE = 7.292115e-5
 
 
@@ -82,35 +81,77 @@ def _skew(v):
     return np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
 
 
-def gyrofree_error_model(geometry, q_bn=(1.0, 0.0, 0.0, 0.0), gravity_m_s2: float = 9.8):
-    """Error model of a gyro-free INS at rest, rate strategy ``"integrate"``, as a
-    ``control.StateSpace``.
+def _rotation(rotvec):
+    """exp([v x]) by Rodrigues' formula."""
+    v = np.asarray(rotvec, float)
+    th = np.linalg.norm(v)
+    K = _skew(v)
+    if th < 1e-8:
+        return np.eye(3) + K + 0.5 * K @ K
+    return np.eye(3) + np.sin(th) / th * K + (1 - np.cos(th)) / th ** 2 * K @ K
+
+
+def _products_jacobian(w):
+    """d[wx^2, wy^2, wz^2, wx wy, wx wz, wy wz] / dw (6 x 3)."""
+    x, y, z = w
+    return np.array([[2 * x, 0, 0], [0, 2 * y, 0], [0, 0, 2 * z],
+                     [y, x, 0], [z, 0, x], [0, z, y]], float)
+
+
+@dataclass
+class TimeVaryingModel:
+    """A linear time-varying error model x' = A(t) x + B(t) u, y = C x (the gyro-free
+    INS under rotation: the body-to-frame matrix turns the body-fixed rate and force
+    errors). ``propagate`` accepts it like a StateSpace; ``nlsys()`` gives the
+    python-control system for simulation (``control.input_output_response``)."""
+    A_of_t: object
+    B_of_t: object
+    C: np.ndarray
+    state_labels: list
+    input_labels: list
+    output_labels: list
+
+    def nlsys(self):
+        import control
+        return control.nlsys(lambda t, x, u, params: self.A_of_t(t) @ x + self.B_of_t(t) @ u,
+                             lambda t, x, u, params: self.C @ x, states=self.state_labels,
+                             inputs=self.input_labels, outputs=self.output_labels)
+
+
+def gyrofree_error_model(geometry, q_bn=(1.0, 0.0, 0.0, 0.0), gravity_m_s2: float = 9.8,
+                         strategy: str = "integrate", omega_b_rad_s=(0.0, 0.0, 0.0),
+                         dt_s: float = 0.01):
+    """Error model of a gyro-free INS whose array rotates at a constant body rate
+    (zero: at rest) about a point fixed in the flat frame of ``SinsConfig(earth="flat")``.
 
     The array solver's least-squares pseudo-inverse P (``gf_array_solver.pinv``) maps
     the accelerometer errors b (one per sensor, m/s^2) to errors of the estimated
-    unknowns; at zero rate the products w w^T contribute only to second order, so
+    unknowns x; the products w w^T it cannot separate come from the predicted rate
+    w_pred = w + dt w_dot (``gf_gfins``), so dx = P (b - H_F J(w) dw_pred) with H_F the
+    array's columns of those products and J the Jacobian of w w^T. Rate error:
 
-        dw'  = P_wdot b                 (the integrated angular acceleration, rad/s)
-        phi' = -C_b^n dw                (attitude, rad; C(computed) = (I - [phi x]) C)
-        dv'  = f^n x phi + C_b^n P_f b  (velocity, m/s; f^n = [0, 0, g])
-        dp'  = dv                       (position, m)
+    * ``integrate``: dw' = dw_dot (a state; constant b gives dw ~ t at rest);
+    * ``sqrt`` (seed 000 eq. 4): dw_k = d(w_k^2) / (2 w_k), an algebraic map (constant
+      b gives a constant dw: attitude ~ t along the rotation, position ~ t^3); it
+      needs every w_k away from zero -- near a zero crossing the linearisation fails.
 
-    in the non-rotating flat frame of ``SinsConfig(earth="flat")``. A constant b gives
-    attitude ~ t^2 and position ~ t^4 (seed 000 sec. 3: the 6-accelerometer scheme's
-    divergence); white noise on b gives attitude ~ t^1.5. Any layout works: the
-    9- and 12-accelerometer arrays navigated with ``"integrate"`` obey the same
-    model with their own P.
+    Navigation (C = C_b^n(t) = C0 exp([w x] t), f^n = [0, 0, g]):
+
+        phi' = -C dw        dv' = f^n x phi + C df        dp' = dv
 
     Parameters
     ----------
     geometry : ArrayGeometry
-    q_bn : (4,) attitude at rest
+    q_bn : (4,) attitude at t = 0
     gravity_m_s2 : the flat frame's gravity (SinsConfig.flat_gravity_m_s2)
+    strategy : "integrate" or "sqrt"
+    omega_b_rad_s : (3,) constant body rate (rad/s)
+    dt_s : sampling interval of the navigator (enters w_pred; s)
 
     Returns
     -------
-    control.StateSpace
-        States ``GYROFREE_STATES``; inputs ``b_0..b_{N-1}`` (m/s^2); outputs the states.
+    control.StateSpace at rest, else ``TimeVaryingModel``. Outputs ``GYROFREE_OUTPUTS``
+    (attitude rad, velocity m/s, position m); inputs ``b_0..b_{N-1}`` (m/s^2).
     """
     import control
     from gfins_fmi._lib import lib
@@ -120,26 +161,76 @@ def gyrofree_error_model(geometry, q_bn=(1.0, 0.0, 0.0, 0.0), gravity_m_s2: floa
     ns, n_est = int(s.n_sensors), int(s.n_est)
     est = [int(s.est[r]) for r in range(n_est)]
     stride = int(lib.GF_ARRAY_MAX_SENSORS)          # rows of pinv are padded to the maximum
-    pinv = np.array([[s.pinv[r * stride + i] for i in range(ns)] for r in range(n_est)])
+    P = np.array([[s.pinv[r * stride + i] for i in range(ns)] for r in range(n_est)])
+    H = np.array([[s.H[i * 12 + j] for j in range(12)] for i in range(ns)])
     if not all(j in est for j in range(6)):
         raise ValueError("the array does not estimate f and omega_dot linearly; "
                          "gyrofree_error_model needs both (see geometry_report)")
-    P_f = pinv[[est.index(j) for j in range(3)]]
-    P_wdot = pinv[[est.index(j) for j in range(3, 6)]]
     g = float(gravity_m_s2)
     if not (np.isfinite(g) and g > 0):
         raise ValueError("gravity_m_s2 must be a positive finite number (m/s^2)")
-    C = quat_to_dcm(np.asarray(q_bn, float))
-    A = np.zeros((12, 12))
-    A[3:6, 0:3] = -C
-    A[6:9, 3:6] = _skew(np.array([0.0, 0.0, g]))
-    A[9:12, 6:9] = np.eye(3)
-    B = np.zeros((12, ns))
-    B[0:3] = P_wdot
-    B[6:9] = C @ P_f
-    return control.ss(A, B, np.eye(12), np.zeros((12, ns)),
-                      inputs=[f"b_{i}" for i in range(ns)], outputs=list(GYROFREE_STATES),
-                      states=list(GYROFREE_STATES))
+    w = np.asarray(omega_b_rad_s, float)
+    if w.shape != (3,) or not np.all(np.isfinite(w)):
+        raise ValueError("omega_b_rad_s must be 3 finite numbers (rad/s)")
+    if not dt_s > 0:
+        raise ValueError("dt_s must be > 0 (s)")
+    rows = {j: est.index(j) for j in est}
+    S = lambda idx: np.eye(n_est)[[rows[j] for j in idx]]          # noqa: E731 (row selector)
+    from_rate = [j for j in range(6, 12) if j not in est and np.any(H[:, j] != 0)]
+    K = (P @ H[:, from_rate] @ _products_jacobian(w)[[j - 6 for j in from_rate]]
+         if from_rate else np.zeros((n_est, 3)))
+    S_f, S_wd = S(range(3)), S(range(3, 6))
+    if strategy == "integrate":
+        # dw' = S_wd (P b - K dw): the rate error is a state
+        n_x, off = 12, 3
+        A_rate, B_rate = -S_wd @ K, S_wd @ P
+        G_f_x, G_f_b = -S_f @ K, S_f @ P                  # df = G_f_x dw + G_f_b b
+    elif strategy == "sqrt":
+        if not all(j in est for j in (6, 7, 8)):
+            raise ValueError("strategy 'sqrt' needs an array that measures the diagonal of w w^T")
+        if np.min(np.abs(w)) < 1e-3:
+            raise ValueError("strategy 'sqrt' is linearised about a rate with every component "
+                             "away from zero (|w_k| >= 1e-3 rad/s): d(w_k) = d(w_k^2) / 2 w_k")
+        M = np.diag(1 / (2 * w)) @ S((6, 7, 8)) + dt_s * S_wd
+        G_pred = np.linalg.solve(np.eye(3) + M @ K, M @ P)     # dw_pred = G_pred b
+        dx = P - K @ G_pred
+        n_x, off = 9, 0
+        G_w = np.diag(1 / (2 * w)) @ S((6, 7, 8)) @ dx
+        G_f_b = S_f @ dx
+    else:
+        raise ValueError("strategy must be 'integrate' or 'sqrt' for the error model")
+    C0 = quat_to_dcm(np.asarray(q_bn, float))
+    fxn = _skew(np.array([0.0, 0.0, g]))
+
+    def A_of_t(t):
+        C = C0 @ _rotation(w * t)
+        A = np.zeros((n_x, n_x))
+        A[off + 3:off + 6, off:off + 3] = fxn
+        A[off + 6:off + 9, off + 3:off + 6] = np.eye(3)
+        if strategy == "integrate":
+            A[0:3, 0:3] = A_rate
+            A[3:6, 0:3] = -C
+            A[6:9, 0:3] = C @ G_f_x
+        return A
+
+    def B_of_t(t):
+        C = C0 @ _rotation(w * t)
+        B = np.zeros((n_x, ns))
+        if strategy == "integrate":
+            B[0:3] = B_rate
+        else:
+            B[0:3] = -C @ G_w
+        B[off + 3:off + 6] = C @ G_f_b
+        return B
+
+    Cout = np.zeros((9, n_x))
+    Cout[:, off:] = np.eye(9)
+    states = (["dw_x", "dw_y", "dw_z"] if off else []) + list(GYROFREE_OUTPUTS)
+    inputs = [f"b_{i}" for i in range(ns)]
+    if not np.any(w):
+        return control.ss(A_of_t(0.0), B_of_t(0.0), Cout, np.zeros((9, ns)), inputs=inputs,
+                          outputs=list(GYROFREE_OUTPUTS), states=states)
+    return TimeVaryingModel(A_of_t, B_of_t, Cout, states, inputs, list(GYROFREE_OUTPUTS))
 
 
 @dataclass
@@ -173,8 +264,11 @@ def propagate(sys, t_s, bias_std, white_density, dt_s: float = 1.0) -> ErrorStd:
     std sigma at interval T has q = sigma sqrt(T).
     """
     from scipy.linalg import expm
-    A, B, C = np.asarray(sys.A), np.asarray(sys.B), np.asarray(sys.C)
-    n, m = A.shape[0], B.shape[1]
+    varying = isinstance(sys, TimeVaryingModel)
+    A_of_t = sys.A_of_t if varying else (lambda t, A=np.asarray(sys.A): A)
+    B_of_t = sys.B_of_t if varying else (lambda t, B=np.asarray(sys.B): B)
+    C = np.asarray(sys.C)
+    n, m = A_of_t(0.0).shape[0], B_of_t(0.0).shape[1]
     bias_std = np.broadcast_to(np.asarray(bias_std, float), (m,))
     q = np.broadcast_to(np.asarray(white_density, float), (m,)) ** 2
     if not (np.all(np.isfinite(bias_std)) and np.all(np.isfinite(q))):
@@ -184,22 +278,27 @@ def propagate(sys, t_s, bias_std, white_density, dt_s: float = 1.0) -> ErrorStd:
         raise ValueError("t_s must be increasing and >= 0")
     if not dt_s > 0:
         raise ValueError("dt_s must be > 0 (s)")
-    # augmented state: [error (n), biases (m)], biases constant
-    Aa = np.zeros((n + m, n + m))
-    Aa[:n, :n] = A
-    Aa[:n, n:] = B
-    Ga = np.zeros((n + m, m))
-    Ga[:n] = B
-    Qc = Ga @ np.diag(q) @ Ga.T
-    # Van Loan: exp([[-A, Q], [0, A^T]] dt) -> Phi, Qd
     N = n + m
-    M = np.zeros((2 * N, 2 * N))
-    M[:N, :N] = -Aa
-    M[:N, N:] = Qc
-    M[N:, N:] = Aa.T
-    E = expm(M * dt_s)
-    Phi = E[N:, N:].T
-    Qd = Phi @ E[:N, N:]
+
+    def van_loan(t):
+        """Phi and Qd of the step starting at t, with the model at its midpoint (a
+        time-varying model: second order in dt)."""
+        A, B = A_of_t(t + 0.5 * dt_s), B_of_t(t + 0.5 * dt_s)
+        # augmented state: [error (n), biases (m)], biases constant
+        Aa = np.zeros((N, N))
+        Aa[:n, :n], Aa[:n, n:] = A, B
+        Ga = np.zeros((N, m))
+        Ga[:n] = B
+        Mv = np.zeros((2 * N, 2 * N))
+        Mv[:N, :N] = -Aa
+        Mv[:N, N:] = Ga @ np.diag(q) @ Ga.T
+        Mv[N:, N:] = Aa.T
+        E = expm(Mv * dt_s)
+        Phi = E[N:, N:].T
+        return Phi, Phi @ E[:N, N:]
+
+    if not varying:
+        fixed = van_loan(0.0)
     P = np.zeros((N, N))
     P[n:, n:] = np.diag(bias_std ** 2)
     Caug = np.zeros((C.shape[0], N))
@@ -209,8 +308,9 @@ def propagate(sys, t_s, bias_std, white_density, dt_s: float = 1.0) -> ErrorStd:
     for k, tk in enumerate(t_s):
         steps = int(round((tk - t) / dt_s))
         for _ in range(steps):
+            Phi, Qd = van_loan(t) if varying else fixed
             P = Phi @ P @ Phi.T + Qd
-        t += steps * dt_s
+            t += dt_s
         out[k] = np.sqrt(np.maximum(np.diag(Caug @ P @ Caug.T), 0.0))
     return ErrorStd(t_s, out)
 

@@ -14,6 +14,9 @@ Scenarios (sensor errors are random constants plus white noise, 1-sigma per sens
   frame with g = 9.8 m/s^2, lever arm 0.1 m), 20 s at 100 Hz; accelerometer bias
   1e-5 m/s^2 and white noise 1e-4 m/s^2 per sample. The vertical position is reported
   but its linear prediction is known to fail (second-order tilt term g |phi|^2 / 2).
+* ``qin9-sqrt``, ``12-sqrt``: the same arrays and errors rotating at a constant body rate
+  ``ROTATION_RAD_S`` about a point fixed in the frame, rate strategy ``sqrt`` (seed 000:
+  |w_k| from the measured w_k^2).
 """
 from __future__ import annotations
 
@@ -25,7 +28,9 @@ import numpy as np
 
 __all__ = ["CONFIGS", "GrowthComparison", "compare", "write_report"]
 
-CONFIGS = ("sins", "cube6", "qin9", "12")
+CONFIGS = ("sins", "cube6", "qin9", "12", "qin9-sqrt", "12-sqrt")
+#: the rotating scenarios' constant body rate (rad/s): every component away from zero
+ROTATION_RAD_S = (1.0, -0.8, 0.6)
 _DEG_H = np.pi / 180 / 3600
 _UG = 9.80665e-6
 
@@ -100,33 +105,44 @@ def _sins(runs, seed, executor, progress, times):
                             pred, out.std(axis=0), runs)
 
 
-def _gyrofree(name, runs, seed, executor, progress, times):
+def _gyrofree(config, runs, seed, executor, progress, times):
     import gfins_fmi as gf
     from gfins_fmi import error_models as em, montecarlo as mc, trajectory as tj
     from gfins_fmi.accel_array import forward_model
     from gfins_fmi.gyrofree import GyroFreeNavigator, layout
+    name, _, strategy = config.partition("-")
+    strategy = strategy or "integrate"
+    w = np.array(ROTATION_RAD_S if strategy == "sqrt" else (0.0, 0.0, 0.0))
     dt, g, b_std, sigma = 0.01, 9.8, 1e-5, 1e-4
     times = np.asarray(times if times is not None else [2.5, 5, 7.5, 10, 12.5, 15, 17.5, 20], float)
     idx = np.round(times / dt).astype(int)
     q0 = tj.euler_to_quat(0.1, -0.05, 0.7)
     n = int(idx[-1]) + 1
+    t = np.arange(n) * dt
+    # truth: rotation about a fixed axis, C(t) = C0 exp([w x] t), q(t) = q0 (x) q(w t)
+    C = tj.quat_to_dcm(q0) @ np.array([em._rotation(w * tk) for tk in t])
+    fb = np.einsum("kji,j->ki", C, np.array([0.0, 0.0, g]))
+    rate = np.linalg.norm(w)
+    axis = w / rate if rate > 0 else w
+    q_true = tj._qmul(np.tile(q0, (n, 1)), np.c_[np.cos(rate * t / 2), np.sin(rate * t / 2)[:, None] * axis])
     geo = layout(name, 0.1)
-    fb = tj.quat_to_dcm(q0).T @ np.array([0.0, 0.0, g])
-    A0 = forward_model(geo, np.tile(fb, (n, 1)), np.zeros((n, 3)), np.zeros((n, 3)))
+    A0 = forward_model(geo, fb, np.tile(w, (n, 1)), np.zeros((n, 3)))
     x0 = gf.NavState(q0, np.zeros(3), 0.0, 0.0, 0.0, 0.0, np.zeros(3))
     cfg = gf.SinsConfig(earth="flat", flat_gravity_m_s2=g)
 
     def task(k, rng):
         A = A0 + rng.normal(0, b_std, A0.shape[1]) + rng.normal(0, sigma, A0.shape)
-        sol, _ = GyroFreeNavigator(geo, x0, "integrate", np.zeros(3), sins=cfg).run(A, dt)
-        att = _rotation_vector_error(sol.q_bn[idx], np.tile(q0, (idx.size, 1)))
+        sol, _ = GyroFreeNavigator(geo, x0, strategy, w, sins=cfg).run(A, dt)
+        att = _rotation_vector_error(sol.q_bn[idx], q_true[idx])
         return dict(out=np.c_[att, sol.pos_m[idx]])
 
-    out = mc.run(task, runs, seed=seed, executor=executor, progress=progress, desc=name)["out"]
+    out = mc.run(task, runs, seed=seed, executor=executor, progress=progress, desc=config)["out"]
     # a sampled white noise of std sigma at interval dt has density sigma sqrt(dt)
-    pred = em.propagate(em.gyrofree_error_model(geo, q0, g), times, b_std, sigma * np.sqrt(dt), dt_s=dt)
-    return GrowthComparison(name, times, ("phi_x", "phi_y", "phi_z", "x", "y", "z"),
-                            pred.std[:, [3, 4, 5, 9, 10, 11]], out.std(axis=0), runs, ("z",))
+    model = em.gyrofree_error_model(geo, q0, g, strategy, w, dt)
+    pred = em.propagate(model, times, b_std, sigma * np.sqrt(dt), dt_s=dt)
+    return GrowthComparison(config, times, ("phi_x", "phi_y", "phi_z", "x", "y", "z"),
+                            pred.std[:, [0, 1, 2, 6, 7, 8]], out.std(axis=0), runs,
+                            ("z",) if strategy == "integrate" else ())
 
 
 def compare(config: str, runs: int = 200, seed: int = 0, executor: cf.Executor | None = None,

@@ -297,7 +297,7 @@ def main(argv: list[str] | None = None) -> int:
     p = sub.add_parser("analyze", help="error growth: python-control predictions against a "
                        "Monte Carlo of the C core, as a markdown report with figures")
     p.add_argument("--config", action="append",
-                   choices=["sins", "cube6", "qin9", "12", "qin9-sqrt", "12-sqrt"],
+                   choices=["sins", "cube6", "qin9", "12", "qin9-sqrt", "12-sqrt", "qin9-fused", "12-fused"],
                    help="configuration (repeatable; default: all); see gfins_fmi.error_report")
     p.add_argument("--runs", type=int, default=1000, help="Monte-Carlo runs per configuration (default 1000)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")

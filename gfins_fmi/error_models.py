@@ -24,7 +24,7 @@ import numpy as np
 
 __all__ = ["SINS_STATES", "GYROFREE_OUTPUTS", "TimeVaryingModel", "sins_error_model", "gyrofree_error_model",
            "covariance", "propagate", "ErrorStd", "with_bias_states", "observability",
-           "Observability", "frequency_response"]
+           "Observability", "frequency_response", "gyrofree_fused_std"]
 
 SINS_STATES = ("phi_E", "phi_N", "phi_U", "dv_E", "dv_N", "dL", "dlon")
 GYROFREE_OUTPUTS = ("phi_x", "phi_y", "phi_z", "dv_x", "dv_y", "dv_z", "dp_x", "dp_y", "dp_z")
@@ -99,6 +99,48 @@ def _products_jacobian(w):
 
 
 @dataclass
+class _ArrayMaps:
+    ns: int
+    n_est: int
+    est: list
+    P: np.ndarray        # pseudo-inverse, n_est x ns
+    K: np.ndarray        # dx / d(w_pred) through the products taken from the rate
+    w: np.ndarray
+    g: float
+
+    def S(self, idx):
+        """Rows of the estimated unknowns idx (selector, len(idx) x n_est)."""
+        return np.eye(self.n_est)[[self.est.index(j) for j in idx]]
+
+
+def _array_maps(geometry, gravity_m_s2, omega_b_rad_s, dt_s) -> _ArrayMaps:
+    """The linear maps of an array's solver (from the C core) and checked parameters."""
+    from gfins_fmi._lib import lib
+    from gfins_fmi.gyrofree import _solver_c
+    s = _solver_c(geometry)
+    ns, n_est = int(s.n_sensors), int(s.n_est)
+    est = [int(s.est[r]) for r in range(n_est)]
+    stride = int(lib.GF_ARRAY_MAX_SENSORS)          # rows of pinv are padded to the maximum
+    P = np.array([[s.pinv[r * stride + i] for i in range(ns)] for r in range(n_est)])
+    H = np.array([[s.H[i * 12 + j] for j in range(12)] for i in range(ns)])
+    if not all(j in est for j in range(6)):
+        raise ValueError("the array does not estimate f and omega_dot linearly; "
+                         "gyrofree_error_model needs both (see geometry_report)")
+    g = float(gravity_m_s2)
+    if not (np.isfinite(g) and g > 0):
+        raise ValueError("gravity_m_s2 must be a positive finite number (m/s^2)")
+    w = np.asarray(omega_b_rad_s, float)
+    if w.shape != (3,) or not np.all(np.isfinite(w)):
+        raise ValueError("omega_b_rad_s must be 3 finite numbers (rad/s)")
+    if not dt_s > 0:
+        raise ValueError("dt_s must be > 0 (s)")
+    from_rate = [j for j in range(6, 12) if j not in est and np.any(H[:, j] != 0)]
+    K = (P @ H[:, from_rate] @ _products_jacobian(w)[[j - 6 for j in from_rate]]
+         if from_rate else np.zeros((n_est, 3)))
+    return _ArrayMaps(ns, n_est, est, P, K, w, g)
+
+
+@dataclass
 class TimeVaryingModel:
     """A linear time-varying error model x' = A(t) x + B(t) u, y = C x (the gyro-free
     INS under rotation: the body-to-frame matrix turns the body-fixed rate and force
@@ -154,31 +196,9 @@ def gyrofree_error_model(geometry, q_bn=(1.0, 0.0, 0.0, 0.0), gravity_m_s2: floa
     (attitude rad, velocity m/s, position m); inputs ``b_0..b_{N-1}`` (m/s^2).
     """
     import control
-    from gfins_fmi._lib import lib
-    from gfins_fmi.gyrofree import _solver_c
     from gfins_fmi.trajectory import quat_to_dcm
-    s = _solver_c(geometry)
-    ns, n_est = int(s.n_sensors), int(s.n_est)
-    est = [int(s.est[r]) for r in range(n_est)]
-    stride = int(lib.GF_ARRAY_MAX_SENSORS)          # rows of pinv are padded to the maximum
-    P = np.array([[s.pinv[r * stride + i] for i in range(ns)] for r in range(n_est)])
-    H = np.array([[s.H[i * 12 + j] for j in range(12)] for i in range(ns)])
-    if not all(j in est for j in range(6)):
-        raise ValueError("the array does not estimate f and omega_dot linearly; "
-                         "gyrofree_error_model needs both (see geometry_report)")
-    g = float(gravity_m_s2)
-    if not (np.isfinite(g) and g > 0):
-        raise ValueError("gravity_m_s2 must be a positive finite number (m/s^2)")
-    w = np.asarray(omega_b_rad_s, float)
-    if w.shape != (3,) or not np.all(np.isfinite(w)):
-        raise ValueError("omega_b_rad_s must be 3 finite numbers (rad/s)")
-    if not dt_s > 0:
-        raise ValueError("dt_s must be > 0 (s)")
-    rows = {j: est.index(j) for j in est}
-    S = lambda idx: np.eye(n_est)[[rows[j] for j in idx]]          # noqa: E731 (row selector)
-    from_rate = [j for j in range(6, 12) if j not in est and np.any(H[:, j] != 0)]
-    K = (P @ H[:, from_rate] @ _products_jacobian(w)[[j - 6 for j in from_rate]]
-         if from_rate else np.zeros((n_est, 3)))
+    lm = _array_maps(geometry, gravity_m_s2, omega_b_rad_s, dt_s)
+    ns, n_est, est, P, K, S, w, g = lm.ns, lm.n_est, lm.est, lm.P, lm.K, lm.S, lm.w, lm.g
     S_f, S_wd = S(range(3)), S(range(3, 6))
     if strategy == "integrate":
         # dw' = S_wd (P b - K dw): the rate error is a state
@@ -437,3 +457,98 @@ def frequency_response(sys, omega_rad_s, inputs=None, outputs=None):
         sub = sys[[sys.output_labels.index(o) for o in outs],
                   [sys.input_labels.index(i) for i in ins]]
     return control.frequency_response(sub, np.asarray(omega_rad_s, float))
+
+
+def gyrofree_fused_std(geometry, t_s, bias_std_m_s2: float, noise_std_m_s2: float,
+                       q_bn=(1.0, 0.0, 0.0, 0.0), gravity_m_s2: float = 9.8,
+                       omega_b_rad_s=(1.0, 1.0, 1.0), dt_s: float = 0.01,
+                       bias_walk_rad_s2_sqrt_s: float = 1e-6, init_std_rad_s: float = 1e-2,
+                       init_bias_std_rad_s2: float = 1e-3) -> ErrorStd:
+    """1-sigma navigation errors of the ``fused`` rate strategy (the EKF of ``gf_gfins``
+    on [w, w_dot bias], measuring the products w w^T), rotating at a constant body rate.
+
+    The filter is linear in its errors about the true rate; its gains follow from its
+    own Riccati recursion (same F, Q, R, P0 as the C core, so they are the gains the
+    filter uses), and the errors are propagated sample by sample: the estimated unknowns'
+    errors dx_k = P (s_k - H_F J dw_pred) with s_k = b + n_k the sensor errors (a
+    random constant plus white noise of ``noise_std_m_s2`` per sample); the prediction
+    uses the trapezoid of dw_dot over two samples (so the noise of consecutive samples
+    is correlated: the previous dw_dot is a state); the update uses the products of the
+    same sample. Navigation as ``gyrofree_error_model``. The result is a discrete-time
+    covariance recursion rather than a python-control system: the filter's gains vary
+    with time until they settle.
+
+    Returns
+    -------
+    ErrorStd with the outputs ``GYROFREE_OUTPUTS``.
+    """
+    from gfins_fmi.trajectory import quat_to_dcm
+    lm = _array_maps(geometry, gravity_m_s2, omega_b_rad_s, dt_s)
+    if not all(j in lm.est for j in (6, 7, 8)):
+        raise ValueError("strategy 'fused' needs an array that measures the diagonal of w w^T")
+    m = 6 if all(j in lm.est for j in range(9, 12)) else 3
+    ns, P, K, w, g, dt = lm.ns, lm.P, lm.K, lm.w, lm.g, float(dt_s)
+    S_f, S_wd, S_W = lm.S(range(3)), lm.S(range(3, 6)), lm.S(range(6, 6 + m))
+    J = _products_jacobian(w)[:m]
+    sig2 = float(noise_std_m_s2) ** 2
+    # the filter's own model (gf_gfins_init / rate_step)
+    R = sig2 * (S_W @ P) @ (S_W @ P).T
+    Fk = np.eye(6)
+    Fk[0:3, 3:6] = -dt * np.eye(3)
+    Qk = np.zeros((6, 6))
+    Qk[0:3, 0:3] = dt * dt * sig2 * (S_wd @ P) @ (S_wd @ P).T
+    Qk[3:6, 3:6] = np.eye(3) * float(bias_walk_rad_s2_sqrt_s) ** 2 * dt
+    Hk = np.zeros((m, 6))
+    Hk[:, 0:3] = J
+    Pf = np.diag([init_std_rad_s ** 2] * 3 + [init_bias_std_rad_s2 ** 2] * 3)
+    C0 = quat_to_dcm(np.asarray(q_bn, float))
+    fxn = _skew(np.array([0.0, 0.0, g]))
+    # error state z = [e_w, e_b, dwdot_prev, phi, dv, dp, b (ns)]
+    iw, ib, iwd, iphi, iv, ip, ibias = 0, 3, 6, 9, 12, 15, 18
+    nz = 18 + ns
+
+    def step(Z, N, k, t):
+        """One sample, applied to columns: Z (nz, c) previous states, N (ns, c) noise."""
+        nonlocal Pf
+        s_k = Z[ibias:] + N
+        first = k == 0
+        e_pred = Z[iw:iw + 3] + (0.0 if first else dt * Z[iwd:iwd + 3])
+        dx = P @ s_k - K @ e_pred
+        wd = S_wd @ dx
+        ew, eb = Z[iw:iw + 3], Z[ib:ib + 3]
+        if not first:
+            ew = ew + 0.5 * dt * (Z[iwd:iwd + 3] + wd) - dt * eb
+        r = S_W @ dx - J @ ew
+        Kg = Pf @ Hk.T @ np.linalg.inv(Hk @ Pf @ Hk.T + R)
+        e = np.vstack([ew, eb]) + Kg @ r
+        df = S_f @ (P @ s_k - K @ e[0:3])
+        Zn = np.zeros_like(Z)
+        Zn[iw:iw + 6] = e
+        Zn[iwd:iwd + 3] = wd
+        Zn[ibias:] = Z[ibias:]
+        if not first:
+            C = C0 @ _rotation(w * t)
+            Cm = C0 @ _rotation(w * (t - 0.5 * dt))
+            Zn[iphi:iphi + 3] = Z[iphi:iphi + 3] - Cm @ (0.5 * dt * (Z[iw:iw + 3] + e[0:3]))
+            Zn[iv:iv + 3] = Z[iv:iv + 3] + dt * (fxn @ (0.5 * (Z[iphi:iphi + 3] + Zn[iphi:iphi + 3])) + C @ df)
+            Zn[ip:ip + 3] = Z[ip:ip + 3] + 0.5 * dt * (Z[iv:iv + 3] + Zn[iv:iv + 3])
+        return Zn, Kg
+
+    t_s = np.atleast_1d(np.asarray(t_s, float))
+    if np.any(np.diff(t_s) <= 0) or t_s[0] < 0:
+        raise ValueError("t_s must be increasing and >= 0")
+    targets = np.round(t_s / dt).astype(int)
+    Pz = np.zeros((nz, nz))
+    Pz[ibias:, ibias:] = np.eye(ns) * float(bias_std_m_s2) ** 2
+    out = np.empty((t_s.size, 9))
+    I_z, I_n = np.eye(nz), np.eye(ns)
+    for k in range(int(targets[-1]) + 1):
+        if k > 0:
+            Pf = Fk @ Pf @ Fk.T + Qk
+        F, Kg = step(I_z, np.zeros((ns, nz)), k, k * dt)
+        G, _ = step(np.zeros((nz, ns)), I_n, k, k * dt)
+        Pz = F @ Pz @ F.T + sig2 * G @ G.T
+        Pf = (np.eye(6) - Kg @ Hk) @ Pf
+        for j in np.flatnonzero(targets == k):
+            out[j] = np.sqrt(np.maximum(np.diag(Pz)[iphi:iphi + 9], 0.0))
+    return ErrorStd(t_s, out)

@@ -14,9 +14,10 @@ Scenarios (sensor errors are random constants plus white noise, 1-sigma per sens
   frame with g = 9.8 m/s^2, lever arm 0.1 m), 20 s at 100 Hz; accelerometer bias
   1e-5 m/s^2 and white noise 1e-4 m/s^2 per sample. The vertical position is reported
   but its linear prediction is known to fail (second-order tilt term g |phi|^2 / 2).
-* ``qin9-sqrt``, ``12-sqrt``: the same arrays and errors rotating at a constant body rate
-  ``ROTATION_RAD_S`` about a point fixed in the frame, rate strategy ``sqrt`` (seed 000:
-  |w_k| from the measured w_k^2).
+* ``qin9-sqrt``, ``12-sqrt``, ``qin9-fused``, ``12-fused``: the same arrays and errors
+  rotating at a constant body rate ``ROTATION_RAD_S`` about a point fixed in the frame,
+  rate strategy ``sqrt`` (seed 000: |w_k| from the measured w_k^2) or ``fused`` (the EKF
+  on [w, w_dot bias] with its default tuning).
 """
 from __future__ import annotations
 
@@ -28,7 +29,7 @@ import numpy as np
 
 __all__ = ["CONFIGS", "GrowthComparison", "compare", "write_report"]
 
-CONFIGS = ("sins", "cube6", "qin9", "12", "qin9-sqrt", "12-sqrt")
+CONFIGS = ("sins", "cube6", "qin9", "12", "qin9-sqrt", "12-sqrt", "qin9-fused", "12-fused")
 #: the rotating scenarios' constant body rate (rad/s): every component away from zero
 ROTATION_RAD_S = (1.0, -0.8, 0.6)
 _DEG_H = np.pi / 180 / 3600
@@ -112,7 +113,7 @@ def _gyrofree(config, runs, seed, executor, progress, times):
     from gfins_fmi.gyrofree import GyroFreeNavigator, layout
     name, _, strategy = config.partition("-")
     strategy = strategy or "integrate"
-    w = np.array(ROTATION_RAD_S if strategy == "sqrt" else (0.0, 0.0, 0.0))
+    w = np.array(ROTATION_RAD_S if strategy != "integrate" else (0.0, 0.0, 0.0))
     dt, g, b_std, sigma = 0.01, 9.8, 1e-5, 1e-4
     times = np.asarray(times if times is not None else [2.5, 5, 7.5, 10, 12.5, 15, 17.5, 20], float)
     idx = np.round(times / dt).astype(int)
@@ -132,14 +133,17 @@ def _gyrofree(config, runs, seed, executor, progress, times):
 
     def task(k, rng):
         A = A0 + rng.normal(0, b_std, A0.shape[1]) + rng.normal(0, sigma, A0.shape)
-        sol, _ = GyroFreeNavigator(geo, x0, strategy, w, sins=cfg).run(A, dt)
+        sol, _ = GyroFreeNavigator(geo, x0, strategy, w, accel_noise_m_s2=sigma, sins=cfg).run(A, dt)
         att = _rotation_vector_error(sol.q_bn[idx], q_true[idx])
         return dict(out=np.c_[att, sol.pos_m[idx]])
 
     out = mc.run(task, runs, seed=seed, executor=executor, progress=progress, desc=config)["out"]
     # a sampled white noise of std sigma at interval dt has density sigma sqrt(dt)
-    model = em.gyrofree_error_model(geo, q0, g, strategy, w, dt)
-    pred = em.propagate(model, times, b_std, sigma * np.sqrt(dt), dt_s=dt)
+    if strategy == "fused":
+        pred = em.gyrofree_fused_std(geo, times, b_std, sigma, q0, g, w, dt)
+    else:
+        model = em.gyrofree_error_model(geo, q0, g, strategy, w, dt)
+        pred = em.propagate(model, times, b_std, sigma * np.sqrt(dt), dt_s=dt)
     return GrowthComparison(config, times, ("phi_x", "phi_y", "phi_z", "x", "y", "z"),
                             pred.std[:, [0, 1, 2, 6, 7, 8]], out.std(axis=0), runs,
                             ("z",) if strategy == "integrate" else ())

@@ -93,17 +93,18 @@ def test_gyrofree_bias_growth_exponents_at_rest(name):
     assert slope[6:8] == pytest.approx([4, 4], abs=1e-3)
 
 
-@pytest.fixture(scope="module", params=["qin9-sqrt", "12-sqrt"])
+@pytest.fixture(scope="module", params=["qin9-sqrt", "12-sqrt", "qin9-fused", "12-fused"])
 def rotating_mc(request):
     """1000 runs of a rotating gyro-free scenario of gfins_fmi.error_report: constant
     body rate (1, -0.8, 0.6) rad/s about a point fixed in the frame, rate strategy
-    "sqrt", same sensor errors as at rest."""
+    "sqrt" or "fused" (EKF), same sensor errors as at rest."""
     return error_report.compare(request.param, runs=1000, seed=3, times=[5.0, 10.0, 20.0])
 
 
 def test_rotating_gyrofree_predicted_std_matches_monte_carlo(rotating_mc):
     """The time-varying model (body-fixed rate error turned by C(t); the products the
-    array cannot separate fed back through the predicted rate) against 1000 runs of
+    array cannot separate fed back through the predicted rate; for "fused" the EKF's
+    error recursion with the gains of its own Riccati equation) against 1000 runs of
     the C core: attitude and all three position axes within 10% (sampling 2.2%;
     measured 0.96..1.04). Here the vertical channel is linear too: attitude errors stay
     ~1e-4 rad, so g|phi|^2/2 is negligible."""
@@ -135,6 +136,8 @@ def test_gyrofree_model_rejects_what_it_cannot_model():
         em.gyrofree_error_model(layout("qin9", 0.1), strategy="sqrt", omega_b_rad_s=(1.0, 0.0, 1.0))
     with pytest.raises(ValueError, match="diagonal of w w"):
         em.gyrofree_error_model(layout("cube6", 0.1), strategy="sqrt", omega_b_rad_s=(1.0, 1.0, 1.0))
+    with pytest.raises(ValueError, match="needs an array that measures the diagonal"):
+        em.gyrofree_fused_std(layout("cube6", 0.1), [1.0], 1e-5, 1e-4)
     with pytest.raises(ValueError, match="strategy must be"):
         em.gyrofree_error_model(layout("qin9", 0.1), strategy="eigen")
     with pytest.raises(ValueError, match="t_s must be increasing"):

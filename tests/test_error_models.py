@@ -180,6 +180,25 @@ def test_stationary_observability_matches_the_classic_result():
     assert em.observability(sys.A, np.eye(13)[[3, 4]], t, names).rank == 7
 
 
+def test_a_heading_change_makes_the_biases_observable():
+    """Observability along a trajectory (A a function of time): the same 10 min, but
+    the vehicle turns 90 deg in heading halfway. The body axes then see the tilts from
+    two directions, so the horizontal accelerometer biases separate from the tilts and
+    the east gyro bias from the heading error (Bar-Itzhack & Berman 1988: manoeuvres
+    improve alignment): only the vertical accelerometer bias (level throughout) stays
+    unobservable."""
+    lat = np.radians(30.0)
+
+    def model(yaw):
+        return em.with_bias_states(em.sins_error_model(lat, tj.euler_to_quat(yaw, 0.0, 0.0), 0.0))
+    names = list(model(0.0).state_labels)
+    A0, A1 = np.asarray(model(0.0).A), np.asarray(model(np.pi / 2).A)
+    obs = em.observability(lambda t: A0 if t < 300.0 else A1, np.eye(13)[[3, 4, 5, 6]],
+                           np.arange(0.0, 600.0, 1.0), names)
+    assert obs.rank == 12
+    assert obs.describe() == ["+1 df_z"]
+
+
 def test_frequency_response_resonates_at_the_foucault_split_schuler_pair():
     """The gain from the body-x (east, at zero yaw) accelerometer error to the north
     tilt of an undamped Schuler loop has two resonances, at w_s -+ W sinL (the Foucault

@@ -34,6 +34,7 @@
 #include "gf_kalman.h"
 #include "gf_linalg.h"
 #include "gf_sins.h"
+#include "gf_ref.h"
 #include "gf_test.h"
 
 #define EPS DBL_EPSILON
@@ -2236,61 +2237,6 @@ static void test_rate_flags(void)
 /* ======================================================================================
  * Navigator
  * ==================================================================================== */
-
-#define REF_A 6378137.0
-#define REF_INV_F 298.257223563
-#define REF_W_IE 7.292115e-5
-#define REF_GM 3.986004418e14
-#define REF_GAMMA_E 9.7803253359
-#define REF_K 0.00193185265241
-
-/* Somigliana (NIMA TR8350.2 eq. 4-1) with the height expansion (eq. 4-3) */
-static double ref_gravity(double lat, double h)
-{
-    const double f = 1.0 / REF_INV_F, e2 = f * (2.0 - f), b = REF_A * (1.0 - f);
-    const double s2 = sin(lat) * sin(lat);
-    const double g0 = REF_GAMMA_E * (1.0 + REF_K * s2) / sqrt(1.0 - e2 * s2);
-    const double m = REF_W_IE * REF_W_IE * REF_A * REF_A * b / REF_GM;
-    return g0 * (1.0 - 2.0 * h / REF_A * (1.0 + f + m - 2.0 * f * s2) + 3.0 * h * h / (REF_A * REF_A));
-}
-
-/* C_b^n = Rz(-psi) Rx(theta) Ry(gamma) (gf_sins.h) and its quaternion */
-static void ref_dcm_euler(const double e[3], double C[3][3])
-{
-    const double cp = cos(e[0]), sp = sin(e[0]), ct = cos(e[1]), st = sin(e[1]);
-    const double cg = cos(e[2]), sg = sin(e[2]);
-    const double Rz[3][3] = {{cp, sp, 0}, {-sp, cp, 0}, {0, 0, 1}};
-    const double Rx[3][3] = {{1, 0, 0}, {0, ct, -st}, {0, st, ct}};
-    const double Ry[3][3] = {{cg, 0, sg}, {0, 1, 0}, {-sg, 0, cg}};
-    double t[3][3];
-    for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j)
-            t[i][j] = Rz[i][0] * Rx[0][j] + Rz[i][1] * Rx[1][j] + Rz[i][2] * Rx[2][j];
-    for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j)
-            C[i][j] = t[i][0] * Ry[0][j] + t[i][1] * Ry[1][j] + t[i][2] * Ry[2][j];
-}
-
-static void ref_quat_euler(const double e[3], double q[4])
-{
-    const double cz = cos(0.5 * e[0]), sz = sin(0.5 * e[0]);
-    const double cx = cos(0.5 * e[1]), sx = sin(0.5 * e[1]);
-    const double cy = cos(0.5 * e[2]), sy = sin(0.5 * e[2]);
-    q[0] = cz * cx * cy + sz * sx * sy;
-    q[1] = cz * sx * cy + sz * cx * sy;
-    q[2] = cz * cx * sy - sz * sx * cy;
-    q[3] = cz * sx * sy - sz * cx * cy;
-}
-
-/* rotation angle of p (x) q^* */
-static double quat_angle(const double p[4], const double q[4])
-{
-    const double w = p[0] * q[0] + p[1] * q[1] + p[2] * q[2] + p[3] * q[3];
-    const double x = -p[0] * q[1] + p[1] * q[0] - p[2] * q[3] + p[3] * q[2];
-    const double y = -p[0] * q[2] + p[1] * q[3] + p[2] * q[0] - p[3] * q[1];
-    const double z = -p[0] * q[3] - p[1] * q[2] + p[2] * q[1] + p[3] * q[0];
-    return 2.0 * atan2(sqrt(x * x + y * y + z * z), fabs(w));
-}
 
 static int nav_same(const gf_sins_state *a, const gf_sins_state *b)
 {

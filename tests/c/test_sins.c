@@ -28,6 +28,7 @@
 
 #include "gf_earth.h"
 #include "gf_sins.h"
+#include "gf_ref.h"
 #include "gf_test.h"
 
 /* gf_earth_gravity through its status-returning API (NaN on error) */
@@ -42,118 +43,6 @@ static double grav(double lat_rad, double h_m)
 #define PI 3.14159265358979323846
 #define DEG (PI / 180.0)
 #define EPS DBL_EPSILON
-
-/* ---- independent reference: WGS-84 (NIMA TR8350.2 tables 3.1, 3.3) ------------------ */
-
-#define REF_A 6378137.0
-#define REF_INV_F 298.257223563
-#define REF_W_IE 7.292115e-5
-#define REF_GM 3.986004418e14
-#define REF_GAMMA_E 9.7803253359
-#define REF_GAMMA_P 9.8321849378
-#define REF_K 0.00193185265241
-
-static double ref_f(void) { return 1.0 / REF_INV_F; }
-static double ref_e2(void) { return ref_f() * (2.0 - ref_f()); }
-static double ref_b(void) { return REF_A * (1.0 - ref_f()); }
-
-static void ref_radii(double lat, double *RM, double *RN)
-{
-    const double s = sin(lat);
-    const double w2 = 1.0 - ref_e2() * s * s;
-    *RN = REF_A / sqrt(w2);
-    *RM = REF_A * (1.0 - ref_e2()) / (w2 * sqrt(w2));
-}
-
-/* Somigliana in the k form (TR8350.2 eq. 4-1) with the height expansion (eq. 4-3):
- * gamma_h = gamma [1 - 2/a (1 + f + m - 2 f sin^2 L) h + 3 h^2 / a^2], m = w^2 a^2 b / GM */
-static double ref_gravity(double lat, double h)
-{
-    const double s2 = sin(lat) * sin(lat);
-    const double g0 = REF_GAMMA_E * (1.0 + REF_K * s2) / sqrt(1.0 - ref_e2() * s2);
-    const double m = REF_W_IE * REF_W_IE * REF_A * REF_A * ref_b() / REF_GM;
-    return g0 * (1.0 - 2.0 * h / REF_A * (1.0 + ref_f() + m - 2.0 * ref_f() * s2) +
-                 3.0 * h * h / (REF_A * REF_A));
-}
-
-/* Somigliana's original closed form on the ellipsoid (no k constant):
- * gamma = (a gamma_e cos^2 L + b gamma_p sin^2 L) / sqrt(a^2 cos^2 L + b^2 sin^2 L) */
-static double ref_gravity_ab(double lat)
-{
-    const double c = cos(lat), s = sin(lat), a = REF_A, b = ref_b();
-    return (a * REF_GAMMA_E * c * c + b * REF_GAMMA_P * s * s) / sqrt(a * a * c * c + b * b * s * s);
-}
-
-/* ---- independent reference: rotations --------------------------------------------- */
-
-/* (matrix arguments are not const: ISO C11 cannot pass double[3][3] to const double[3][3]) */
-static void mat_mul(double A[3][3], double B[3][3], double C[3][3])
-{
-    for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j)
-            C[i][j] = A[i][0] * B[0][j] + A[i][1] * B[1][j] + A[i][2] * B[2][j];
-}
-
-static void mat_vec(double A[3][3], const double v[3], double out[3])
-{
-    for (int i = 0; i < 3; ++i)
-        out[i] = A[i][0] * v[0] + A[i][1] * v[1] + A[i][2] * v[2];
-}
-
-static void mat_t_vec(double A[3][3], const double v[3], double out[3])
-{
-    for (int i = 0; i < 3; ++i)
-        out[i] = A[0][i] * v[0] + A[1][i] * v[1] + A[2][i] * v[2];
-}
-
-/* C_b^n = Rz(-psi) Rx(theta) Ry(gamma) (gf_sins.h), active rotation matrices */
-static void ref_dcm_euler(const double e[3], double C[3][3])
-{
-    const double cp = cos(e[0]), sp = sin(e[0]), ct = cos(e[1]), st = sin(e[1]);
-    const double cg = cos(e[2]), sg = sin(e[2]);
-    double Rz[3][3] = {{cp, sp, 0}, {-sp, cp, 0}, {0, 0, 1}}; /* Rz(-psi) */
-    double Rx[3][3] = {{1, 0, 0}, {0, ct, -st}, {0, st, ct}};
-    double Ry[3][3] = {{cg, 0, sg}, {0, 1, 0}, {-sg, 0, cg}};
-    double t[3][3];
-    mat_mul(Rz, Rx, t);
-    mat_mul(t, Ry, C);
-}
-
-/* q = qz(-psi) (x) qx(theta) (x) qy(gamma), expanded by hand */
-static void ref_quat_euler(const double e[3], double q[4])
-{
-    const double cz = cos(0.5 * e[0]), sz = sin(0.5 * e[0]);
-    const double cx = cos(0.5 * e[1]), sx = sin(0.5 * e[1]);
-    const double cy = cos(0.5 * e[2]), sy = sin(0.5 * e[2]);
-    q[0] = cz * cx * cy + sz * sx * sy;
-    q[1] = cz * sx * cy + sz * cx * sy;
-    q[2] = cz * cx * sy - sz * sx * cy;
-    q[3] = cz * sx * sy - sz * cx * cy;
-}
-
-static void ref_quat_to_dcm(const double q[4], double C[3][3])
-{
-    const double a = q[0], b = q[1], c = q[2], d = q[3];
-    C[0][0] = a * a + b * b - c * c - d * d;
-    C[0][1] = 2 * (b * c - a * d);
-    C[0][2] = 2 * (b * d + a * c);
-    C[1][0] = 2 * (b * c + a * d);
-    C[1][1] = a * a - b * b + c * c - d * d;
-    C[1][2] = 2 * (c * d - a * b);
-    C[2][0] = 2 * (b * d - a * c);
-    C[2][1] = 2 * (c * d + a * b);
-    C[2][2] = a * a - b * b - c * c + d * d;
-}
-
-/* rotation angle of p (x) q^* (Hamilton), robust for small angles */
-static double quat_angle(const double p[4], const double q[4])
-{
-    const double w = p[0] * q[0] + p[1] * q[1] + p[2] * q[2] + p[3] * q[3];
-    const double x = -p[0] * q[1] + p[1] * q[0] - p[2] * q[3] + p[3] * q[2];
-    const double y = -p[0] * q[2] + p[1] * q[3] + p[2] * q[0] - p[3] * q[1];
-    const double z = -p[0] * q[3] - p[1] * q[2] + p[2] * q[1] + p[3] * q[0];
-    return 2.0 * atan2(sqrt(x * x + y * y + z * z), fabs(w));
-}
 
 static double wrap_pi(double a) { return remainder(a, 2.0 * PI); }
 

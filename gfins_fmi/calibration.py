@@ -132,42 +132,47 @@ def _check_rank(J, names, axis, sensor):
                          f"{', '.join(involved)} separately (add tilted positions or table rates)")
 
 
-def _fit_accel_axis(i, f, w, y, sigma):
-    j, l = [x for x in range(3) if x != i]
-    cen = w[:, j] ** 2 + w[:, l] ** 2            # centripetal factor of the lever arm
-    p = np.zeros(6)                               # b, s, K2, N_ij, N_il, r
-    for _ in range(10):                           # Gauss-Newton on the exact model
-        b, s, k2, nj, nl, r = p
-        u = f[:, i] + nj * f[:, j] + nl * f[:, l] - r * cen
-        pred = (1 + s) * u + k2 * u * u + b
-        d = (1 + s) + 2 * k2 * u
-        J = np.c_[np.ones_like(u), u, u * u, d * f[:, j], d * f[:, l], -d * cen]
-        _check_rank(J, ("bias", "scale", "K2", f"N_{'xyz'[i]}{'xyz'[j]}", f"N_{'xyz'[i]}{'xyz'[l]}",
-                        "lever arm"), "xyz"[i], "accelerometer")
+def _gauss_newton(model, n_params, y, sigma, names, axis, sensor):
+    """Least squares on an exact sensor model: ``model(p)`` -> (prediction, Jacobian).
+    Returns the parameters, their stds (white output noise sigma) and the residuals."""
+    p = np.zeros(n_params)
+    for _ in range(10):
+        pred, J = model(p)
+        _check_rank(J, names, axis, sensor)
         step, *_ = np.linalg.lstsq(J, y - pred, rcond=None)
         p += step
         if np.max(np.abs(step) / np.maximum(np.abs(p), 1e-30)) < 1e-13:
             break
+    pred, J = model(p)
     cov = sigma ** 2 * np.linalg.inv(J.T @ J)
-    return p, np.sqrt(np.diag(cov)), (j, l), y - pred
+    return p, np.sqrt(np.diag(cov)), y - pred
+
+
+def _fit_accel_axis(i, f, w, y, sigma):
+    j, l = [x for x in range(3) if x != i]
+    cen = w[:, j] ** 2 + w[:, l] ** 2            # centripetal factor of the lever arm
+
+    def model(p):                                 # p = b, s, K2, N_ij, N_il, r
+        b, s, k2, nj, nl, r = p
+        u = f[:, i] + nj * f[:, j] + nl * f[:, l] - r * cen
+        d = (1 + s) + 2 * k2 * u
+        return ((1 + s) * u + k2 * u * u + b,
+                np.c_[np.ones_like(u), u, u * u, d * f[:, j], d * f[:, l], -d * cen])
+    names = ("bias", "scale", "K2", f"N_{'xyz'[i]}{'xyz'[j]}", f"N_{'xyz'[i]}{'xyz'[l]}", "lever arm")
+    p, std, res = _gauss_newton(model, 6, y, sigma, names, "xyz"[i], "accelerometer")
+    return p, std, (j, l), res
 
 
 def _fit_gyro_axis(i, w, y, sigma):
     j, l = [x for x in range(3) if x != i]
-    p = np.zeros(4)                               # b, s, N_ij, N_il
-    for _ in range(10):
+
+    def model(p):                                 # p = b, s, N_ij, N_il
         b, s, nj, nl = p
         v = w[:, i] + nj * w[:, j] + nl * w[:, l]
-        pred = (1 + s) * v + b
-        J = np.c_[np.ones_like(v), v, (1 + s) * w[:, j], (1 + s) * w[:, l]]
-        _check_rank(J, ("bias", "scale", f"N_{'xyz'[i]}{'xyz'[j]}", f"N_{'xyz'[i]}{'xyz'[l]}"),
-                    "xyz"[i], "gyro")
-        step, *_ = np.linalg.lstsq(J, y - pred, rcond=None)
-        p += step
-        if np.max(np.abs(step) / np.maximum(np.abs(p), 1e-30)) < 1e-13:
-            break
-    cov = sigma ** 2 * np.linalg.inv(J.T @ J)
-    return p, np.sqrt(np.diag(cov)), (j, l), y - pred
+        return (1 + s) * v + b, np.c_[np.ones_like(v), v, (1 + s) * w[:, j], (1 + s) * w[:, l]]
+    names = ("bias", "scale", f"N_{'xyz'[i]}{'xyz'[j]}", f"N_{'xyz'[i]}{'xyz'[l]}")
+    p, std, res = _gauss_newton(model, 4, y, sigma, names, "xyz"[i], "gyro")
+    return p, std, (j, l), res
 
 
 def calibrate(data: CalibrationData) -> CalibrationResult:

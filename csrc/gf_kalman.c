@@ -9,6 +9,30 @@
 #define NMAX GF_KF_MAX_N
 #define MMAX GF_KF_MAX_M
 
+/* C (r x c) = A (r x k) B (k x c), row-major */
+static void mat_mul(size_t r, size_t k, size_t c, const double *A, const double *B, double *C)
+{
+    for (size_t i = 0; i < r; ++i)
+        for (size_t j = 0; j < c; ++j) {
+            double acc = 0.0;
+            for (size_t l = 0; l < k; ++l)
+                acc += A[i * k + l] * B[l * c + j];
+            C[i * c + j] = acc;
+        }
+}
+
+/* C (r x c) = A (r x k) B^T, B (c x k), row-major */
+static void mat_mul_bt(size_t r, size_t k, size_t c, const double *A, const double *B, double *C)
+{
+    for (size_t i = 0; i < r; ++i)
+        for (size_t j = 0; j < c; ++j) {
+            double acc = 0.0;
+            for (size_t l = 0; l < k; ++l)
+                acc += A[i * k + l] * B[j * k + l];
+            C[i * c + j] = acc;
+        }
+}
+
 gf_status gf_kalman_init(gf_kalman *kf, size_t n, const double *x0, const double *P0)
 {
     if (!kf || !x0 || !P0)
@@ -37,13 +61,7 @@ gf_status gf_kalman_predict(gf_kalman *kf, const double *F, const double *Q, int
         return GF_ERR_BAD_SIZE;
     if (F) {
         double FP[NMAX * NMAX];
-        for (size_t i = 0; i < n; ++i)
-            for (size_t j = 0; j < n; ++j) {
-                double acc = 0.0;
-                for (size_t k = 0; k < n; ++k)
-                    acc += F[i * n + k] * kf->P[k * n + j];
-                FP[i * n + j] = acc;
-            }
+        mat_mul(n, n, n, F, kf->P, FP);
         for (size_t i = 0; i < n; ++i)
             for (size_t j = i; j < n; ++j) {
                 double acc = 0.0;
@@ -53,12 +71,7 @@ gf_status gf_kalman_predict(gf_kalman *kf, const double *F, const double *Q, int
             }
         if (propagate_x) {
             double x[NMAX];
-            for (size_t i = 0; i < n; ++i) {
-                double acc = 0.0;
-                for (size_t k = 0; k < n; ++k)
-                    acc += F[i * n + k] * kf->x[k];
-                x[i] = acc;
-            }
+            mat_mul(n, n, 1, F, kf->x, x);
             memcpy(kf->x, x, n * sizeof *x);
         }
     }
@@ -88,13 +101,7 @@ gf_status gf_kalman_update(gf_kalman *kf, size_t m, const double *residual, cons
     }
     /* PHt = P H^T (n x m), S = H P H^T + R (m x m) */
     double PHt[NMAX * MMAX], S[MMAX * MMAX], L[MMAX * MMAX];
-    for (size_t i = 0; i < n; ++i)
-        for (size_t j = 0; j < m; ++j) {
-            double acc = 0.0;
-            for (size_t k = 0; k < n; ++k)
-                acc += kf->P[i * n + k] * H[j * n + k];
-            PHt[i * m + j] = acc;
-        }
+    mat_mul_bt(n, n, m, kf->P, H, PHt);
     for (size_t i = 0; i < m; ++i)
         for (size_t j = 0; j < m; ++j) {
             double acc = R[i * m + j];
@@ -139,13 +146,7 @@ gf_status gf_kalman_update(gf_kalman *kf, size_t m, const double *residual, cons
                 acc -= Kt[k * n + i] * H[k * n + j];
             A[i * n + j] = acc;
         }
-    for (size_t i = 0; i < n; ++i)
-        for (size_t j = 0; j < n; ++j) {
-            double acc = 0.0;
-            for (size_t k = 0; k < n; ++k)
-                acc += A[i * n + k] * kf->P[k * n + j];
-            AP[i * n + j] = acc;
-        }
+    mat_mul(n, n, n, A, kf->P, AP);
     for (size_t i = 0; i < n; ++i)
         for (size_t j = 0; j < m; ++j) {
             double acc = 0.0;

@@ -64,18 +64,6 @@ class GrowthComparison:
             return self.simulated / self.predicted
 
 
-def _rotation_vector_error(q_est, q_true):
-    """Rotation vector (n, 3) of q_est (x) q_true^* (small-angle accurate)."""
-    w = np.sum(q_est * q_true, axis=1)
-    v = (q_true[:, :1] * q_est[:, 1:] - q_est[:, :1] * q_true[:, 1:]
-         - np.cross(q_est[:, 1:], q_true[:, 1:]))
-    nv = np.linalg.norm(v, axis=1)
-    angle = 2 * np.arctan2(nv, np.abs(w))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        axis = np.where(nv[:, None] > 0, v / nv[:, None], 0.0)
-    return np.sign(w)[:, None] * angle[:, None] * axis
-
-
 def _sins(runs, seed, executor, progress, times):
     import gfins_fmi as gf
     from gfins_fmi import error_models as em, montecarlo as mc, trajectory as tj
@@ -94,7 +82,7 @@ def _sins(runs, seed, executor, progress, times):
         dth = tr.dtheta_rad + rng.normal(0, sbg, 3) * dt + rng.normal(0, arw * np.sqrt(dt), (n, 3))
         dv = tr.dv_m_s + rng.normal(0, sba, 3) * dt + rng.normal(0, vrw * np.sqrt(dt), (n, 3))
         sol = gf.Strapdown(x0, cfg).run(dth, dv, dt_s=dt)
-        att = _rotation_vector_error(sol.q_bn[idx], tr.q_bn[1:][idx])
+        att = tj.attitude_error_rad(sol.q_bn[idx], tr.q_bn[1:][idx])
         dn = (sol.lat_rad[idx] - tr.lat_rad[1:][idx]) * RM
         de = (sol.lon_rad[idx] - tr.lon_rad[1:][idx]) * RN * np.cos(tr.lat_rad[0])
         return dict(out=np.c_[att, dn, de])
@@ -134,7 +122,7 @@ def _gyrofree(config, runs, seed, executor, progress, times):
     def task(k, rng):
         A = A0 + rng.normal(0, b_std, A0.shape[1]) + rng.normal(0, sigma, A0.shape)
         sol, _ = GyroFreeNavigator(geo, x0, strategy, w, accel_noise_m_s2=sigma, sins=cfg).run(A, dt)
-        att = _rotation_vector_error(sol.q_bn[idx], q_true[idx])
+        att = tj.attitude_error_rad(sol.q_bn[idx], q_true[idx])
         return dict(out=np.c_[att, sol.pos_m[idx]])
 
     out = mc.run(task, runs, seed=seed, executor=executor, progress=progress, desc=config)["out"]

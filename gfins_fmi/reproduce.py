@@ -37,6 +37,7 @@ import numpy as np
 
 from gfins_fmi.gyrofree import GyroFreeNavigator, layout
 from gfins_fmi.sins import NavState, SinsConfig
+from gfins_fmi.trajectory import attitude_error_rad
 
 __all__ = ["PAPER", "QinScenario", "qin_truth", "run_qin", "qin_table", "qin_plot",
            "SCHEMES", "rate_strategy_table", "improvement"]
@@ -92,16 +93,6 @@ def qin_truth(sc: QinScenario = QinScenario()) -> dict:
     return dict(t=t, pos=pos, vel=vel, q=q, w=np.tile(w, (n, 1)), f=f_b)
 
 
-def _attitude_error_deg(qe, qt):
-    w = np.sum(qe * qt, axis=1)
-    v = qt[:, :1] * qe[:, 1:] - qe[:, :1] * qt[:, 1:] - np.cross(qe[:, 1:], qt[:, 1:])
-    nv = np.linalg.norm(v, axis=1)
-    ang = 2 * np.arctan2(nv, np.abs(w))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        axis = np.where(nv[:, None] > 0, v / nv[:, None], 0.0)
-    return np.degrees(np.sign(w)[:, None] * axis * ang[:, None])
-
-
 @dataclass
 class QinResult:
     """Monte-Carlo errors per scheme: att_deg (runs, k, 3) and pos_m (runs, k, 2) at the
@@ -149,7 +140,7 @@ def run_qin(runs: int = 100, seed: int = 2008, scenario: QinScenario = QinScenar
                                     accel_noise_m_s2=sigma,
                                     sins=SinsConfig(earth="flat", flat_gravity_m_s2=scenario.gravity_m_s2))
             sol, rates = nav.run(A, scenario.dt_s)
-            res.att_deg[name][k] = _attitude_error_deg(sol.q_bn[keep], tr["q"][keep])
+            res.att_deg[name][k] = np.degrees(attitude_error_rad(sol.q_bn[keep], tr["q"][keep]))
             res.pos_m[name][k] = (sol.pos_m[keep] - tr["pos"][keep])[:, :2]
             res.rate_rms[name][k] = np.sqrt(np.mean((rates.omega_rad_s - tr["w"]) ** 2, axis=0))
     return res

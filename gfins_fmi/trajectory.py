@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["WGS84", "radii", "gravity", "euler_to_quat", "quat_to_dcm", "Motion",
+__all__ = ["WGS84", "radii", "gravity", "euler_to_quat", "quat_to_dcm", "attitude_error_rad", "Motion",
            "Stationary", "ConstantVelocity", "SineVelocity", "Circle", "Coning", "Airdrop",
            "VehicleRun", "Trajectory", "sample", "deg", "rad"]
 
@@ -87,6 +87,20 @@ def _qaxis(axis: int, angle):
 def euler_to_quat(heading, pitch, roll):
     """q_b^n of Euler angles (rad), C_b^n = Rz(-heading) Rx(pitch) Ry(roll)."""
     return _qmul(_qmul(_qaxis(2, -np.asarray(heading)), _qaxis(0, pitch)), _qaxis(1, roll))
+
+
+def attitude_error_rad(q_est, q_true) -> np.ndarray:
+    """Rotation vector (n, 3), in the navigation frame, of q_est (x) q_true^*: the
+    attitude error of an estimate (rad). atan2 form, accurate for small angles."""
+    q_est, q_true = np.atleast_2d(q_est), np.atleast_2d(q_true)
+    w = np.sum(q_est * q_true, axis=1)
+    v = (q_true[:, :1] * q_est[:, 1:] - q_est[:, :1] * q_true[:, 1:]
+         - np.cross(q_est[:, 1:], q_true[:, 1:]))
+    nv = np.linalg.norm(v, axis=1)
+    angle = 2 * np.arctan2(nv, np.abs(w))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        axis = np.where(nv[:, None] > 0, v / nv[:, None], 0.0)
+    return np.sign(w)[:, None] * angle[:, None] * axis
 
 
 def quat_to_dcm(q):

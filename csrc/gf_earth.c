@@ -103,3 +103,11 @@ gf_status gf_earth_batch(size_t n, const double *lat_rad, const double *h_m, dou
         *n_done = n;
     return GF_OK;
 }
+
+void gf_earth_radii_dlat(const gf_earth *earth, double *dR_M_m, double *dR_N_m)
+{
+    const double s = earth->sin_lat, c = earth->cos_lat;
+    const double k = GF_WGS84_E2 * s * c / (1.0 - GF_WGS84_E2 * s * s);
+    *dR_N_m = earth->R_N_m * k;
+    *dR_M_m = 3.0 * earth->R_M_m * k;
+}

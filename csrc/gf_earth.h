@@ -63,6 +63,11 @@ gf_status gf_earth_batch(size_t n, const double *lat_rad, const double *h_m, dou
 void gf_earth_from_sincos(gf_earth *earth, double sin_lat, double cos_lat, double h_m,
                           const double *v_n_m_s, double earth_rate_sign);
 
+/* Derivatives of the radii of curvature with respect to latitude (m/rad), from the
+ * filled *earth: dR_N/dL = R_N e^2 sinL cosL / q, dR_M/dL = 3 R_M e^2 sinL cosL / q,
+ * q = 1 - e^2 sin^2 L (differentiate R_N = a q^-1/2, R_M = a (1 - e^2) q^-3/2). */
+void gf_earth_radii_dlat(const gf_earth *earth, double *dR_M_m, double *dR_N_m);
+
 #ifdef __cplusplus
 }
 #endif

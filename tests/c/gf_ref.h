@@ -16,6 +16,7 @@
 #define REF_GAMMA_P 9.8321849378
 #define REF_K 0.00193185265241
 
+#define REF_PI 3.14159265358979323846
 static inline double ref_f(void) { return 1.0 / REF_INV_F; }
 static inline double ref_e2(void) { return ref_f() * (2.0 - ref_f()); }
 static inline double ref_b(void) { return REF_A * (1.0 - ref_f()); }

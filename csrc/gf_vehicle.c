@@ -1,0 +1,332 @@
+/* gf_vehicle.c — rigid ground vehicle and its exact sensor outputs; see gf_vehicle.h. */
+#include "gf_vehicle.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "gf_earth.h"
+#include "gf_math.h"
+#include "gf_sins.h"
+
+#define PIECE_MAX_S 0.25                 /* longest quadrature piece */
+#define LAT_MAX_RAD (89.0 * GF_PI / 180.0)
+
+/* 8-node Gauss-Legendre rule on [-1, 1] (exact for degree 15). */
+static const double GL_X[8] = {-0.9602898564975363, -0.7966664774136267, -0.5255324099163290,
+                               -0.1834346424956498, 0.1834346424956498, 0.5255324099163290,
+                               0.7966664774136267, 0.9602898564975363};
+static const double GL_W[8] = {0.1012285362903763, 0.2223810344533745, 0.3137066458778873,
+                               0.3626837833783620, 0.3626837833783620, 0.3137066458778873,
+                               0.2223810344533745, 0.1012285362903763};
+
+/* Speed, heading and their derivatives at one time. */
+typedef struct kin {
+    double u, du;                /* m/s, m/s^2 */
+    double psi, dpsi, ddpsi;     /* rad, rad/s, rad/s^2 */
+} kin;
+
+/* C2 smooth step S(s) = s - sin(2 pi s)/(2 pi) on [0, 1], its derivatives and integral. */
+static void smooth_step(double s, double *S, double *dS, double *ddS, double *I)
+{
+    s = s < 0.0 ? 0.0 : (s > 1.0 ? 1.0 : s);
+    const double w = 2.0 * GF_PI * s;
+    *S = s - sin(w) / (2.0 * GF_PI);
+    *dS = 1.0 - cos(w);
+    *ddS = 2.0 * GF_PI * sin(w);
+    *I = 0.5 * s * s + (cos(w) - 1.0) / (4.0 * GF_PI * GF_PI);
+}
+
+static kin kinematics(const gf_vehicle_state *st, double t_s)
+{
+    const gf_vehicle_segment *g = &st->active;
+    const double tau = t_s - st->active_t0_s, r0 = st->heading_rate0_rad_s;
+    kin k = {st->speed0_m_s, 0.0, st->heading0_rad + r0 * tau, r0, 0.0};
+    if (g->duration_s > 0.0) {
+        const double T = g->duration_s;
+        double S, dS, ddS, I;
+        smooth_step(tau / T, &S, &dS, &ddS, &I);
+        k.u += g->dspeed_m_s * S;
+        k.du = g->dspeed_m_s * dS / T;
+        k.psi += g->dheading_rate_rad_s * T * I + g->dheading_rad * S;
+        k.dpsi += g->dheading_rate_rad_s * S + g->dheading_rad * dS / T;
+        k.ddpsi = g->dheading_rate_rad_s * dS / T + g->dheading_rad * ddS / (T * T);
+    }
+    return k;
+}
+
+/* Displacement (east, north) gained over [a, b] inside the active segment. */
+static void displacement(const gf_vehicle_state *st, double a, double b, double *dE, double *dN)
+{
+    const double half = 0.5 * (b - a);
+    double e = 0.0, n = 0.0;
+    for (int j = 0; j < 8; ++j) {
+        const kin k = kinematics(st, a + half * (GL_X[j] + 1.0));
+        e += GL_W[j] * k.u * sin(k.psi);
+        n += GL_W[j] * k.u * cos(k.psi);
+    }
+    *dE = half * e;
+    *dN = half * n;
+}
+
+/* Truth and sensor rates at t_s with displacement (E, N); increments untouched. */
+static gf_status evaluate(const gf_vehicle_state *st, double t_s, double E, double N,
+                          gf_vehicle_sample *out)
+{
+    const gf_vehicle_profile *p = &st->profile;
+    const kin k = kinematics(st, t_s);
+    const double h = p->h0_m;
+    const double kN = 1.0 / (st->R_M0_m + h), kE = 1.0 / ((st->R_N0_m + h) * cos(p->lat0_rad));
+    const double sp = sin(k.psi), cp = cos(k.psi);
+    const double vE = k.u * sp, vN = k.u * cp;
+    const double aE = k.du * sp + k.u * cp * k.dpsi, aN = k.du * cp - k.u * sp * k.dpsi;
+    const double L = p->lat0_rad + N * kN, lam = p->lon0_rad + E * kE;
+    if (!(fabs(L) < LAT_MAX_RAD))
+        return GF_ERR_DIVERGED;
+    const double dL = vN * kN, dlam = vE * kE, ddL = aN * kN, ddlam = aE * kE;
+    gf_earth e;
+    gf_status st_e = gf_earth_update(&e, L, h, NULL, 1.0);
+    if (st_e != GF_OK)
+        return st_e;
+    double dRM, dRN;
+    gf_earth_radii_dlat(&e, &dRM, &dRN);
+    const double s = e.sin_lat, c = e.cos_lat, RNh = e.R_N_m + h, RMh = e.R_M_m + h;
+    const double W = GF_WGS84_OMEGA_IE_RAD_S;
+    const double v[3] = {RNh * c * dlam, RMh * dL, 0.0};
+    const double dv[3] = {dRN * dL * c * dlam - RNh * s * dL * dlam + RNh * c * ddlam,
+                          dRM * dL * dL + RMh * ddL, 0.0};
+    const double w_ie[3] = {0.0, W * c, W * s};
+    const double w_en[3] = {-dL, dlam * c, dlam * s};
+    double w_in[3], two_ie_en[3], cor[3], f_n[3];
+    gf_v3_add(w_ie, w_en, w_in);
+    gf_v3_axpy(w_en, 2.0, w_ie, two_ie_en); /* w_en + 2 w_ie */
+    gf_v3_cross(two_ie_en, v, cor);
+    f_n[0] = dv[0] + cor[0];
+    f_n[1] = dv[1] + cor[1];
+    f_n[2] = dv[2] + cor[2] + e.gravity_m_s2; /* - g^n, g^n = [0, 0, -gamma] */
+    /* d(w_ie + w_en)/dt */
+    const double w_in_dot[3] = {-ddL, -W * s * dL + ddlam * c - dlam * s * dL,
+                                W * c * dL + ddlam * s + dlam * c * dL};
+    /* C_n^b for C_b^n = Rz(-psi): x_b = [c x_E - s x_N, s x_E + c x_N, x_U] */
+#define TO_BODY(x, y)                                                                        \
+    do {                                                                                     \
+        (y)[0] = cp * (x)[0] - sp * (x)[1];                                                  \
+        (y)[1] = sp * (x)[0] + cp * (x)[1];                                                  \
+        (y)[2] = (x)[2];                                                                     \
+    } while (0)
+    double w_in_b[3], w_in_dot_b[3], f_b[3], tmp[3];
+    TO_BODY(w_in, w_in_b);
+    TO_BODY(w_in_dot, w_in_dot_b);
+    TO_BODY(f_n, f_b);
+#undef TO_BODY
+    const double w_nb[3] = {0.0, 0.0, -k.dpsi};
+    gf_v3_add(w_nb, w_in_b, out->gyro_rad_s);
+    gf_v3_cross(w_nb, w_in_b, tmp);
+    out->gyro_dot_rad_s2[0] = w_in_dot_b[0] - tmp[0];
+    out->gyro_dot_rad_s2[1] = w_in_dot_b[1] - tmp[1];
+    out->gyro_dot_rad_s2[2] = -k.ddpsi + w_in_dot_b[2] - tmp[2];
+    gf_v3_copy(f_b, out->accel_m_s2);
+    gf_v3_copy(v, out->v_n_m_s);
+    const double euler[3] = {k.psi, 0.0, 0.0};
+    st_e = gf_euler_to_quat(euler, out->q_bn);
+    if (st_e == GF_OK)
+        st_e = gf_quat_to_euler(out->q_bn, out->euler_rad);
+    if (st_e != GF_OK)
+        return st_e;
+    out->time_s = t_s;
+    out->lat_rad = L;
+    out->lon_rad = lam;
+    out->h_m = h;
+    out->east_m = E;
+    out->north_m = N;
+    out->speed_m_s = k.u;
+    out->heading_rate_rad_s = k.dpsi;
+    return GF_OK;
+}
+
+/* Makes the next profile segment (or cruising) active at time t_s, continuing speed,
+ * heading and heading rate. */
+static void activate_next(gf_vehicle_state *st, double t_s)
+{
+    const kin k = kinematics(st, t_s);
+    st->speed0_m_s = k.u;
+    st->heading0_rad = k.psi;
+    st->heading_rate0_rad_s = k.dpsi;
+    st->active_t0_s = t_s;
+    if (st->next_segment < st->profile.n_segments)
+        st->active = st->profile.segment[st->next_segment++];
+    else
+        memset(&st->active, 0, sizeof st->active);
+}
+
+static double active_end(const gf_vehicle_state *st)
+{
+    return st->active.duration_s > 0.0 ? st->active_t0_s + st->active.duration_s : INFINITY;
+}
+
+/* Integrates displacement and increments over [a, b] inside the active segment. */
+static gf_status integrate_piece(gf_vehicle_state *st, double a, double b, double dth[3],
+                                 double dv[3])
+{
+    const double half = 0.5 * (b - a);
+    for (int j = 0; j < 8; ++j) {
+        const double tj = a + half * (GL_X[j] + 1.0);
+        double dE, dN;
+        displacement(st, a, tj, &dE, &dN);
+        gf_vehicle_sample s;
+        const gf_status status = evaluate(st, tj, st->east_m + dE, st->north_m + dN, &s);
+        if (status != GF_OK)
+            return status;
+        for (int i = 0; i < 3; ++i) {
+            dth[i] += half * GL_W[j] * s.gyro_rad_s[i];
+            dv[i] += half * GL_W[j] * s.accel_m_s2[i];
+        }
+    }
+    double dE, dN;
+    displacement(st, a, b, &dE, &dN);
+    st->east_m += dE;
+    st->north_m += dN;
+    return GF_OK;
+}
+
+gf_status gf_vehicle_init(gf_vehicle_state *state, const gf_vehicle_profile *profile,
+                          double start_time_s, gf_vehicle_sample *first, int *bad)
+{
+    if (bad)
+        *bad = 0;
+    if (!state || !profile)
+        return GF_ERR_NULL_POINTER;
+    const gf_vehicle_profile *p = profile;
+    if (!isfinite(p->lat0_rad) || !isfinite(p->lon0_rad) || !isfinite(p->h0_m) ||
+        !isfinite(p->heading0_rad) || !isfinite(p->speed0_m_s) ||
+        !isfinite(p->heading_rate0_rad_s) || !isfinite(start_time_s))
+        return GF_ERR_NONFINITE_INPUT;
+    if (p->n_segments > GF_VEHICLE_MAX_SEGMENTS)
+        return GF_ERR_BAD_SIZE;
+    int which = 0;
+    if (!(fabs(p->lat0_rad) < LAT_MAX_RAD))
+        which = 1;
+    else if (!(p->h0_m >= -1000.0 && p->h0_m <= 1e5))
+        which = 2;
+    else if (p->speed0_m_s < 0.0)
+        which = 3;
+    double u = p->speed0_m_s;
+    for (size_t k = 0; k < p->n_segments && !which; ++k) {
+        const gf_vehicle_segment *g = &p->segment[k];
+        if (!isfinite(g->duration_s) || !isfinite(g->dspeed_m_s) ||
+            !isfinite(g->dheading_rate_rad_s) || !isfinite(g->dheading_rad))
+            return GF_ERR_NONFINITE_INPUT;
+        u += g->dspeed_m_s; /* S is monotonic: the end speed is the extreme */
+        if (!(g->duration_s > 0.0) || u < 0.0)
+            which = 100 + (int)k;
+    }
+    if (which) {
+        if (bad)
+            *bad = which;
+        return GF_ERR_BAD_PARAMETER;
+    }
+    gf_vehicle_state s;
+    memset(&s, 0, sizeof s);
+    s.profile = *p;
+    s.time_s = start_time_s;
+    s.speed0_m_s = p->speed0_m_s;
+    s.heading0_rad = p->heading0_rad;
+    s.heading_rate0_rad_s = p->heading_rate0_rad_s;
+    s.active_t0_s = start_time_s;
+    if (p->n_segments > 0)
+        s.active = p->segment[s.next_segment++];
+    gf_earth e;
+    gf_status status = gf_earth_update(&e, p->lat0_rad, p->h0_m, NULL, 1.0);
+    if (status != GF_OK)
+        return status;
+    s.R_M0_m = e.R_M_m;
+    s.R_N0_m = e.R_N_m;
+    gf_vehicle_sample first_sample;
+    status = evaluate(&s, start_time_s, 0.0, 0.0, &first_sample);
+    if (status != GF_OK)
+        return status;
+    memset(first_sample.dtheta_rad, 0, sizeof first_sample.dtheta_rad);
+    memset(first_sample.dv_m_s, 0, sizeof first_sample.dv_m_s);
+    *state = s;
+    if (first)
+        *first = first_sample;
+    return GF_OK;
+}
+
+gf_status gf_vehicle_command(gf_vehicle_state *state, double speed_m_s,
+                             double heading_rate_rad_s, double duration_s)
+{
+    if (!state)
+        return GF_ERR_NULL_POINTER;
+    if (!isfinite(speed_m_s) || !isfinite(heading_rate_rad_s) || !isfinite(duration_s))
+        return GF_ERR_NONFINITE_INPUT;
+    if (speed_m_s < 0.0 || !(duration_s > 0.0))
+        return GF_ERR_BAD_PARAMETER;
+    const kin k = kinematics(state, state->time_s);
+    state->speed0_m_s = k.u;
+    state->heading0_rad = k.psi;
+    state->heading_rate0_rad_s = k.dpsi;
+    state->active_t0_s = state->time_s;
+    state->active.duration_s = duration_s;
+    state->active.dspeed_m_s = speed_m_s - k.u;
+    state->active.dheading_rate_rad_s = heading_rate_rad_s - k.dpsi;
+    state->active.dheading_rad = 0.0;
+    state->next_segment = state->profile.n_segments; /* then cruise */
+    return GF_OK;
+}
+
+gf_status gf_vehicle_step(gf_vehicle_state *state, double t_end_s, gf_vehicle_sample *sample)
+{
+    if (!state || !sample)
+        return GF_ERR_NULL_POINTER;
+    if (!(t_end_s > state->time_s) || !isfinite(t_end_s))
+        return GF_ERR_BAD_TIME;
+    gf_vehicle_state s = *state;
+    const double t_end = t_end_s;
+    double dth[3] = {0.0, 0.0, 0.0}, dv[3] = {0.0, 0.0, 0.0};
+    double a = s.time_s;
+    while (a < t_end) {
+        const double seg_end = active_end(&s);
+        const double b_seg = seg_end < t_end ? seg_end : t_end;
+        const int pieces = (int)ceil((b_seg - a) / PIECE_MAX_S);
+        for (int m = 0; m < pieces; ++m) {
+            const double pa = a + (b_seg - a) * m / pieces;
+            const double pb = m + 1 == pieces ? b_seg : a + (b_seg - a) * (m + 1) / pieces;
+            const gf_status status = integrate_piece(&s, pa, pb, dth, dv);
+            if (status != GF_OK)
+                return status;
+        }
+        a = b_seg;
+        if (seg_end <= t_end)
+            activate_next(&s, seg_end);
+    }
+    gf_vehicle_sample out;
+    const gf_status status = evaluate(&s, t_end, s.east_m, s.north_m, &out);
+    if (status != GF_OK)
+        return status;
+    memcpy(out.dtheta_rad, dth, sizeof dth);
+    memcpy(out.dv_m_s, dv, sizeof dv);
+    s.time_s = t_end;
+    *state = s;
+    *sample = out;
+    return GF_OK;
+}
+
+gf_status gf_vehicle_run(gf_vehicle_state *state, size_t n, double dt_s,
+                         gf_vehicle_sample *samples, size_t *n_done)
+{
+    if (n_done)
+        *n_done = 0;
+    if (!state || (n && !samples))
+        return GF_ERR_NULL_POINTER;
+    if (!(dt_s > 0.0) || !isfinite(dt_s))
+        return GF_ERR_BAD_TIME;
+    const double t0 = state->time_s;
+    for (size_t k = 0; k < n; ++k) {
+        const gf_status status = gf_vehicle_step(state, t0 + (double)(k + 1) * dt_s, &samples[k]);
+        if (status != GF_OK)
+            return status;
+        if (n_done)
+            *n_done = k + 1;
+    }
+    return GF_OK;
+}

@@ -25,7 +25,8 @@ __all__ = ["MODELS", "fmu_path", "validate", "run_fmu", "run_accel9_fmu", "run_s
 
 #: model name -> model identifier of the FMUs shipped
 MODELS = {"accel9": "gfins_accel9", "sins": "gfins_sins", "gfnav_cube6": "gfins_gfnav_cube6",
-          "gfnav_qin9": "gfins_gfnav_qin9", "gfnav_12": "gfins_gfnav_12"}
+          "gfnav_qin9": "gfins_gfnav_qin9", "gfnav_12": "gfins_gfnav_12",
+          "vehicle": "gfins_vehicle"}
 
 
 class FmuRunError(GfinsError):
@@ -318,14 +319,7 @@ def run_sins_fmu(gyro, accel, dt_s: float, initial, *, config=None, h_ext_m=None
               "q0": np.asarray(initial.q_bn, float), "v0": np.asarray(initial.v_n_m_s, float),
               "lat0": initial.lat_rad, "lon0": initial.lon_rad, "h0": initial.h_m}
     if imu_errors is not None:
-        c = imu_errors._c
-        params.update(imu_comp=1, gyro_bias=list(c.g_bias_rad_s), gyro_scale=list(c.g_scale),
-                      gyro_misalign=list(c.g_misalign_rad), accel_bias=list(c.a_bias_m_s2),
-                      accel_scale=list(c.a_scale), accel_misalign=list(c.a_misalign_rad),
-                      accel_k2=list(c.a_k2_s2_m), lever_arm=list(c.a_lever_m))
-        if imu_errors._c.temp_order:
-            raise ValueError("the SINS FMU compensates at the reference temperature only: "
-                             "temperature coefficients are not passed to it")
+        params.update(imu_comp=1, **imu_errors.fmu_parameters())
     if lowpass_sos is not None:
         sos = np.asarray(lowpass_sos, float)
         if sos.ndim != 2 or sos.shape[1] != 6 or not 1 <= sos.shape[0] <= 8:

@@ -115,6 +115,24 @@ class ImuErrors:
                              f"{_FIELDS.get(int(bad[0]), 'a non-finite value')}")
         object.__setattr__(self, "_c", c)
 
+    def fmu_parameters(self) -> dict:
+        """The model as start values of the SINS and vehicle FMUs (SI units, FMI 3.0
+        array names; the FMUs work at the reference temperature only).
+
+        Raises
+        ------
+        ValueError
+            The model has temperature coefficients (the FMUs do not take them).
+        """
+        c = self._c
+        if c.temp_order:
+            raise ValueError("the FMUs model the IMU at the reference temperature only: "
+                             "temperature coefficients are not passed to them")
+        return dict(gyro_bias=list(c.g_bias_rad_s), gyro_scale=list(c.g_scale),
+                    gyro_misalign=list(c.g_misalign_rad), accel_bias=list(c.a_bias_m_s2),
+                    accel_scale=list(c.a_scale), accel_misalign=list(c.a_misalign_rad),
+                    accel_k2=list(c.a_k2_s2_m), lever_arm=list(c.a_lever_m))
+
     @classmethod
     def random(cls, rng: np.random.Generator, gyro_bias_deg_h=0.0, gyro_scale_ppm=0.0,
                gyro_misalignment_arcsec=0.0, accel_bias_ug=0.0, accel_scale_ppm=0.0,

@@ -38,8 +38,45 @@ def initial_state() -> list:
     ]
 
 
+def skip_steps() -> dict:
+    return dict(name="skip_steps", causality="parameter", variability="fixed", type="Int32",
+                shape=(), start=0, field="skip_steps",
+                description="Number of first doSteps whose inputs are ignored: navigation "
+                            "starts at the sample after them, from the initial state given. "
+                            "1 for masters that pass no connected outputs before the first "
+                            "step (fmpy's SSP simulator starts every connection at 0)")
+
+
 def external_height() -> dict:
     return dict(name="h_ext", causality="input", variability="continuous", type="Float64",
                 shape=(), unit="m", start=float("nan"), field="h_ext_m",
                 description="External (barometric) height at the communication point for "
                             "vertical_mode = 2; NaN (the start value): none")
+
+
+def imu_error_parameters() -> list:
+    """The IMU error model (gf_imu_error, SI units; gfins_fmi.ImuErrors.fmu_parameters()
+    gives them from datasheet units): compensated by the SINS FMU, applied by the vehicle
+    FMU. ModelData field: ``FmuImuParams imu_params`` (common/imu_params.h)."""
+    return [
+        dict(name="gyro_bias", causality="parameter", variability="fixed", type="Float64",
+             shape=(3,), unit="rad/s", start=0.0, field="imu_params.gyro_bias_rad_s", description="Gyro biases"),
+        dict(name="gyro_scale", causality="parameter", variability="fixed", type="Float64",
+             shape=(3,), start=0.0, field="imu_params.gyro_scale", description="Gyro scale-factor errors (1 = 100%)"),
+        dict(name="gyro_misalign", causality="parameter", variability="fixed", type="Float64",
+             shape=(9,), unit="rad", start=0.0, field="imu_params.gyro_misalign_rad",
+             description="Gyro cross-coupling N_g, row-major 3 x 3, zero diagonal"),
+        dict(name="accel_bias", causality="parameter", variability="fixed", type="Float64",
+             shape=(3,), unit="m/s2", start=0.0, field="imu_params.accel_bias_m_s2", description="Accelerometer biases"),
+        dict(name="accel_scale", causality="parameter", variability="fixed", type="Float64",
+             shape=(3,), start=0.0, field="imu_params.accel_scale", description="Accelerometer scale-factor errors"),
+        dict(name="accel_misalign", causality="parameter", variability="fixed", type="Float64",
+             shape=(9,), unit="rad", start=0.0, field="imu_params.accel_misalign_rad",
+             description="Accelerometer cross-coupling N_a, row-major 3 x 3, zero diagonal"),
+        dict(name="accel_k2", causality="parameter", variability="fixed", type="Float64",
+             shape=(3,), unit="s2/m", start=0.0, field="imu_params.accel_k2_s2_m",
+             description="Accelerometer second-order coefficients K2"),
+        dict(name="lever_arm", causality="parameter", variability="fixed", type="Float64",
+             shape=(3,), unit="m", start=0.0, field="imu_params.lever_arm_m",
+             description="Inner lever arms of the accelerometers along their axes"),
+    ]

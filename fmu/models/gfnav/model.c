@@ -38,7 +38,9 @@ static void publish(ModelData *d)
     d->nav_time_s = s->time_s;
 }
 
-FmuStatus model_exit_initialization(FmuInstance *instance, ModelData *d, double start_time_s)
+/* Validates the parameters and starts the navigation at start_time_s (also used to
+ * restart it after skip_steps ignored doSteps). */
+static FmuStatus start_navigation(FmuInstance *instance, ModelData *d, double start_time_s)
 {
     gf_array_geometry g;
     if (make_geometry(d->lever_arm_m, &g) != GF_OK) {
@@ -88,8 +90,22 @@ FmuStatus model_exit_initialization(FmuInstance *instance, ModelData *d, double 
     return FMU_OK;
 }
 
+FmuStatus model_exit_initialization(FmuInstance *instance, ModelData *d, double start_time_s)
+{
+    if (d->skip_steps < 0) {
+        fmu_log_error(instance, "parameter skip_steps = %d must be >= 0", (int)d->skip_steps);
+        return FMU_ERROR;
+    }
+    d->skipped = 0;
+    return start_navigation(instance, d, start_time_s);
+}
+
 FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double h_s)
 {
+    if (d->skipped < d->skip_steps) { /* ignore these inputs; start at the next sample */
+        ++d->skipped;
+        return d->skipped == d->skip_steps ? start_navigation(instance, d, t_s + h_s) : FMU_OK;
+    }
     double q[4], v[3], pos[3], w[3], f[3];
     uint8_t flags = 0;
     size_t done = 0;

@@ -13,6 +13,7 @@ typedef struct ModelData {
     int32_t strategy, earth, vertical_mode;
     double accel_noise_m_s2, omega_init_rad_s[3], flat_gravity_m_s2, hold_height_m, baro_tau_s;
     double q0[4], v0_m_s[3], lat0_rad, lon0_rad, h0_m, pos0_m[3];
+    int32_t skip_steps;
     /* inputs (A holds up to 12 outputs; the layout uses the first n) */
     double A_m_s2[12], h_ext_m;
     /* outputs */
@@ -22,6 +23,7 @@ typedef struct ModelData {
     /* internal */
     double previous_step_s;
     int32_t started;
+    int32_t skipped;          /* doSteps ignored so far (skip_steps) */
     gf_gfnav_state nav;
 } ModelData;
 

@@ -45,6 +45,7 @@ def make(layout: str, n: int) -> dict:
                  description="Gravity of the fixed frame (earth = 1), >= 0"),
             *_COMMON["vertical_channel"](),
             *_COMMON["initial_state"](),
+            _COMMON["skip_steps"](),
             dict(name="pos0", causality="parameter", variability="fixed", type="Float64",
                  shape=(3,), unit="m", start=0.0, field="pos0_m",
                  description="Initial position in the fixed frame (earth = 1)"),

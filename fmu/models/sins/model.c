@@ -24,7 +24,9 @@ static void publish(ModelData *d)
     d->nav_time_s = d->nav.time_s;
 }
 
-FmuStatus model_exit_initialization(FmuInstance *instance, ModelData *d, double start_time_s)
+/* Validates the parameters and starts the navigation at start_time_s (also used to
+ * restart it after skip_steps ignored doSteps). */
+static FmuStatus start_navigation(FmuInstance *instance, ModelData *d, double start_time_s)
 {
     gf_sins_config cfg;
     gf_sins_config_default(&cfg);
@@ -64,22 +66,9 @@ FmuStatus model_exit_initialization(FmuInstance *instance, ModelData *d, double 
         return FMU_ERROR;
     }
     if (d->imu_comp) {
-        static const char *const field_names[] = {"a non-finite value", "gyro_scale (|s| < 0.5)",
-            "gyro_misalign (|N| < 0.1 rad, zero diagonal)", "accel_scale (|s| < 0.5)",
-            "accel_misalign (|N| < 0.1 rad, zero diagonal)", "accel_k2 (|K2| * 1000 m/s2 < 0.1)",
-            "lever_arm (|r| < 1 m)", "temperature order"};
-        memcpy(d->imu.g_bias_rad_s, d->gyro_bias_rad_s, sizeof d->imu.g_bias_rad_s);
-        memcpy(d->imu.g_scale, d->gyro_scale, sizeof d->imu.g_scale);
-        memcpy(d->imu.g_misalign_rad, d->gyro_misalign_rad, sizeof d->imu.g_misalign_rad);
-        memcpy(d->imu.a_bias_m_s2, d->accel_bias_m_s2, sizeof d->imu.a_bias_m_s2);
-        memcpy(d->imu.a_scale, d->accel_scale, sizeof d->imu.a_scale);
-        memcpy(d->imu.a_misalign_rad, d->accel_misalign_rad, sizeof d->imu.a_misalign_rad);
-        memcpy(d->imu.a_k2_s2_m, d->accel_k2_s2_m, sizeof d->imu.a_k2_s2_m);
-        memcpy(d->imu.a_lever_m, d->lever_arm_m, sizeof d->imu.a_lever_m);
-        int bad = 0;
-        if (gf_imu_errors_check(&d->imu, &bad) != GF_OK) {
-            fmu_log_error(instance, "IMU error parameter out of range: %s",
-                          field_names[bad >= 0 && bad <= 7 ? bad : 0]);
+        const char *why = fmu_imu_errors_build(&d->imu_params, &d->imu);
+        if (why) {
+            fmu_log_error(instance, "IMU error parameter out of range: %s", why);
             return FMU_ERROR;
         }
     }
@@ -138,8 +127,22 @@ static gf_status condition(ModelData *d, int increments, double dt, const double
     return GF_OK;
 }
 
+FmuStatus model_exit_initialization(FmuInstance *instance, ModelData *d, double start_time_s)
+{
+    if (d->skip_steps < 0) {
+        fmu_log_error(instance, "parameter skip_steps = %d must be >= 0", (int)d->skip_steps);
+        return FMU_ERROR;
+    }
+    d->skipped = 0;
+    return start_navigation(instance, d, start_time_s);
+}
+
 FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double h_s)
 {
+    if (d->skipped < d->skip_steps) { /* ignore these inputs; start at the next sample */
+        ++d->skipped;
+        return d->skipped == d->skip_steps ? start_navigation(instance, d, t_s + h_s) : FMU_OK;
+    }
     const int increments = d->nav.cfg.input == GF_SINS_INPUT_INCREMENTS;
     if (increments && !d->started) { /* no increment ends at the start time */
         d->previous_step_s = h_s;

@@ -7,6 +7,7 @@
 #include "gf_biquad.h"
 #include "gf_imu_error.h"
 #include "gf_sins.h"
+#include "imu_params.h"
 
 typedef struct ModelData {
     /* parameters */
@@ -14,9 +15,9 @@ typedef struct ModelData {
     double hold_height_m, baro_tau_s, max_rate_rad_s, max_specific_force_m_s2;
     double q0[4], v0_m_s[3], lat0_rad, lon0_rad, h0_m;
     int32_t imu_comp, lowpass_sections;
-    double gyro_bias_rad_s[3], gyro_scale[3], gyro_misalign_rad[9];
-    double accel_bias_m_s2[3], accel_scale[3], accel_misalign_rad[9], accel_k2_s2_m[3];
-    double lever_arm_m[3], lowpass_sos[48];
+    FmuImuParams imu_params;
+    double lowpass_sos[48];
+    int32_t skip_steps;
     /* inputs */
     double dtheta_rad[3], dv_m_s[3], gyro_rad_s[3], accel_m_s2[3], h_ext_m;
     /* outputs */
@@ -24,6 +25,7 @@ typedef struct ModelData {
     /* internal */
     double previous_step_s;   /* communication step that ended at this sample: its dt */
     int32_t started;          /* 1 once a doStep has been taken */
+    int32_t skipped;          /* doSteps ignored so far (skip_steps) */
     gf_sins_state nav;
     gf_imu_errors imu;        /* built from the parameters when imu_comp = 1 */
     gf_biquad lowpass;        /* 6 channels: gyro x y z, accel x y z */

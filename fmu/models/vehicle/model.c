@@ -1,0 +1,172 @@
+/* model.c — the vehicle as an FMU model: FMI-agnostic, calls gf_vehicle (truth),
+ * gf_imu_error (IMU errors) and gf_array_forward (accelerometer array).
+ *
+ * Sampling: after exitInitializationMode the outputs describe the start time (zero
+ * increments); doStep(t, h) moves the vehicle to t + h (an absolute time, so a long run
+ * keeps no time drift beyond the master's own) and the outputs describe t + h, the
+ * increments covering (t, t + h]. Any step size is handled. */
+#include <math.h>
+#include <string.h>
+
+#include "fmu_model.h"
+#include "gf_gfins.h"
+#include "gf_math.h"
+#include "model.h"
+
+static size_t array_size(int32_t layout)
+{
+    return layout == 0 ? 6u : layout == 1 ? 9u : 12u;
+}
+
+/* Sensor outputs of the current truth sample: IMU (with errors if asked) and array. */
+static gf_status sense(ModelData *d, double dt_s)
+{
+    const gf_vehicle_sample *x = &d->out;
+    double w[3], f[3], mw[3], mf[3];
+    memcpy(w, x->gyro_rad_s, sizeof w);
+    memcpy(f, x->accel_m_s2, sizeof f);
+    memcpy(d->dtheta_rad, x->dtheta_rad, sizeof d->dtheta_rad);
+    memcpy(d->dv_m_s, x->dv_m_s, sizeof d->dv_m_s);
+    if (d->imu_errors) {
+        size_t done = 0;
+        gf_status st = gf_imu_apply(&d->imu, 1, x->gyro_rad_s, x->accel_m_s2, NULL, w, f, &done);
+        if (st != GF_OK)
+            return st;
+        if (dt_s > 0.0) { /* increments as mean rates over the step, as the SINS FMU compensates */
+            for (int i = 0; i < 3; ++i) {
+                mw[i] = x->dtheta_rad[i] / dt_s;
+                mf[i] = x->dv_m_s[i] / dt_s;
+            }
+            st = gf_imu_apply(&d->imu, 1, mw, mf, NULL, mw, mf, &done);
+            if (st != GF_OK)
+                return st;
+            for (int i = 0; i < 3; ++i) {
+                d->dtheta_rad[i] = mw[i] * dt_s;
+                d->dv_m_s[i] = mf[i] * dt_s;
+            }
+        }
+    }
+    memcpy(d->gyro_rad_s, w, sizeof w);
+    memcpy(d->accel_m_s2, f, sizeof f);
+    double A[GF_ARRAY_MAX_SENSORS];
+    size_t done = 0;
+    const gf_status st = gf_array_forward(&d->array, 1, x->accel_m_s2, x->gyro_rad_s,
+                                          x->gyro_dot_rad_s2, A, &done);
+    if (st != GF_OK)
+        return st;
+    const size_t n = array_size(d->array_layout);
+    for (size_t i = 0; i < VEHICLE_ARRAY_MAX; ++i)
+        d->A_m_s2[i] = i < n ? A[i] + d->array_bias_m_s2[i] : 0.0;
+    return GF_OK;
+}
+
+FmuStatus model_exit_initialization(FmuInstance *instance, ModelData *d, double start_time_s)
+{
+    if (d->n_segments < 0 || d->n_segments > GF_VEHICLE_MAX_SEGMENTS) {
+        fmu_log_error(instance, "parameter n_segments = %d must be 0..%d", (int)d->n_segments,
+                      GF_VEHICLE_MAX_SEGMENTS);
+        return FMU_ERROR;
+    }
+    if (d->drive != 0 && d->drive != 1) {
+        fmu_log_error(instance, "parameter drive = %d must be 0 (profile) or 1 (inputs)",
+                      (int)d->drive);
+        return FMU_ERROR;
+    }
+    if (!(d->command_time_s > 0.0) || !isfinite(d->command_time_s)) {
+        fmu_log_error(instance, "parameter command_time = %g s must be finite and > 0",
+                      d->command_time_s);
+        return FMU_ERROR;
+    }
+    if (d->imu_errors != 0 && d->imu_errors != 1) {
+        fmu_log_error(instance, "parameter imu_errors = %d must be 0 or 1", (int)d->imu_errors);
+        return FMU_ERROR;
+    }
+    memset(&d->imu, 0, sizeof d->imu);
+    if (d->imu_errors) {
+        const char *why = fmu_imu_errors_build(&d->imu_params, &d->imu);
+        if (why) {
+            fmu_log_error(instance, "IMU error parameter out of range: %s", why);
+            return FMU_ERROR;
+        }
+    }
+    gf_status st = d->array_layout == 0 ? gf_layout_cube6(d->lever_arm_m, &d->array)
+                 : d->array_layout == 1 ? gf9_geometry(d->lever_arm_m, &d->array)
+                 : d->array_layout == 2 ? gf_layout_12(d->lever_arm_m, &d->array)
+                                        : GF_ERR_BAD_PARAMETER;
+    if (st != GF_OK) {
+        fmu_log_error(instance, "array_layout = %d must be 0, 1 or 2 and l = %g m finite and "
+                      ">= 1e-6 m", (int)d->array_layout, d->lever_arm_m);
+        return FMU_ERROR;
+    }
+    if (!gf_all_finite(d->array_bias_m_s2, VEHICLE_ARRAY_MAX)) {
+        fmu_log_error(instance, "parameter array_bias must be finite");
+        return FMU_ERROR;
+    }
+    d->profile.n_segments = (size_t)d->n_segments;
+    for (int32_t k = 0; k < d->n_segments; ++k) {
+        d->profile.segment[k].duration_s = d->seg_duration_s[k];
+        d->profile.segment[k].dspeed_m_s = d->seg_dspeed_m_s[k];
+        d->profile.segment[k].dheading_rate_rad_s = d->seg_dheading_rate_rad_s[k];
+        d->profile.segment[k].dheading_rad = d->seg_dheading_rad[k];
+    }
+    int bad = 0;
+    st = gf_vehicle_init(&d->vehicle, &d->profile, start_time_s, &d->out, &bad);
+    if (st != GF_OK) {
+        if (bad == 1)
+            fmu_log_error(instance, "parameter lat0 = %g rad: |lat0| must be < 89 deg",
+                          d->profile.lat0_rad);
+        else if (bad == 2)
+            fmu_log_error(instance, "parameter h0 = %g m must be in [-1000, 1e5] m", d->profile.h0_m);
+        else if (bad == 3)
+            fmu_log_error(instance, "parameter speed0 = %g m/s must be >= 0", d->profile.speed0_m_s);
+        else if (bad >= 100)
+            fmu_log_error(instance, "segment %d (seg_*[%d]): seg_duration must be > 0 and the "
+                          "speed must stay >= 0 (the seg_dspeed so far sum below -speed0)",
+                          bad - 100 + 1, bad - 100 + 1);
+        else
+            fmu_log_error(instance, "vehicle parameters refused: %s (a non-finite start value "
+                          "or segment?)", gf_status_string(st));
+        return FMU_ERROR;
+    }
+    st = sense(d, 0.0);
+    if (st != GF_OK) {
+        fmu_log_error(instance, "sensor outputs at the start failed: %s", gf_status_string(st));
+        return FMU_ERROR;
+    }
+    return FMU_OK;
+}
+
+FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double h_s)
+{
+    gf_vehicle_state next = d->vehicle;
+    if (d->drive == 1) {
+        const gf_status st = gf_vehicle_command(&next, d->speed_cmd_m_s, d->heading_rate_cmd_rad_s,
+                                                d->command_time_s);
+        if (st != GF_OK) {
+            fmu_log_error(instance, "t = %.9g s: input speed_cmd = %g m/s must be finite and "
+                          ">= 0, heading_rate_cmd = %g rad/s finite", t_s, d->speed_cmd_m_s,
+                          d->heading_rate_cmd_rad_s);
+            return FMU_ERROR;
+        }
+    }
+    /* the vehicle's clock is the master's: step to t + h, starting from t */
+    next.time_s = t_s;
+    gf_vehicle_sample out;
+    gf_status st = gf_vehicle_step(&next, t_s + h_s, &out);
+    if (st != GF_OK) {
+        fmu_log_error(instance, "t = %.9g s: vehicle step failed: %s", t_s,
+                      st == GF_ERR_DIVERGED ? "the vehicle reached |latitude| = 89 deg"
+                                            : gf_status_string(st));
+        return FMU_ERROR;
+    }
+    const gf_vehicle_sample previous = d->out;
+    d->out = out;
+    st = sense(d, h_s);
+    if (st != GF_OK) {
+        d->out = previous;
+        fmu_log_error(instance, "t = %.9g s: sensor outputs failed: %s", t_s, gf_status_string(st));
+        return FMU_ERROR;
+    }
+    d->vehicle = next;
+    return FMU_OK;
+}

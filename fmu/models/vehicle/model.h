@@ -1,0 +1,35 @@
+/* model.h — data of the vehicle FMU (variables: model_spec.py). */
+#ifndef VEHICLE_MODEL_H
+#define VEHICLE_MODEL_H
+
+#include <stdint.h>
+
+#include "gf_accel_array.h"
+#include "gf_imu_error.h"
+#include "gf_vehicle.h"
+#include "imu_params.h"
+
+#define VEHICLE_ARRAY_MAX 12
+
+typedef struct ModelData {
+    /* parameters */
+    gf_vehicle_profile profile;           /* start values; segments from the seg_* arrays */
+    int32_t n_segments, drive, imu_errors, array_layout;
+    double seg_duration_s[GF_VEHICLE_MAX_SEGMENTS], seg_dspeed_m_s[GF_VEHICLE_MAX_SEGMENTS];
+    double seg_dheading_rate_rad_s[GF_VEHICLE_MAX_SEGMENTS];
+    double seg_dheading_rad[GF_VEHICLE_MAX_SEGMENTS];
+    double command_time_s, lever_arm_m, array_bias_m_s2[VEHICLE_ARRAY_MAX];
+    FmuImuParams imu_params;
+    /* inputs */
+    double speed_cmd_m_s, heading_rate_cmd_rad_s;
+    /* outputs */
+    gf_vehicle_sample out;                /* truth (and ideal sensors) */
+    double gyro_rad_s[3], accel_m_s2[3], dtheta_rad[3], dv_m_s[3];
+    double A_m_s2[VEHICLE_ARRAY_MAX];
+    /* internal */
+    gf_vehicle_state vehicle;
+    gf_imu_errors imu;
+    gf_array_geometry array;
+} ModelData;
+
+#endif /* VEHICLE_MODEL_H */

@@ -1,0 +1,101 @@
+"""Interface of the vehicle FMU (gf_vehicle): a level ground vehicle following a profile
+of segments or driven by speed / heading-rate commands, with the outputs of the sensors
+riding it — an IMU (rates and increments, optionally corrupted by the IMU error model)
+and an accelerometer array of a chosen layout. fmu/tools/fmugen.py makes the FMI 2.0
+and 3.0 modelDescription.xml and the C table from it."""
+
+import math
+import pathlib
+import runpy
+
+_COMMON = runpy.run_path(str(pathlib.Path(__file__).resolve().parent.parent / "common" / "nav_params.py"))
+MAX_SEGMENTS = 32  # GF_VEHICLE_MAX_SEGMENTS
+# default profile: seed 001's vehicle test with a 60 s alignment (VehicleProfile.seed001(60))
+_DEFAULT = [(60.0, 0.0, 0.0, 0.0), (20.0, 15.0, 0.0, 0.0), (220.0, 0.0, 0.0, 0.0),
+            (30.0, 0.0, 0.0, math.pi), (210.0, 0.0, 0.0, 0.0), (30.0, 0.0, 0.0, math.pi)]
+
+
+def _column(k):
+    return [row[k] for row in _DEFAULT] + [0.0] * (MAX_SEGMENTS - len(_DEFAULT))
+
+
+def _p(name, unit, start, field, description, type_="Float64", shape=()):
+    d = dict(name=name, causality="parameter", variability="fixed", type=type_, shape=shape,
+             start=start, field=field, description=description)
+    if unit:
+        d["unit"] = unit
+    return d
+
+
+def _out(name, unit, shape, field, description):
+    d = dict(name=name, causality="output", variability="discrete", type="Float64",
+             shape=shape, field=field, description=description)
+    if unit:
+        d["unit"] = unit
+    return d
+
+
+MODEL = dict(
+    model_name="gfins.Vehicle",
+    model_identifier="gfins_vehicle",
+    description=(
+        "Level ground vehicle on WGS-84 following a segment profile (speed, heading-rate "
+        "and heading changes by C2 smooth steps; seed 001's vehicle test by default) or "
+        "speed / heading-rate commands, with its true pose and the exact outputs of an "
+        "IMU and an accelerometer array riding it. The outputs after doStep(t, h) "
+        "describe t + h; increments cover (t, t + h]."),
+    default_experiment=dict(start_time=0.0, stop_time=600.0, step_size=0.01),
+    variables=[
+        _p("lat0", "rad", 0.5235987755982988, "profile.lat0_rad", "Start latitude, |lat0| < 89 deg"),
+        _p("lon0", "rad", 1.9896753472735356, "profile.lon0_rad", "Start longitude"),
+        _p("h0", "m", 100.0, "profile.h0_m", "Height (constant), -1000 .. 1e5 m"),
+        _p("heading0", "rad", 0.0, "profile.heading0_rad", "Start heading, clockwise from north"),
+        _p("speed0", "m/s", 0.0, "profile.speed0_m_s", "Start speed, >= 0"),
+        _p("heading_rate0", "rad/s", 0.0, "profile.heading_rate0_rad_s",
+           "Start heading rate (clockwise positive; a circle: -speed/radius turns left)"),
+        _p("n_segments", None, len(_DEFAULT), "n_segments",
+           f"Number of profile segments used, 0 .. {MAX_SEGMENTS}", type_="Int32"),
+        _p("seg_duration", "s", _column(0), "seg_duration_s", "Segment durations, > 0",
+           shape=(MAX_SEGMENTS,)),
+        _p("seg_dspeed", "m/s", _column(1), "seg_dspeed_m_s",
+           "Speed change over each segment (smooth step)", shape=(MAX_SEGMENTS,)),
+        _p("seg_dheading_rate", "rad/s", _column(2), "seg_dheading_rate_rad_s",
+           "Heading-rate change over each segment (smooth step)", shape=(MAX_SEGMENTS,)),
+        _p("seg_dheading", "rad", _column(3), "seg_dheading_rad",
+           "Heading change over each segment on top of the rate (smooth step; pi: a 180 deg "
+           "turn to the right)", shape=(MAX_SEGMENTS,)),
+        _p("drive", None, 0, "drive", "0: follow the profile; 1: follow the inputs speed_cmd "
+           "and heading_rate_cmd", type_="Int32"),
+        _p("command_time", "s", 1.0, "command_time_s",
+           "drive = 1: a command is reached over this time (smooth step), > 0"),
+        _p("imu_errors", None, 0, "imu_errors", "1: the IMU outputs carry the error model "
+           "below (applied to rates; to increments as mean rates over the step)", type_="Int32"),
+        *_COMMON["imu_error_parameters"](),
+        _p("array_layout", None, 1, "array_layout", "Accelerometer array: 0 cube6 (6 outputs), "
+           "1 qin9 (9), 2 twelve (12); A holds the layout's outputs first, zeros after",
+           type_="Int32"),
+        _p("l", "m", 0.1, "lever_arm_m", "Lever arm of the array layout, >= 1e-6 m"),
+        _p("array_bias", "m/s2", 0.0, "array_bias_m_s2", "Bias of each array accelerometer",
+           shape=(12,)),
+        dict(name="speed_cmd", causality="input", variability="continuous", type="Float64",
+             shape=(), unit="m/s", start=0.0, field="speed_cmd_m_s",
+             description="drive = 1: commanded speed, >= 0"),
+        dict(name="heading_rate_cmd", causality="input", variability="continuous",
+             type="Float64", shape=(), unit="rad/s", start=0.0, field="heading_rate_cmd_rad_s",
+             description="drive = 1: commanded heading rate (clockwise positive)"),
+        _out("q", None, (4,), "out.q_bn", "True attitude quaternion q_b^n"),
+        _out("euler", "rad", (3,), "out.euler_rad", "True heading [0, 2 pi), pitch, roll"),
+        _out("v", "m/s", (3,), "out.v_n_m_s", "True velocity, East-North-Up"),
+        _out("lat", "rad", (), "out.lat_rad", "True latitude"),
+        _out("lon", "rad", (), "out.lon_rad", "True longitude"),
+        _out("h", "m", (), "out.h_m", "True height"),
+        _out("gyro_rate", "rad/s", (3,), "gyro_rad_s", "IMU angular rate w_ib^b (with errors "
+             "when imu_errors = 1)"),
+        _out("specific_force", "m/s2", (3,), "accel_m_s2", "IMU specific force f^b"),
+        _out("dtheta", "rad", (3,), "dtheta_rad", "IMU angle increment over the last step"),
+        _out("dv", "m/s", (3,), "dv_m_s", "IMU velocity increment over the last step"),
+        _out("angular_accel", "rad/s2", (3,), "out.gyro_dot_rad_s2", "True d w_ib^b / dt"),
+        _out("A", "m/s2", (12,), "A_m_s2", "Accelerometer-array outputs (layout array_layout)"),
+        _out("time_s", "s", (), "out.time_s", "Time that the outputs describe"),
+    ],
+)

@@ -91,7 +91,8 @@ class _Slave:
     """One instance of a shipped FMU through fmpy's FMU2Slave / FMU3Slave, with
     variables addressed by their FMI 3.0 names (FMI 2.0 scalars ``x[i]`` are gathered)."""
 
-    def __init__(self, path: pathlib.Path, fmi_version: int, log: _Log, logging_on: bool):
+    def __init__(self, path: pathlib.Path, fmi_version: int, log: _Log, logging_on: bool,
+                 instance_name: str | None = None):
         from fmpy import extract, read_model_description
         self.version = fmi_version
         self.md = read_model_description(str(path))
@@ -104,7 +105,7 @@ class _Slave:
                                    fmi2CallbackLoggerTYPE)
             self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=self.unzipdir,
                                    modelIdentifier=self.md.coSimulation.modelIdentifier,
-                                   instanceName=self.md.coSimulation.modelIdentifier)
+                                   instanceName=instance_name or self.md.coSimulation.modelIdentifier)
             cb = fmi2CallbackFunctions()
             # No fmpy.logging.addLoggerProxy: it keeps one global logger for the whole
             # process, which would outlive this object. The FMU passes the formatted text
@@ -122,7 +123,7 @@ class _Slave:
             from fmpy.fmi3 import FMU3Slave
             self.slave = FMU3Slave(guid=self.md.instantiationToken, unzipDirectory=self.unzipdir,
                                    modelIdentifier=self.md.coSimulation.modelIdentifier,
-                                   instanceName=self.md.coSimulation.modelIdentifier)
+                                   instanceName=instance_name or self.md.coSimulation.modelIdentifier)
             self.slave.instantiate(loggingOn=logging_on,
                                    logMessage=lambda env, status, cat, msg: log.add(status, cat, msg))
 

@@ -99,16 +99,19 @@ class VehicleProfile:
         return p
 
     def as_parameters(self) -> dict:
-        """The profile as start values of the vehicle FMU (FMI 2.0 scalar names)."""
-        out = {"lat0": self.lat0_rad, "lon0": self.lon0_rad, "h0": self.h0_m,
-               "heading0": self.heading0_rad, "speed0": self.speed0_m_s,
-               "heading_rate0": self.heading_rate0_rad_s, "n_segments": len(self.segments)}
-        for k, s in enumerate(self.segments):
-            out[f"seg_duration[{k + 1}]"] = s.duration_s
-            out[f"seg_dspeed[{k + 1}]"] = s.dspeed_m_s
-            out[f"seg_dheading_rate[{k + 1}]"] = s.dheading_rate_rad_s
-            out[f"seg_dheading[{k + 1}]"] = s.dheading_rad
-        return out
+        """The profile as start values of the vehicle FMU (FMI 3.0 names; the segment
+        arrays padded with zeros to MAX_SEGMENTS)."""
+        def column(attr):
+            vals = [float(getattr(s, attr)) for s in self.segments]
+            return vals + [0.0] * (MAX_SEGMENTS - len(vals))
+        if len(self.segments) > MAX_SEGMENTS:
+            raise ValueError(f"at most {MAX_SEGMENTS} segments; got {len(self.segments)}")
+        return {"lat0": self.lat0_rad, "lon0": self.lon0_rad, "h0": self.h0_m,
+                "heading0": self.heading0_rad, "speed0": self.speed0_m_s,
+                "heading_rate0": self.heading_rate0_rad_s, "n_segments": len(self.segments),
+                "seg_duration": column("duration_s"), "seg_dspeed": column("dspeed_m_s"),
+                "seg_dheading_rate": column("dheading_rate_rad_s"),
+                "seg_dheading": column("dheading_rad")}
 
 
 _BAD = {1: "lat0_rad: |latitude| must be < 89 deg", 2: "h0_m must be in [-1000, 1e5] m",

@@ -1,0 +1,651 @@
+"""Co-simulation of the vehicle FMU with a navigator FMU, three ways:
+
+* :class:`CoSimulation` — a Python master on fmpy's FMU2Slave / FMU3Slave (Jacobi or
+  Gauss-Seidel ordering, roll-back through FMU states, progress bar);
+* :func:`write_ssp` / :func:`run_ssp` — an SSP 1.0 file (SystemStructure.ssd, the FMI
+  2.0 FMUs, a parameter set) that fmpy's SSP simulator and other SSP tools run;
+* :func:`write_container` / :func:`run_container` — one container FMU (fmpy's
+  container_fmu) holding both FMUs, for tools that take a single FMU.
+
+A :class:`System` says which FMUs take part, with which start values, and how they are
+connected; :func:`vehicle_navigation` builds the usual one (vehicle -> navigator).
+:func:`direct_navigation` runs the navigator of a system through cffi on given sensor
+data: the reference that every co-simulated result is compared with.
+
+Sampling. Every shipped FMU holds, after ``doStep(t, h)``, outputs describing one time:
+the vehicle's describe t + h (``time_s`` output), a navigator's the sample it took at t.
+A master must therefore hand a navigator the vehicle's outputs *at* t, i.e. pass the
+outputs read after the previous step (Jacobi), or step the navigator before the vehicle
+(Gauss-Seidel order ``["navigator", "vehicle"]``). See docs/cosim.md.
+"""
+from __future__ import annotations
+
+import pathlib
+import shutil
+import tempfile
+import xml.etree.ElementTree as ET
+import zipfile
+from dataclasses import dataclass, field
+from typing import Callable, Iterable, Mapping
+
+import numpy as np
+
+from gfins_fmi.fmu import MODELS, FmuRunError, _Log, _Slave, fmu_path
+
+__all__ = ["System", "Connection", "vehicle_navigation", "CoSimulation", "write_ssp",
+           "run_ssp", "write_container", "run_container", "direct_navigation",
+           "NAVIGATORS"]
+
+#: navigator name -> (FMU model, vehicle outputs connected to the navigator inputs)
+NAVIGATORS = {"gfnav_cube6": ("gfnav_cube6", [("A", "A", 6)]),
+              "gfnav_qin9": ("gfnav_qin9", [("A", "A", 9)]),
+              "gfnav_12": ("gfnav_12", [("A", "A", 12)]),
+              "sins": ("sins", [("dtheta", "dtheta", 3), ("dv", "dv", 3)])}
+_LAYOUT = {"gfnav_cube6": 0, "gfnav_qin9": 1, "gfnav_12": 2}
+
+
+@dataclass(frozen=True)
+class Connection:
+    """``size`` values from output ``source_var`` of ``source`` to input ``dest_var`` of
+    ``dest`` (FMI 3.0 names; element i is ``name[i + 1]`` in FMI 2.0). An array output
+    longer than the input (the vehicle's A has 12 slots) is connected element-wise for
+    the first ``size`` elements."""
+    source: str
+    source_var: str
+    dest: str
+    dest_var: str
+    size: int = 1
+
+    def scalars(self) -> list[tuple[str, str]]:
+        """(source name, dest name) pairs of FMI 2.0 scalar variables."""
+        if self.size == 1 and "[" not in self.source_var:
+            return [(self.source_var, self.dest_var)]
+        return [(f"{self.source_var}[{i}]", f"{self.dest_var}[{i}]") for i in range(1, self.size + 1)]
+
+
+@dataclass
+class System:
+    """FMUs, their start values and their connections.
+
+    Attributes
+    ----------
+    components : dict name -> (model, parameters)
+        ``model`` one of :data:`gfins_fmi.fmu.MODELS`; parameters by FMI 3.0 name
+        (arrays as sequences).
+    connections : list of Connection
+    outputs : dict name -> list of variable names
+        What the runs record (FMI 3.0 names).
+    step_s, stop_s : float
+        Communication step and stop time (s); start time 0 unless given to a run.
+    """
+    components: dict
+    connections: list
+    outputs: dict = field(default_factory=dict)
+    step_s: float = 0.01
+    stop_s: float = 60.0
+
+    def scalar_parameters(self, name: str) -> dict:
+        """Start values of one component as FMI 2.0 scalars (``x[1]`` ...)."""
+        out = {}
+        for key, value in self.components[name][1].items():
+            arr = np.asarray(value)
+            if arr.ndim == 0:
+                out[key] = value.item() if isinstance(value, np.generic) else value
+            else:
+                for i, x in enumerate(arr.ravel(), 1):
+                    out[f"{key}[{i}]"] = x.item()
+        return out
+
+
+def vehicle_navigation(navigator: str = "gfnav_qin9", profile=None, *, step_s: float = 0.01,
+                       stop_s: float | None = None, l_m: float = 0.1, skip_steps: int = 0,
+                       imu_errors=None, array_bias_m_s2=None, navigator_parameters: Mapping | None = None,
+                       hold_height: bool = True) -> System:
+    """The vehicle FMU connected to a navigator FMU.
+
+    Parameters
+    ----------
+    navigator : {"gfnav_cube6", "gfnav_qin9", "gfnav_12", "sins"}
+        Gyro-free navigator (array outputs A connected) or strapdown INS (increments
+        dtheta, dv connected; input_mode 0).
+    profile : gfins_fmi.vehicle.VehicleProfile, optional
+        The manoeuvre (default: seed 001's vehicle test with a 60 s alignment).
+    step_s, stop_s : float
+        Communication step (s) and stop time (s; default: end of the profile + 30 s).
+    l_m : float
+        Lever arm of the array layout (gyro-free navigators).
+    skip_steps : int
+        Navigator doSteps to ignore at the start (1 under fmpy's SSP simulator, which
+        passes no outputs before the first step); the navigator starts from the true
+        state at ``skip_steps * step_s`` (from the C vehicle model).
+    imu_errors : gfins_fmi.ImuErrors, optional
+        Applied by the vehicle to its IMU outputs (not compensated by the navigator:
+        pass ``navigator_parameters=dict(imu_comp=1, **imu_errors.fmu_parameters())``
+        to compensate).
+    array_bias_m_s2 : (n,) optional
+        Biases of the array accelerometers.
+    navigator_parameters : mapping, optional
+        More navigator start values (FMI 3.0 names), e.g. ``{"strategy": 3}``.
+    hold_height : bool
+        Hold the navigator's height at the vehicle's (a ground vehicle): vertical_mode 1.
+    """
+    from gfins_fmi.sins import NavState
+    from gfins_fmi.vehicle import VehicleProfile, simulate_vehicle
+    if navigator not in NAVIGATORS:
+        raise ValueError(f"navigator must be one of {sorted(NAVIGATORS)}; got {navigator!r}")
+    if int(skip_steps) != skip_steps or skip_steps < 0:
+        raise ValueError(f"skip_steps must be an integer >= 0; got {skip_steps!r}")
+    profile = profile or VehicleProfile.seed001(align_s=60.0)
+    stop_s = profile.duration_s() + 30.0 if stop_s is None else float(stop_s)
+    model, links = NAVIGATORS[navigator]
+    truth = simulate_vehicle(profile, skip_steps * step_s, step_s)
+    start = NavState.from_trajectory(truth, int(skip_steps))
+    veh = profile.as_parameters()
+    veh["l"] = float(l_m)
+    if navigator in _LAYOUT:
+        veh["array_layout"] = _LAYOUT[navigator]
+    if imu_errors is not None:
+        veh.update(imu_errors=1, **imu_errors.fmu_parameters())
+    if array_bias_m_s2 is not None:
+        b = np.zeros(12)
+        b[:len(np.ravel(array_bias_m_s2))] = np.ravel(array_bias_m_s2)
+        veh["array_bias"] = b.tolist()
+    nav = {"q0": start.q_bn.tolist(), "v0": start.v_n_m_s.tolist(), "lat0": start.lat_rad,
+           "lon0": start.lon_rad, "h0": start.h_m, "skip_steps": int(skip_steps)}
+    if hold_height:
+        nav.update(vertical_mode=1, hold_height=profile.h0_m)
+    if navigator in _LAYOUT:
+        nav.update(l=float(l_m), omega_init=truth.gyro_rad_s[int(skip_steps)].tolist())
+    nav.update(navigator_parameters or {})
+    conns = [Connection("vehicle", a, "navigator", b, n) for a, b, n in links]
+    outputs = {"vehicle": ["time_s", "lat", "lon", "h", "v", "euler", "q"] + [c.source_var for c in conns],
+               "navigator": ["time_s", "lat", "lon", "h", "v", "euler", "q"]}
+    return System({"vehicle": ("vehicle", veh), "navigator": (model, nav)}, conns, outputs,
+                  float(step_s), stop_s)
+
+
+# ---- Python master --------------------------------------------------------------------
+class CoSimulation:
+    """A co-simulation master on fmpy's FMU2Slave / FMU3Slave.
+
+    Parameters
+    ----------
+    system : System
+    fmi_version : {2, 3}
+    algorithm : {"jacobi", "gauss-seidel"}
+        Jacobi: at each communication point every input takes the outputs held at that
+        point, then every FMU steps. Gauss-Seidel: the FMUs step one after the other in
+        ``order``, each taking the outputs its sources hold at that moment (already
+        stepped ones: the new outputs).
+    order : list of str, optional
+        Gauss-Seidel order (default: the order of ``system.components``).
+    logging_on : bool
+        Debug logging of the FMUs (errors are always collected).
+    echo : callable, optional
+        Receives every log line as it arrives.
+
+    Notes
+    -----
+    After initialization every connection is propagated once, so the first step sees
+    the outputs at the start time. ``get_state``/``set_state`` roll every FMU and the
+    master's clock back together; ``serialize_state``/``deserialize_state`` give and
+    take bytes.
+    """
+
+    def __init__(self, system: System, fmi_version: int = 2, algorithm: str = "jacobi",
+                 order: list | None = None, logging_on: bool = False,
+                 echo: Callable[[str], None] | None = None):
+        if algorithm not in ("jacobi", "gauss-seidel"):
+            raise ValueError(f"algorithm must be 'jacobi' or 'gauss-seidel'; got {algorithm!r}")
+        if fmi_version not in (2, 3):
+            raise ValueError(f"fmi_version must be 2 or 3; got {fmi_version!r}")
+        self.system = system
+        self.version = fmi_version
+        self.algorithm = algorithm
+        self.order = list(order or system.components)
+        if sorted(self.order) != sorted(system.components):
+            raise ValueError(f"order must list every component once: {sorted(system.components)}")
+        self.log = _Log(echo)
+        self.slaves: dict[str, _Slave] = {}
+        self.time_s = 0.0
+        try:
+            for name, (model, _) in system.components.items():
+                if model not in MODELS:
+                    raise ValueError(f"component {name}: unknown model {model!r}")
+                self.slaves[name] = _Slave(fmu_path(model, fmi_version), fmi_version, self.log,
+                                           logging_on, instance_name=name)
+            self._links = []     # (dest, dest refs, source, source refs, n)
+            for c in system.connections:
+                for comp in (c.source, c.dest):
+                    if comp not in self.slaves:
+                        raise ValueError(f"connection {c}: no component {comp!r}")
+                src = self._refs(c.source, c.source_var, c.size)
+                dst = self._refs(c.dest, c.dest_var, c.size)
+                self._links.append((c.dest, dst, c.source, src))
+        except Exception:
+            self.close()
+            raise
+
+    def _refs(self, comp: str, var: str, size: int):
+        """(value refs, count to read, count used) for the first ``size`` elements."""
+        s = self.slaves[comp]
+        vrs, n, _ = s.refs(var)
+        if size > n:
+            raise ValueError(f"{comp}.{var} has {n} elements; the connection needs {size}")
+        if self.version == 2:
+            return vrs[:size], size, size
+        return vrs, n, size  # FMI 3.0 reads whole arrays; the first `size` are used
+
+    def _get(self, comp, refs):
+        s = self.slaves[comp].slave
+        vrs, n, size = refs
+        values = s.getReal(vrs) if self.version == 2 else s.getFloat64(vrs, n)
+        return values if size == n else values[:size]
+
+    def _set(self, comp, refs, values):
+        s = self.slaves[comp].slave
+        (s.setReal if self.version == 2 else s.setFloat64)(refs[0], values)
+
+    def _transfer(self, dest: str | None = None):
+        for d, dst, src_comp, src in self._links:
+            if dest is None or d == dest:
+                self._set(d, dst, self._get(src_comp, src))
+
+    def _call(self, what: str, fn, *args, **kwargs):
+        from fmpy.fmi1 import FMICallException
+        try:
+            return fn(*args, **kwargs)
+        except FMICallException as exc:
+            raise FmuRunError(f"{what} failed: {exc}. FMU log: "
+                              f"{'; '.join(self.log.messages[-5:]) or 'no message logged'}",
+                              self.log.messages) from exc
+
+    def initialize(self, start_s: float = 0.0, stop_s: float | None = None) -> None:
+        """Set the start values, initialise every FMU, propagate the connections once."""
+        stop = self.system.stop_s if stop_s is None else stop_s
+        for name, (_, params) in self.system.components.items():
+            self._call(f"initialising {name}", self.slaves[name].initialize, start_s, stop, params)
+        self.time_s = float(start_s)
+        self._start_s = float(start_s)
+        self._steps = 0
+        self._transfer()
+
+    def step(self, h_s: float) -> None:
+        """One communication step of every FMU from the current time."""
+        t = self.time_s
+        if self.algorithm == "jacobi":
+            self._transfer()
+            for name in self.order:
+                self._call(f"{name}.doStep at t = {t:.9g} s", self.slaves[name].slave.doStep,
+                           currentCommunicationPoint=t, communicationStepSize=h_s)
+        else:
+            for name in self.order:
+                self._transfer(name)
+                self._call(f"{name}.doStep at t = {t:.9g} s", self.slaves[name].slave.doStep,
+                           currentCommunicationPoint=t, communicationStepSize=h_s)
+        self._steps += 1
+        self.time_s = t + h_s
+
+    def read(self, comp: str, var: str) -> list:
+        """Current value(s) of a variable (FMI 3.0 name)."""
+        return self.slaves[comp].get(var)
+
+    def run(self, stop_s: float | None = None, step_s: float | None = None,
+            progress: bool = False) -> dict:
+        """Step with a fixed step to ``stop_s`` and record ``system.outputs`` after the
+        initialization and after every step.
+
+        Returns
+        -------
+        dict "comp.var" -> ndarray (n_rows, size), plus "time" (n_rows,): the master's
+        time when the row was read.
+        """
+        h = self.system.step_s if step_s is None else step_s
+        stop = self.system.stop_s if stop_s is None else stop_s
+        n = int(round((stop - self.time_s) / h))
+        refs = {(c, v): self.slaves[c].refs(v) for c, vs in self.system.outputs.items() for v in vs}
+        rows = {k: np.empty((n + 1, r[1])) for k, r in refs.items()}
+        times = np.empty(n + 1)
+        t0 = self.time_s
+
+        def record(i):
+            times[i] = self.time_s
+            for (c, v), (vrs, cnt, _) in refs.items():
+                rows[(c, v)][i] = self._get(c, (vrs, cnt, cnt))
+        bar = None
+        if progress:
+            from tqdm import tqdm
+            bar = tqdm(total=n, unit="step", unit_scale=True, desc="co-simulation")
+        try:
+            record(0)
+            for k in range(n):
+                # communication points t0 + k h (computed, not accumulated)
+                self.time_s = t0 + k * h
+                self.step(h)
+                self.time_s = t0 + (k + 1) * h
+                record(k + 1)
+                if bar and k % 1000 == 999:
+                    bar.update(1000)
+        finally:
+            if bar:
+                bar.update(n - bar.n)
+                bar.close()
+        out = {f"{c}.{v}": a for (c, v), a in rows.items()}
+        out["time"] = times
+        return out
+
+    # -- roll-back ------------------------------------------------------------------------
+    def get_state(self) -> dict:
+        """FMU states of every component and the master's clock."""
+        st = {name: self._call(f"{name}.getFMUState",
+                               s.slave.getFMUstate if self.version == 2 else s.slave.getFMUState)
+              for name, s in self.slaves.items()}
+        return {"time_s": self.time_s, "fmus": st}
+
+    def set_state(self, state: dict) -> None:
+        for name, s in self.slaves.items():
+            fn = s.slave.setFMUstate if self.version == 2 else s.slave.setFMUState
+            self._call(f"{name}.setFMUState", fn, state["fmus"][name])
+        self.time_s = state["time_s"]
+
+    def free_state(self, state: dict) -> None:
+        for name, s in self.slaves.items():
+            fn = s.slave.freeFMUstate if self.version == 2 else s.slave.freeFMUState
+            fn(state["fmus"][name])
+
+    def serialize_state(self, state: dict) -> dict:
+        """The state as bytes per component (can be stored and restored later)."""
+        out = {}
+        for name, s in self.slaves.items():
+            fn = s.slave.serializeFMUstate if self.version == 2 else s.slave.serializeFMUState
+            out[name] = bytes(self._call(f"{name}.serialize", fn, state["fmus"][name]))
+        return {"time_s": state["time_s"], "fmus": out}
+
+    def deserialize_state(self, data: dict) -> dict:
+        st = {}
+        for name, s in self.slaves.items():
+            fn = s.slave.deSerializeFMUstate if self.version == 2 else s.slave.deserializeFMUState
+            st[name] = self._call(f"{name}.deserialize", fn, data["fmus"][name])
+        return {"time_s": data["time_s"], "fmus": st}
+
+    def close(self) -> None:
+        for s in self.slaves.values():
+            s.close()
+        self.slaves = {}
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+# ---- SSP ------------------------------------------------------------------------------
+_SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
+_SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
+_SSV = "http://ssp-standard.org/SSP1/SystemStructureParameterValues"
+
+
+def _fmu_variables(model: str, fmi_version: int) -> dict:
+    from fmpy import read_model_description
+    md = read_model_description(str(fmu_path(model, fmi_version)))
+    return {v.name: v for v in md.modelVariables}
+
+
+def write_ssp(system: System, path: str | pathlib.Path, name: str = "VehicleNavigation") -> pathlib.Path:
+    """Write ``system`` as an SSP 1.0 file with the FMI 2.0 FMUs (scalar connections).
+
+    The archive holds SystemStructure.ssd (components, connectors, connections, a
+    system-level ParameterBinding, the default experiment), resources/<fmu>.fmu and
+    resources/parameters.ssv (the start values, named ``component.variable``).
+    Connectors: every connected variable, the recorded outputs and the parameters set.
+    """
+    ET.register_namespace("ssd", _SSD)
+    ET.register_namespace("ssc", _SSC)
+    ET.register_namespace("ssv", _SSV)
+    path = pathlib.Path(path)
+    root = ET.Element(f"{{{_SSD}}}SystemStructureDescription", version="1.0", name=name)
+    sysel = ET.SubElement(root, f"{{{_SSD}}}System", name=name,
+                          description="gfins_fmi: vehicle FMU connected to a navigator FMU")
+    binding = ET.SubElement(ET.SubElement(sysel, f"{{{_SSD}}}ParameterBindings"),
+                            f"{{{_SSD}}}ParameterBinding", source="resources/parameters.ssv")
+    del binding
+    elements = ET.SubElement(sysel, f"{{{_SSD}}}Elements")
+    pset = ET.Element(f"{{{_SSV}}}ParameterSet", version="1.0", name=f"{name} start values")
+    params_el = ET.SubElement(pset, f"{{{_SSV}}}Parameters")
+    for comp, (model, _) in system.components.items():
+        variables = _fmu_variables(model, 2)
+        el = ET.SubElement(elements, f"{{{_SSD}}}Component", name=comp,
+                           type="application/x-fmu-sharedlibrary",
+                           source=f"resources/{MODELS[model]}.fmu")
+        conns = ET.SubElement(el, f"{{{_SSD}}}Connectors")
+        names: dict[str, str] = {}
+        for c in system.connections:
+            for a, b in c.scalars():
+                if c.source == comp:
+                    names[a] = "output"
+                if c.dest == comp:
+                    names[b] = "input"
+        for var in system.outputs.get(comp, []):
+            for scalar in ([var] if var in variables else
+                           [k for k in variables if k.startswith(var + "[")]):
+                names.setdefault(scalar, "output")
+        params = system.scalar_parameters(comp)
+        for pname in params:
+            names.setdefault(pname, "parameter")
+        for cname, kind in names.items():
+            if cname not in variables:
+                raise ValueError(f"{comp} ({model}) has no variable {cname!r}")
+            con = ET.SubElement(conns, f"{{{_SSD}}}Connector", name=cname, kind=kind)
+            typ = variables[cname].type
+            ET.SubElement(con, f"{{{_SSC}}}{'Integer' if typ == 'Integer' else 'Real'}")
+        for pname, value in params.items():
+            p = ET.SubElement(params_el, f"{{{_SSV}}}Parameter", name=f"{comp}.{pname}")
+            if variables[pname].type == "Integer":
+                ET.SubElement(p, f"{{{_SSV}}}Integer", value=str(int(value)))
+            else:
+                ET.SubElement(p, f"{{{_SSV}}}Real", value=repr(float(value)))
+    connections = ET.SubElement(sysel, f"{{{_SSD}}}Connections")
+    for c in system.connections:
+        for a, b in c.scalars():
+            ET.SubElement(connections, f"{{{_SSD}}}Connection", startElement=c.source,
+                          startConnector=a, endElement=c.dest, endConnector=b)
+    ET.SubElement(root, f"{{{_SSD}}}DefaultExperiment", startTime="0.0",
+                  stopTime=repr(float(system.stop_s)))
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as z:
+        z.writestr("SystemStructure.ssd", ET.tostring(root, encoding="utf-8", xml_declaration=True))
+        z.writestr("resources/parameters.ssv", ET.tostring(pset, encoding="utf-8", xml_declaration=True))
+        for model in {m for m, _ in system.components.values()}:
+            z.write(fmu_path(model, 2), f"resources/{MODELS[model]}.fmu")
+    return path
+
+
+def run_ssp(path: str | pathlib.Path, stop_s: float, step_s: float) -> np.ndarray:
+    """Simulate an SSP written by :func:`write_ssp` with fmpy's SSP simulator.
+
+    fmpy applies a parameter set only when handed one, so the archive's
+    resources/parameters.ssv is read and passed. Returns fmpy's structured array: a
+    row per step, recorded *after* the step at ``time`` (so the vehicle's outputs in a
+    row describe ``time + step_s``, a navigator's the sample taken at ``time``).
+    """
+    from fmpy.ssp.simulation import simulate_ssp
+    from fmpy.ssp.ssd import read_ssv
+    params = read_ssv(str(path), resource="resources/parameters.ssv")
+    return simulate_ssp(str(path), start_time=0.0, stop_time=stop_s, step_size=step_s,
+                        parameter_set=params)
+
+
+# ---- container FMU --------------------------------------------------------------------
+def write_container(system: System, path: str | pathlib.Path, fmi_version: int = 2) -> pathlib.Path:
+    """One container FMU (fmpy.container_fmu) holding the system's FMUs of
+    ``fmi_version``: the connections inside, the recorded outputs exposed as outputs
+    ``comp_var`` (FMI 2.0: ``comp_var_i`` per element) and the system's start values as
+    parameters ``comp_param``; internal fixed step ``system.step_s``."""
+    from fmpy import read_model_description
+    from fmpy.container_fmu.cli import create_container_fmu
+    from fmpy.container_fmu.config import Component, Configuration
+    from fmpy.container_fmu.config import Connection as CConnection
+    from fmpy.model_description import CoSimulation as MdCoSim
+    from fmpy.model_description import (DefaultExperiment, Dimension, ModelDescription,
+                                        ModelVariable, Unknown)
+    real = "Real" if fmi_version == 2 else "Float64"
+    integer = "Integer" if fmi_version == 2 else "Int32"
+    comps, mds = {}, {}
+    for name, (model, _) in system.components.items():
+        fpath = pathlib.Path(fmu_path(model, fmi_version))
+        mds[name] = read_model_description(str(fpath))
+        comps[name] = Component(name=name, filename=fpath, modelDescription=mds[name])
+    var_of = {name: {v.name: v for v in md.modelVariables} for name, md in mds.items()}
+
+    def elements(comp, var, size=None):
+        """Component variables addressing var (FMI 2: scalars)."""
+        vs = var_of[comp]
+        if fmi_version == 3 or var in vs:
+            return [vs[var]]
+        n = size or sum(1 for k in vs if k.startswith(var + "["))
+        return [vs[f"{var}[{i}]"] for i in range(1, n + 1)]
+
+    connections = []
+    for c in system.connections:
+        if fmi_version == 3:
+            n_src = int(var_of[c.source][c.source_var].dimensions[0].start) \
+                if var_of[c.source][c.source_var].dimensions else 1
+            if n_src != c.size:
+                raise ValueError(f"FMI 3.0 container: {c.source}.{c.source_var} has {n_src} "
+                                 f"elements, {c.dest}.{c.dest_var} takes {c.size}; FMI 3.0 "
+                                 "connects whole arrays: use fmi_version=2 (scalars)")
+        connections.append(CConnection(comps[c.source], elements(c.source, c.source_var, c.size),
+                                       comps[c.dest], elements(c.dest, c.dest_var, c.size)))
+    # the container binary takes value reference 0 as time in FMI 2.0 too
+    variables = [ModelVariable(type=real, variability="continuous", causality="independent",
+                               name="time")]
+    mappings = {}
+    for comp, names in system.outputs.items():
+        for var in names:
+            for cv in elements(comp, var):
+                shape = [Dimension(start=d.start, valueReference=None) for d in cv.dimensions]
+                mv = ModelVariable(type=real if cv.type in ("Real", "Float64") else integer,
+                                   variability="discrete", causality="output", initial="calculated",
+                                   name=f"{comp}_{cv.name}".replace("[", "_").replace("]", ""),
+                                   dimensions=shape)
+                variables.append(mv)
+                mappings[mv] = [(comps[comp], cv)]
+    for comp, (_, params) in system.components.items():
+        for pname, value in params.items():
+            arr = np.ravel(np.asarray(value, dtype=float))
+            if fmi_version == 3 and arr.size > 1:
+                continue  # fmpy 0.3.x containers set array parameters element by element: refused
+            cvs = elements(comp, pname)
+            vals = arr if fmi_version == 2 else [arr]
+            for cv, val in zip(cvs, vals):
+                is_int = cv.type in ("Integer", "Int32")
+                val = np.ravel(val)
+                start = " ".join(str(int(x)) if is_int else repr(float(x)) for x in val)
+                mv = ModelVariable(type=integer if is_int else real, variability="fixed",
+                                   causality="parameter", initial="exact",
+                                   name=f"{comp}_{cv.name}".replace("[", "_").replace("]", ""),
+                                   start=start,
+                                   dimensions=[Dimension(start=d.start, valueReference=None)
+                                               for d in cv.dimensions])
+                variables.append(mv)
+                mappings[mv] = [(comps[comp], cv)]
+    md = ModelDescription(fmiVersion=f"{fmi_version}.0", modelName="gfins_vehicle_navigation",
+                          instantiationToken="{7a2c9f4e-3b1d-4e8a-9c6f-5d2b8e1a4f70}",
+                          defaultExperiment=DefaultExperiment(startTime="0", stopTime=str(system.stop_s),
+                                                              stepSize=str(system.step_s)),
+                          coSimulation=MdCoSim(fixedInternalStepSize=system.step_s),
+                          modelVariables=variables)
+    if fmi_version == 2:
+        md.guid = md.instantiationToken
+    md.outputs = [Unknown(variable=v) for v in variables if v.causality == "output"]
+    md.initialUnknowns = [Unknown(variable=v) for v in variables if v.causality == "output"]
+    config = Configuration(parallelDoStep=False, modelDescription=md,
+                           components=list(comps.values()), connections=connections,
+                           variableMappings=mappings)
+    path = pathlib.Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    import fmpy.container_fmu as cfmu
+    with tempfile.TemporaryDirectory() as tmp, _container_json_fixes(cfmu):
+        create_container_fmu(config, pathlib.Path(tmp), path)
+    return path
+
+
+class _container_json_fixes:
+    """Two workarounds for fmpy 0.3.x's container.json writer, active while a container
+    is written: (1) FMI 3.0 array connections have a numpy integer size that json cannot
+    write ("Object of type int64 is not JSON serializable"); (2) FMI 2.0 connections get
+    the FMI 2.0 type names (Real, Integer), which the container binary refuses
+    ("unknown variant `Real`"): renamed to Float64, Int32; (3) an array start value is
+    written as one string, which the container cannot parse: split into elements."""
+
+    def __init__(self, module):
+        self.module = module
+
+    def __enter__(self):
+        import json
+        import types
+
+        def dump(data, f, **kw):
+            for v in data.get("variables", []):  # (3) array start values: one per element
+                if "start" in v and len(v["start"]) == 1 and " " in str(v["start"][0]):
+                    v["start"] = str(v["start"][0]).split()
+            for c in data.get("connections", []):
+                c["variableType"] = {"Real": "Float64", "Integer": "Int32"}.get(
+                    c["variableType"], c["variableType"])
+            json.dump(data, f, default=int, **kw)
+        self.saved = self.module.json
+        self.module.json = types.SimpleNamespace(dump=dump)
+        return self
+
+    def __exit__(self, *exc):
+        self.module.json = self.saved
+
+
+def run_container(path: str | pathlib.Path, stop_s: float, step_s: float,
+                  outputs: Iterable[str] | None = None) -> np.ndarray:
+    """Simulate a container FMU with fmpy.simulate_fmu, one output row per step (row at
+    ``time`` read after the step that ends there)."""
+    from fmpy import simulate_fmu
+    return simulate_fmu(str(path), stop_time=stop_s, output_interval=step_s,
+                        output=list(outputs) if outputs else None)
+
+
+# ---- reference: the navigator through cffi --------------------------------------------
+def direct_navigation(system: System, sensors: Mapping[str, np.ndarray], start_time_s: float = 0.0):
+    """Run the system's navigator through cffi (no FMU) on sensor records.
+
+    Parameters
+    ----------
+    sensors : mapping
+        ``{"A": (n, n_sensors)}`` array samples at t_k = start + (skip + k) h for a
+        gyro-free navigator, or ``{"dtheta": (n, 3), "dv": (n, 3)}`` increments over
+        (t_(k-1), t_k], k = skip + 1 ... for the SINS.
+
+    Returns
+    -------
+    NavSolution
+        Row k: the state at t_(skip + k) (gyro-free: the sample; SINS: after the k-th
+        increment, row 0 the initial state).
+    """
+    from gfins_fmi.gyrofree import STRATEGIES, GyroFreeNavigator, layout
+    from gfins_fmi.sins import NavState, SinsConfig, Strapdown
+    model, nav = system.components["navigator"]
+    h = system.step_s
+    t0 = start_time_s + nav.get("skip_steps", 0) * h
+    init = NavState(np.asarray(nav["q0"], float), np.asarray(nav["v0"], float), nav["lat0"],
+                    nav["lon0"], nav["h0"], t0)
+    vertical = {0: "free", 1: "hold", 2: "baro"}[nav.get("vertical_mode", 0)]
+    cfg = dict(vertical=vertical, hold_height_m=nav.get("hold_height", 0.0))
+    if model.startswith("gfnav_"):
+        strategy = {v: k for k, v in STRATEGIES.items()}[nav.get("strategy",
+                                                              {"gfnav_cube6": 0, "gfnav_qin9": 1, "gfnav_12": 2}[model])]
+        g = layout(model[len("gfnav_"):], nav.get("l", 0.1))
+        navi = GyroFreeNavigator(g, init, strategy=strategy,
+                                 omega_init_rad_s=nav.get("omega_init", (0.0, 0.0, 0.0)),
+                                 accel_noise_m_s2=nav.get("accel_noise", 1e-4),
+                                 sins=SinsConfig(**cfg))
+        sol, _ = navi.run(sensors["A"], h)
+        return sol
+    sd = Strapdown(init, SinsConfig(input="increments", coning=bool(nav.get("coning", 1)), **cfg))
+    return sd.run(sensors["dtheta"], sensors["dv"], h)

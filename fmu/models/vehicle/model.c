@@ -37,12 +37,13 @@ static gf_status sense(ModelData *d, double dt_s)
                 mw[i] = x->dtheta_rad[i] / dt_s;
                 mf[i] = x->dv_m_s[i] / dt_s;
             }
-            st = gf_imu_apply(&d->imu, 1, mw, mf, NULL, mw, mf, &done);
+            double ew[3], ef[3]; /* gf_imu_apply's outputs must not alias its inputs */
+            st = gf_imu_apply(&d->imu, 1, mw, mf, NULL, ew, ef, &done);
             if (st != GF_OK)
                 return st;
             for (int i = 0; i < 3; ++i) {
-                d->dtheta_rad[i] = mw[i] * dt_s;
-                d->dv_m_s[i] = mf[i] * dt_s;
+                d->dtheta_rad[i] = ew[i] * dt_s;
+                d->dv_m_s[i] = ef[i] * dt_s;
             }
         }
     }
@@ -128,6 +129,7 @@ FmuStatus model_exit_initialization(FmuInstance *instance, ModelData *d, double 
                           "or segment?)", gf_status_string(st));
         return FMU_ERROR;
     }
+    d->active_cmd[0] = d->active_cmd[1] = NAN;
     st = sense(d, 0.0);
     if (st != GF_OK) {
         fmu_log_error(instance, "sensor outputs at the start failed: %s", gf_status_string(st));
@@ -139,7 +141,11 @@ FmuStatus model_exit_initialization(FmuInstance *instance, ModelData *d, double 
 FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double h_s)
 {
     gf_vehicle_state next = d->vehicle;
-    if (d->drive == 1) {
+    /* a command starts a smooth step when it changes; a held command is reached after
+     * command_time (re-anchoring every step would restart the smooth step each time) */
+    const int changed = !(d->speed_cmd_m_s == d->active_cmd[0]) ||
+                        !(d->heading_rate_cmd_rad_s == d->active_cmd[1]);
+    if (d->drive == 1 && changed) {
         const gf_status st = gf_vehicle_command(&next, d->speed_cmd_m_s, d->heading_rate_cmd_rad_s,
                                                 d->command_time_s);
         if (st != GF_OK) {
@@ -160,6 +166,10 @@ FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double 
         return FMU_ERROR;
     }
     const gf_vehicle_sample previous = d->out;
+    if (d->drive == 1) {
+        d->active_cmd[0] = d->speed_cmd_m_s;
+        d->active_cmd[1] = d->heading_rate_cmd_rad_s;
+    }
     d->out = out;
     st = sense(d, h_s);
     if (st != GF_OK) {

@@ -28,6 +28,7 @@ typedef struct ModelData {
     double A_m_s2[VEHICLE_ARRAY_MAX];
     /* internal */
     gf_vehicle_state vehicle;
+    double active_cmd[2];                 /* command being followed (drive = 1); NaN: none */
     gf_imu_errors imu;
     gf_array_geometry array;
 } ModelData;

@@ -67,7 +67,8 @@ MODEL = dict(
         _p("drive", None, 0, "drive", "0: follow the profile; 1: follow the inputs speed_cmd "
            "and heading_rate_cmd", type_="Int32"),
         _p("command_time", "s", 1.0, "command_time_s",
-           "drive = 1: a command is reached over this time (smooth step), > 0"),
+           "drive = 1: a new command is reached over this time from the step at which it "
+           "changes (C2 smooth step from the current speed and heading rate), > 0"),
         _p("imu_errors", None, 0, "imu_errors", "1: the IMU outputs carry the error model "
            "below (applied to rates; to increments as mean rates over the step)", type_="Int32"),
         *_COMMON["imu_error_parameters"](),

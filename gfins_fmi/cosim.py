@@ -303,15 +303,27 @@ class CoSimulation:
         h = self.system.step_s if step_s is None else step_s
         stop = self.system.stop_s if stop_s is None else stop_s
         n = int(round((stop - self.time_s) / h))
-        refs = {(c, v): self.slaves[c].refs(v) for c, vs in self.system.outputs.items() for v in vs}
-        rows = {k: np.empty((n + 1, r[1])) for k, r in refs.items()}
+        # one get call per component per row: all its recorded variables together
+        plan = []   # (component, (vrs, count, count), [(key, start, stop)])
+        rows = {}
+        for c, names in self.system.outputs.items():
+            vrs, parts, pos = [], [], 0
+            for v in names:
+                r, cnt, _ = self.slaves[c].refs(v)
+                vrs += r
+                parts.append(((c, v), pos, pos + cnt))
+                rows[(c, v)] = np.empty((n + 1, cnt))
+                pos += cnt
+            plan.append((c, (vrs, pos, pos), parts))
         times = np.empty(n + 1)
         t0 = self.time_s
 
         def record(i):
             times[i] = self.time_s
-            for (c, v), (vrs, cnt, _) in refs.items():
-                rows[(c, v)][i] = self._get(c, (vrs, cnt, cnt))
+            for c, refs_c, parts in plan:
+                values = self._get(c, refs_c)
+                for key, a, b in parts:
+                    rows[key][i] = values[a:b]
         bar = None
         if progress:
             from tqdm import tqdm

@@ -11,7 +11,8 @@ def _demo(args) -> int:
     res = demo.run(out_dir=args.out, duration_s=args.duration, dt_s=args.dt, l_m=args.lever_arm,
                    noise_m_s2=args.noise)
     ok = all(res[f"fmi{v}"]["problems"] == [] and res[f"fmi{v}"]["max_rel_diff"] <= 1e-12
-             for v in (2, 3)) and res["sins"]["fmu_max_rel_diff"] <= 1e-12
+             for v in (2, 3)) and res["sins"]["fmu_max_rel_diff"] <= 1e-12 \
+        and res["cosim"]["master_diff"] == 0.0 and res["cosim"]["ssp_diff"] == 0.0
     print("\ndemo " + ("passed: C core, FMUs and analysis agree" if ok else "FAILED"))
     return 0 if ok else 1
 
@@ -168,6 +169,57 @@ def _analyze(args) -> int:
     return 0
 
 
+def _cosim(args) -> int:
+    import time
+
+    import numpy as np
+
+    from gfins_fmi import cosim
+    from gfins_fmi.vehicle import VehicleProfile
+    out = pathlib.Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    profile = VehicleProfile.seed001(align_s=args.align)
+    system = cosim.vehicle_navigation(args.navigator, profile, step_s=args.step, stop_s=args.seconds)
+    t0 = time.perf_counter()
+    with cosim.CoSimulation(system, fmi_version=args.fmi) as m:
+        m.initialize()
+        r = m.run(progress=not args.quiet)
+    wall = time.perf_counter() - t0
+    e = cosim.navigation_errors(r)
+    d = cosim.differences_from_direct(system, r, "master")
+    print(f"vehicle + {args.navigator}, {args.seconds:g} s at {1 / args.step:g} Hz, FMI "
+          f"{args.fmi}.0, Python master: {wall:.1f} s")
+    print(f"  navigation error: horizontal max {e['horizontal_m'].max():.4g} m (final "
+          f"{e['horizontal_m'][-1]:.4g} m), velocity max {e['velocity_m_s'].max():.3g} m/s, "
+          f"attitude max {np.degrees(e['attitude_rad'].max()):.3g} deg")
+    print(f"  co-simulated vs cffi navigator on the same sensor data: |dlat| {d['lat_rad']:.3g} "
+          f"rad, |dv| {d['v_m_s']:.3g} m/s")
+    ok = d["lat_rad"] == 0.0 and d["v_m_s"] == 0.0
+    np.savetxt(out / "cosim_errors.csv", np.c_[e["t_s"], e["horizontal_m"], e["velocity_m_s"],
+                                               e["attitude_rad"]], delimiter=",",
+               header="t_s,horizontal_error_m,velocity_error_m_s,attitude_error_rad", comments="")
+    if args.navigator.startswith("gfnav_"):
+        skip = cosim.vehicle_navigation(args.navigator, profile, step_s=args.step,
+                                        stop_s=args.seconds, skip_steps=1)
+        ssp = cosim.write_ssp(skip, out / "vehicle_navigation.ssp")
+        t0 = time.perf_counter()
+        rs = cosim.run_ssp(ssp, args.seconds, args.step)
+        ds = cosim.differences_from_direct(skip, rs, "ssp")
+        print(f"  SSP {ssp} (fmpy SSP simulator, {time.perf_counter() - t0:.1f} s): |dlat| "
+              f"{ds['lat_rad']:.3g} rad, |dv| {ds['v_m_s']:.3g} m/s vs cffi")
+        cont = cosim.write_container(skip, out / "vehicle_navigation.fmu", fmi_version=2)
+        t0 = time.perf_counter()
+        rc = cosim.run_container(cont, args.seconds, args.step)
+        dc = cosim.differences_from_direct(skip, rc, "container")
+        print(f"  container {cont} (fmpy, {time.perf_counter() - t0:.1f} s): |dlat| "
+              f"{dc['lat_rad']:.3g} rad, |dv| {dc['v_m_s']:.3g} m/s vs cffi")
+        ok = ok and max(ds.values()) == 0.0 and max(dc.values()) == 0.0
+    print(f"  errors -> {out / 'cosim_errors.csv'}")
+    print("cosim " + ("passed: every co-simulation equals the cffi pipeline bit for bit"
+                      if ok else "FAILED: a co-simulation differs from the cffi pipeline"))
+    return 0 if ok else 1
+
+
 def _info(args) -> int:
     import gfins_fmi
     from gfins_fmi.fmu import MODELS, fmu_path
@@ -305,6 +357,19 @@ def main(argv: list[str] | None = None) -> int:
                    help="folder for report.md and the figures")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     p.set_defaults(func=_analyze)
+
+    p = sub.add_parser("cosim", help="vehicle FMU + navigator FMU co-simulation (seed 001's run): "
+                       "Python master, SSP file and container FMU, each checked against cffi")
+    p.add_argument("--navigator", choices=["gfnav_qin9", "gfnav_cube6", "gfnav_12", "sins"],
+                   default="gfnav_qin9")
+    p.add_argument("--seconds", type=float, default=600.0, help="stop time, s (default 600)")
+    p.add_argument("--step", type=float, default=0.01, help="communication step, s (default 0.01)")
+    p.add_argument("--align", type=float, default=60.0, help="rest before the run, s (default 60)")
+    p.add_argument("--fmi", type=int, choices=[2, 3], default=3, help="FMI version of the master run")
+    p.add_argument("--out", type=pathlib.Path, default=pathlib.Path("gfins_cosim"),
+                   help="folder for the SSP, the container FMU and the error CSV")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cosim)
 
     p = sub.add_parser("validate", help="run fmpy's validation on every shipped FMU")
     p.set_defaults(func=_validate)

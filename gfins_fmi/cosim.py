@@ -34,7 +34,7 @@ from gfins_fmi.fmu import MODELS, FmuRunError, _Log, _Slave, fmu_path
 
 __all__ = ["System", "Connection", "vehicle_navigation", "CoSimulation", "write_ssp",
            "run_ssp", "write_container", "run_container", "direct_navigation",
-           "NAVIGATORS"]
+           "navigation_errors", "differences_from_direct", "NAVIGATORS"]
 
 #: navigator name -> (FMU model, vehicle outputs connected to the navigator inputs)
 NAVIGATORS = {"gfnav_cube6": ("gfnav_cube6", [("A", "A", 6)]),
@@ -661,3 +661,70 @@ def direct_navigation(system: System, sensors: Mapping[str, np.ndarray], start_t
         return sol
     sd = Strapdown(init, SinsConfig(input="increments", coning=bool(nav.get("coning", 1)), **cfg))
     return sd.run(sensors["dtheta"], sensors["dv"], h)
+
+
+def navigation_errors(result: Mapping) -> dict:
+    """Navigation error against the vehicle's truth for a :meth:`CoSimulation.run`
+    result (Jacobi, or Gauss-Seidel with the navigator first): row k + 1 of the
+    navigator describes the time of row k of the vehicle.
+
+    Returns
+    -------
+    dict with t_s (n,), horizontal_m (n,) horizontal position error (m, north/east with
+    the WGS-84 radii), velocity_m_s (n,) norm of the horizontal velocity error and
+    attitude_rad (n,) attitude error angle.
+    """
+    from gfins_fmi.trajectory import attitude_error_rad, radii
+    t = result["vehicle.time_s"][:-1, 0]
+    lat_t, lon_t = result["vehicle.lat"][:-1, 0], result["vehicle.lon"][:-1, 0]
+    lat_n, lon_n = result["navigator.lat"][1:, 0], result["navigator.lon"][1:, 0]
+    h = result["vehicle.h"][:-1, 0]
+    RM, RN, _, _ = radii(lat_t)
+    north = (lat_n - lat_t) * (RM + h)
+    east = (lon_n - lon_t) * (RN + h) * np.cos(lat_t)
+    dv = result["navigator.v"][1:, :2] - result["vehicle.v"][:-1, :2]
+    return dict(t_s=t, horizontal_m=np.hypot(north, east),
+                velocity_m_s=np.linalg.norm(dv, axis=1),
+                attitude_rad=attitude_error_rad(result["navigator.q"][1:], result["vehicle.q"][:-1]))
+
+
+def differences_from_direct(system: System, result, kind: str = "master") -> dict:
+    """Max |difference| between a co-simulated navigator and :func:`direct_navigation`
+    on the sensor data recorded in ``result`` (0.0 when bit-identical).
+
+    ``kind``: "master" (a :meth:`CoSimulation.run` result), "ssp" (:func:`run_ssp`) or
+    "container" (:func:`run_container`, FMI 2.0). The rows are aligned as each runner
+    records them (see their docstrings). Returns {"lat_rad": ..., "v_m_s": ...}.
+    """
+    model, nav = system.components["navigator"]
+    gyro_free = model.startswith("gfnav_")
+    n_in = {"gfnav_cube6": 6, "gfnav_qin9": 9, "gfnav_12": 12}.get(model, 3)
+
+    def col(name, i=None):
+        """A column of an SSP or container result (FMI 2.0 scalar names)."""
+        key = f"{name}[{i}]" if i is not None else name
+        if kind == "container":
+            key = key.replace(".", "_").replace("[", "_").replace("]", "")
+        return np.asarray(result[key])
+
+    if kind not in ("master", "ssp", "container"):
+        raise ValueError(f"kind must be 'master', 'ssp' or 'container'; got {kind!r}")
+    if kind == "master":
+        first = 1 if gyro_free else 2
+        data = ({"A": result["vehicle.A"][:-1, :n_in]} if gyro_free else
+                {"dtheta": result["vehicle.dtheta"][1:-1], "dv": result["vehicle.dv"][1:-1]})
+        lat = result["navigator.lat"][first:, 0]
+        v = result["navigator.v"][first:]
+    else:
+        # rows after each step; the container has the initial row first
+        off = 1 if kind == "container" else 0
+        if not gyro_free:
+            raise ValueError("differences_from_direct: SSP/container comparison is made for "
+                             "the gyro-free navigators (array samples)")
+        A = np.stack([col("vehicle.A", i) for i in range(1, n_in + 1)], 1)
+        data = {"A": A[off:-1]}
+        lat = col("navigator.lat")[off + 1:]
+        v = np.stack([col("navigator.v", i) for i in (1, 2, 3)], 1)[off + 1:]
+    sol = direct_navigation(system, data)
+    return {"lat_rad": float(np.max(np.abs(sol.lat_rad - lat))),
+            "v_m_s": float(np.max(np.abs(sol.v_n_m_s - v)))}

@@ -284,3 +284,17 @@ def test_master_reports_fmu_errors_with_the_log():
     with cosim.CoSimulation(system) as m:
         with pytest.raises(FmuRunError, match="lever arm"):
             m.initialize()
+
+
+@pytest.mark.parametrize("navigator", ["gfnav_cube6", "sins"])
+def test_cli_cosim_checks_every_runner(tmp_path, navigator, capsys):
+    from gfins_fmi.cli import main
+    rc = main(["cosim", "--navigator", navigator, "--seconds", "4", "--align", "1",
+               "--quiet", "--out", str(tmp_path)])
+    out = capsys.readouterr().out
+    assert rc == 0, out
+    assert "bit for bit" in out
+    assert (tmp_path / "cosim_errors.csv").is_file()
+    if navigator != "sins":
+        assert (tmp_path / "vehicle_navigation.ssp").is_file()
+        assert validate(tmp_path / "vehicle_navigation.fmu") == []

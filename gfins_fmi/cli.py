@@ -198,22 +198,22 @@ def _cosim(args) -> int:
     np.savetxt(out / "cosim_errors.csv", np.c_[e["t_s"], e["horizontal_m"], e["velocity_m_s"],
                                                e["attitude_rad"]], delimiter=",",
                header="t_s,horizontal_error_m,velocity_error_m_s,attitude_error_rad", comments="")
-    if args.navigator.startswith("gfnav_"):
-        skip = cosim.vehicle_navigation(args.navigator, profile, step_s=args.step,
-                                        stop_s=args.seconds, skip_steps=1)
-        ssp = cosim.write_ssp(skip, out / "vehicle_navigation.ssp")
-        t0 = time.perf_counter()
-        rs = cosim.run_ssp(ssp, args.seconds, args.step)
-        ds = cosim.differences_from_direct(skip, rs, "ssp")
-        print(f"  SSP {ssp} (fmpy SSP simulator, {time.perf_counter() - t0:.1f} s): |dlat| "
-              f"{ds['lat_rad']:.3g} rad, |dv| {ds['v_m_s']:.3g} m/s vs cffi")
-        cont = cosim.write_container(skip, out / "vehicle_navigation.fmu", fmi_version=2)
-        t0 = time.perf_counter()
-        rc = cosim.run_container(cont, args.seconds, args.step)
-        dc = cosim.differences_from_direct(skip, rc, "container")
-        print(f"  container {cont} (fmpy, {time.perf_counter() - t0:.1f} s): |dlat| "
-              f"{dc['lat_rad']:.3g} rad, |dv| {dc['v_m_s']:.3g} m/s vs cffi")
-        ok = ok and max(ds.values()) == 0.0 and max(dc.values()) == 0.0
+    # the same system as an SSP file and as a container FMU (FMI 2.0)
+    skip = cosim.vehicle_navigation(args.navigator, profile, step_s=args.step,
+                                    stop_s=args.seconds, skip_steps=1)
+    ssp = cosim.write_ssp(skip, out / "vehicle_navigation.ssp")
+    t0 = time.perf_counter()
+    rs = cosim.run_ssp(ssp, args.seconds, args.step)
+    ds = cosim.differences_from_direct(skip, rs, "ssp")
+    print(f"  SSP {ssp} (fmpy SSP simulator, {time.perf_counter() - t0:.1f} s): |dlat| "
+          f"{ds['lat_rad']:.3g} rad, |dv| {ds['v_m_s']:.3g} m/s vs cffi")
+    cont = cosim.write_container(skip, out / "vehicle_navigation.fmu", fmi_version=2)
+    t0 = time.perf_counter()
+    rc = cosim.run_container(cont, args.seconds, args.step)
+    dc = cosim.differences_from_direct(skip, rc, "container")
+    print(f"  container {cont} (fmpy, {time.perf_counter() - t0:.1f} s): |dlat| "
+          f"{dc['lat_rad']:.3g} rad, |dv| {dc['v_m_s']:.3g} m/s vs cffi")
+    ok = ok and max(ds.values()) == 0.0 and max(dc.values()) == 0.0
     print(f"  errors -> {out / 'cosim_errors.csv'}")
     print("cosim " + ("passed: every co-simulation equals the cffi pipeline bit for bit"
                       if ok else "FAILED: a co-simulation differs from the cffi pipeline"))

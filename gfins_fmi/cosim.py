@@ -716,15 +716,18 @@ def differences_from_direct(system: System, result, kind: str = "master") -> dic
         lat = result["navigator.lat"][first:, 0]
         v = result["navigator.v"][first:]
     else:
-        # rows after each step; the container has the initial row first
+        # rows recorded after each step (the container has the initial row first): the
+        # vehicle's row k describes t_(k+1), the navigator's the sample it took at t_k
         off = 1 if kind == "container" else 0
-        if not gyro_free:
-            raise ValueError("differences_from_direct: SSP/container comparison is made for "
-                             "the gyro-free navigators (array samples)")
-        A = np.stack([col("vehicle.A", i) for i in range(1, n_in + 1)], 1)
-        data = {"A": A[off:-1]}
-        lat = col("navigator.lat")[off + 1:]
-        v = np.stack([col("navigator.v", i) for i in (1, 2, 3)], 1)[off + 1:]
+        if gyro_free:
+            A = np.stack([col("vehicle.A", i) for i in range(1, n_in + 1)], 1)
+            data, first = {"A": A[off:-1]}, off + 1
+        else:  # the first increment consumed ends one step after the navigation start
+            data = {k: np.stack([col(f"vehicle.{k}", i) for i in (1, 2, 3)], 1)[off + 1:-1]
+                    for k in ("dtheta", "dv")}
+            first = off + 2
+        lat = col("navigator.lat")[first:]
+        v = np.stack([col("navigator.v", i) for i in (1, 2, 3)], 1)[first:]
     sol = direct_navigation(system, data)
     return {"lat_rad": float(np.max(np.abs(sol.lat_rad - lat))),
             "v_m_s": float(np.max(np.abs(sol.v_n_m_s - v)))}

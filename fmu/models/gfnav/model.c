@@ -9,6 +9,7 @@
 #include "fmu_model.h"
 #include "gf_math.h"
 #include "model.h"
+#include "skip_steps.h"
 
 #ifndef GFNAV_LAYOUT
 #error "GFNAV_LAYOUT must be defined (0 cube6, 1 qin9, 2 twelve)"
@@ -92,20 +93,16 @@ static FmuStatus start_navigation(FmuInstance *instance, ModelData *d, double st
 
 FmuStatus model_exit_initialization(FmuInstance *instance, ModelData *d, double start_time_s)
 {
-    if (d->skip_steps < 0) {
-        fmu_log_error(instance, "parameter skip_steps = %d must be >= 0", (int)d->skip_steps);
+    if (!fmu_skip_steps_reset(instance, d->skip_steps, &d->skipped))
         return FMU_ERROR;
-    }
-    d->skipped = 0;
     return start_navigation(instance, d, start_time_s);
 }
 
 FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double h_s)
 {
-    if (d->skipped < d->skip_steps) { /* ignore these inputs; start at the next sample */
-        ++d->skipped;
-        return d->skipped == d->skip_steps ? start_navigation(instance, d, t_s + h_s) : FMU_OK;
-    }
+    int restart = 0;
+    if (fmu_skip_this_step(d->skip_steps, &d->skipped, &restart)) /* start at the next sample */
+        return restart ? start_navigation(instance, d, t_s + h_s) : FMU_OK;
     double q[4], v[3], pos[3], w[3], f[3];
     uint8_t flags = 0;
     size_t done = 0;

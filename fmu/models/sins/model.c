@@ -12,6 +12,7 @@
 #include "fmu_model.h"
 #include "gf_math.h"
 #include "model.h"
+#include "skip_steps.h"
 
 static void publish(ModelData *d)
 {
@@ -129,20 +130,16 @@ static gf_status condition(ModelData *d, int increments, double dt, const double
 
 FmuStatus model_exit_initialization(FmuInstance *instance, ModelData *d, double start_time_s)
 {
-    if (d->skip_steps < 0) {
-        fmu_log_error(instance, "parameter skip_steps = %d must be >= 0", (int)d->skip_steps);
+    if (!fmu_skip_steps_reset(instance, d->skip_steps, &d->skipped))
         return FMU_ERROR;
-    }
-    d->skipped = 0;
     return start_navigation(instance, d, start_time_s);
 }
 
 FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double h_s)
 {
-    if (d->skipped < d->skip_steps) { /* ignore these inputs; start at the next sample */
-        ++d->skipped;
-        return d->skipped == d->skip_steps ? start_navigation(instance, d, t_s + h_s) : FMU_OK;
-    }
+    int restart = 0;
+    if (fmu_skip_this_step(d->skip_steps, &d->skipped, &restart)) /* start at the next sample */
+        return restart ? start_navigation(instance, d, t_s + h_s) : FMU_OK;
     const int increments = d->nav.cfg.input == GF_SINS_INPUT_INCREMENTS;
     if (increments && !d->started) { /* no increment ends at the start time */
         d->previous_step_s = h_s;

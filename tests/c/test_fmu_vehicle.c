@@ -1,0 +1,266 @@
+/* test_fmu_vehicle.c — the vehicle FMU model (fmu/models/vehicle) through the FMI 2.0
+ * glue, linked into this executable so that it runs under ASan/UBSan/LeakSanitizer
+ * (tests/test_cosim.py covers the shipped FMUs through fmpy, FMI 2.0 and 3.0).
+ *   1. a run of seed 001's default profile equals gf_vehicle called directly at the
+ *      same communication points, bit for bit (truth, IMU, increments);
+ *   2. IMU errors and the accelerometer array: outputs = gf_imu_apply / the array's
+ *      forward model on the direct truth, bit for bit;
+ *   3. FMU state: get mid-run, run on, set back, run again: identical; serialize,
+ *      deserialize into a fresh instance: identical;
+ *   4. bad parameters are refused by exitInitializationMode with a logged reason;
+ *   5. commands (drive = 1): a held command is reached after command_time. */
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "fmi2Functions.h"
+#include "fmu_instance.h"
+#include "gf_gfins.h"
+#include "gf_math.h"
+#include "gf_test.h"
+#include "gf_vehicle.h"
+
+#define H_S 0.01
+enum { N = 3000 };   /* 30 s: rest, start, into the straight run */
+
+static char g_log[4096];
+
+static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status,
+                   fmi2String category, fmi2String message, ...)
+{
+    (void)env; (void)name; (void)category; (void)status;
+    va_list ap;
+    va_start(ap, message);
+    const size_t used = strlen(g_log);
+    vsnprintf(g_log + used, sizeof g_log - used, message, ap);
+    va_end(ap);
+}
+
+static const fmi2CallbackFunctions kCallbacks = {
+    logger, calloc, free, NULL, NULL};
+
+static fmi2ValueReference vr(const char *name)
+{
+    for (size_t i = 0; i < sizeof kFmi2Variables / sizeof kFmi2Variables[0]; ++i)
+        if (strcmp(kFmi2Variables[i].name, name) == 0)
+            return kFmi2Variables[i].value_reference;
+    CHECK(0, "no variable %s", name);
+    return 0;
+}
+
+static void vrs(const char *base, int n, fmi2ValueReference *out)
+{
+    char name[48];
+    for (int i = 0; i < n; ++i) {
+        snprintf(name, sizeof name, "%s[%d]", base, i + 1);
+        out[i] = vr(name);
+    }
+}
+
+/* Outputs compared: q, v, lat, lon, gyro_rate, specific_force, dtheta, dv, A (first 9). */
+enum { N_OUT = 4 + 3 + 2 + 3 + 3 + 3 + 3 + 9 };
+static fmi2ValueReference g_out[N_OUT];
+
+static void init_outputs(void)
+{
+    fmi2ValueReference *p = g_out;
+    vrs("q", 4, p); p += 4;
+    vrs("v", 3, p); p += 3;
+    *p++ = vr("lat");
+    *p++ = vr("lon");
+    vrs("gyro_rate", 3, p); p += 3;
+    vrs("specific_force", 3, p); p += 3;
+    vrs("dtheta", 3, p); p += 3;
+    vrs("dv", 3, p); p += 3;
+    vrs("A", 9, p);
+}
+
+static fmi2Component open_ready(const char *name, int imu_errors, double stop_s)
+{
+    fmi2Component c = fmi2Instantiate(name, fmi2CoSimulation, INSTANTIATION_TOKEN, "",
+                                      &kCallbacks, fmi2False, fmi2False);
+    CHECK(c != NULL, "instantiate");
+    CHECK(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2True, stop_s) == fmi2OK, "setup");
+    CHECK(fmi2EnterInitializationMode(c) == fmi2OK, "enter");
+    if (imu_errors) {
+        const fmi2ValueReference on = vr("imu_errors");
+        const fmi2Integer one = 1;
+        fmi2ValueReference r[9];
+        const double bias[3] = {1e-6, -2e-6, 3e-6}, scale[3] = {1e-4, -2e-4, 5e-5};
+        const double k2[3] = {2e-5, -1e-5, 1.5e-5}, lever[3] = {0.03, -0.02, 0.025};
+        const double mis[9] = {0, 5e-5, -4e-5, 6e-5, 0, 3e-5, -5e-5, 4e-5, 0};
+        CHECK(fmi2SetInteger(c, &on, 1, &one) == fmi2OK, "imu_errors");
+        vrs("gyro_bias", 3, r); fmi2SetReal(c, r, 3, bias);
+        vrs("accel_scale", 3, r); fmi2SetReal(c, r, 3, scale);
+        vrs("accel_k2", 3, r); fmi2SetReal(c, r, 3, k2);
+        vrs("lever_arm", 3, r); fmi2SetReal(c, r, 3, lever);
+        vrs("gyro_misalign", 9, r); fmi2SetReal(c, r, 9, mis);
+    }
+    CHECK(fmi2ExitInitializationMode(c) == fmi2OK, "exit: %s", g_log);
+    return c;
+}
+
+static void run(fmi2Component c, int k0, int k1, double out[][N_OUT])
+{
+    for (int k = k0; k < k1; ++k) {
+        CHECK(fmi2DoStep(c, k * H_S, H_S, fmi2True) == fmi2OK, "doStep %d", k);
+        fmi2GetReal(c, g_out, N_OUT, out[k]);
+    }
+}
+
+static double g_a[N][N_OUT], g_b[N][N_OUT];
+
+static void test_equals_core(int imu_errors)
+{
+    fmi2Component c = open_ready("vehicle", imu_errors, N * H_S);
+    run(c, 0, N, g_a);
+    fmi2FreeInstance(c);
+    /* the same motion directly: the FMU's default profile (seed 001, 60 s alignment) */
+    gf_vehicle_profile p;
+    memset(&p, 0, sizeof p);
+    p.lat0_rad = 0.5235987755982988;
+    p.lon0_rad = 1.9896753472735356;
+    p.h0_m = 100.0;
+    p.n_segments = 6;
+    const double seg[6][4] = {{60, 0, 0, 0}, {20, 15, 0, 0}, {220, 0, 0, 0}, {30, 0, 0, GF_PI},
+                              {210, 0, 0, 0}, {30, 0, 0, GF_PI}};
+    for (int i = 0; i < 6; ++i) {
+        p.segment[i].duration_s = seg[i][0];
+        p.segment[i].dspeed_m_s = seg[i][1];
+        p.segment[i].dheading_rate_rad_s = seg[i][2];
+        p.segment[i].dheading_rad = seg[i][3];
+    }
+    gf_vehicle_state s;
+    gf_vehicle_sample x;
+    CHECK(gf_vehicle_init(&s, &p, 0.0, &x, NULL) == GF_OK, "direct init");
+    gf_array_geometry g;
+    gf9_geometry(0.1, &g);
+    gf_imu_errors e;
+    memset(&e, 0, sizeof e);
+    if (imu_errors) {
+        const double bias[3] = {1e-6, -2e-6, 3e-6}, scale[3] = {1e-4, -2e-4, 5e-5};
+        const double k2[3] = {2e-5, -1e-5, 1.5e-5}, lever[3] = {0.03, -0.02, 0.025};
+        const double mis[9] = {0, 5e-5, -4e-5, 6e-5, 0, 3e-5, -5e-5, 4e-5, 0};
+        memcpy(e.g_bias_rad_s, bias, sizeof bias);
+        memcpy(e.a_scale, scale, sizeof scale);
+        memcpy(e.a_k2_s2_m, k2, sizeof k2);
+        memcpy(e.a_lever_m, lever, sizeof lever);
+        memcpy(e.g_misalign_rad, mis, sizeof mis);
+    }
+    int worst = -1;
+    for (int k = 0; k < N && worst < 0; ++k) {
+        s.time_s = k * H_S;       /* the FMU steps from the master's t to t + h */
+        CHECK(gf_vehicle_step(&s, k * H_S + H_S, &x) == GF_OK, "direct step");
+        double w[3], f[3], mw[3], mf[3], ew[3], ef[3], A[GF_ARRAY_MAX_SENSORS];
+        size_t done;
+        gf_imu_apply(&e, 1, x.gyro_rad_s, x.accel_m_s2, NULL, w, f, &done);
+        for (int i = 0; i < 3; ++i) {
+            mw[i] = x.dtheta_rad[i] / H_S;
+            mf[i] = x.dv_m_s[i] / H_S;
+        }
+        gf_imu_apply(&e, 1, mw, mf, NULL, ew, ef, &done);
+        gf_array_forward(&g, 1, x.accel_m_s2, x.gyro_rad_s, x.gyro_dot_rad_s2, A, &done);
+        double want[N_OUT], *q = want;
+        memcpy(q, x.q_bn, 4 * sizeof *q); q += 4;
+        memcpy(q, x.v_n_m_s, 3 * sizeof *q); q += 3;
+        *q++ = x.lat_rad;
+        *q++ = x.lon_rad;
+        memcpy(q, w, 3 * sizeof *q); q += 3;
+        memcpy(q, f, 3 * sizeof *q); q += 3;
+        for (int i = 0; i < 3; ++i) q[i] = imu_errors ? ew[i] * H_S : x.dtheta_rad[i];
+        q += 3;
+        for (int i = 0; i < 3; ++i) q[i] = imu_errors ? ef[i] * H_S : x.dv_m_s[i];
+        q += 3;
+        memcpy(q, A, 9 * sizeof *q);
+        if (memcmp(want, g_a[k], sizeof want) != 0)
+            worst = k;
+    }
+    CHECK(worst < 0, "imu_errors = %d: FMU differs from the core at step %d", imu_errors, worst);
+}
+
+static void test_states(void)
+{
+    fmi2Component c = open_ready("vehicle", 1, N * H_S);
+    run(c, 0, N / 2, g_a);
+    fmi2FMUstate st = NULL;
+    CHECK(fmi2GetFMUstate(c, &st) == fmi2OK, "get state");
+    run(c, N / 2, N, g_a);
+    CHECK(fmi2SetFMUstate(c, st) == fmi2OK, "set state");
+    run(c, N / 2, N, g_b);
+    CHECK(memcmp(g_a[N / 2], g_b[N / 2], sizeof g_a[0] * (N - N / 2)) == 0, "replay after set");
+    size_t size = 0;
+    CHECK(fmi2SerializedFMUstateSize(c, st, &size) == fmi2OK, "size");
+    fmi2Byte *bytes = malloc(size);
+    CHECK(fmi2SerializeFMUstate(c, st, bytes, size) == fmi2OK, "serialize");
+    fmi2FreeFMUstate(c, &st);
+    fmi2FreeInstance(c);
+    fmi2Component d = open_ready("fresh", 1, N * H_S);
+    fmi2FMUstate st2 = NULL;
+    CHECK(fmi2DeSerializeFMUstate(d, bytes, size, &st2) == fmi2OK, "deserialize");
+    CHECK(fmi2SetFMUstate(d, st2) == fmi2OK, "set deserialized");
+    run(d, N / 2, N, g_b);
+    CHECK(memcmp(g_a[N / 2], g_b[N / 2], sizeof g_a[0] * (N - N / 2)) == 0, "replay after deserialize");
+    fmi2FreeFMUstate(d, &st2);
+    fmi2FreeInstance(d);
+    free(bytes);
+}
+
+static void expect_refused(const char *param, double value, const char *mention)
+{
+    g_log[0] = '\0';
+    fmi2Component c = fmi2Instantiate("bad", fmi2CoSimulation, INSTANTIATION_TOKEN, "",
+                                      &kCallbacks, fmi2False, fmi2False);
+    fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0);
+    fmi2EnterInitializationMode(c);
+    const fmi2ValueReference r = vr(param);
+    if (kFmi2Variables[r - 1].type == FMU_TYPE_INT32) {
+        const fmi2Integer v = (fmi2Integer)value;
+        fmi2SetInteger(c, &r, 1, &v);
+    } else {
+        fmi2SetReal(c, &r, 1, &value);
+    }
+    CHECK(fmi2ExitInitializationMode(c) == fmi2Error, "%s = %g accepted", param, value);
+    CHECK(strstr(g_log, mention) != NULL, "%s: log does not mention %s: %s", param, mention, g_log);
+    fmi2FreeInstance(c);
+}
+
+static void test_commands(void)
+{
+    fmi2Component c = fmi2Instantiate("cmd", fmi2CoSimulation, INSTANTIATION_TOKEN, "",
+                                      &kCallbacks, fmi2False, fmi2False);
+    fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0);
+    fmi2EnterInitializationMode(c);
+    const fmi2ValueReference ir[2] = {vr("drive"), vr("n_segments")};
+    const fmi2Integer iv[2] = {1, 0};
+    fmi2SetInteger(c, ir, 2, iv);
+    const fmi2ValueReference ct = vr("command_time");
+    const double two = 2.0;
+    fmi2SetReal(c, &ct, 1, &two);
+    CHECK(fmi2ExitInitializationMode(c) == fmi2OK, "exit (commands)");
+    const fmi2ValueReference cmd[2] = {vr("speed_cmd"), vr("heading_rate_cmd")};
+    const double values[2] = {8.0, 0.1};
+    fmi2SetReal(c, cmd, 2, values);
+    for (int k = 0; k < 400; ++k)
+        fmi2DoStep(c, k * H_S, H_S, fmi2True);
+    const fmi2ValueReference heading = vr("euler[1]");
+    double psi = 0.0;
+    fmi2GetReal(c, &heading, 1, &psi);
+    /* 0.1 rad/s reached over 2 s (smooth step integrates to 1/2), then 2 s more */
+    CHECK_CLOSE(psi, 0.3, 1e-12, "heading after a held command");
+    fmi2FreeInstance(c);
+}
+
+int main(void)
+{
+    init_outputs();
+    test_equals_core(0);
+    test_equals_core(1);
+    test_states();
+    expect_refused("n_segments", 40, "n_segments");
+    expect_refused("lat0", 1.56, "lat0");
+    expect_refused("array_layout", 7, "array_layout");
+    expect_refused("command_time", -1.0, "command_time");
+    expect_refused("speed0", -2.0, "speed0");
+    test_commands();
+    TEST_MAIN_END();
+}

@@ -19,6 +19,27 @@ static const double GL_W[8] = {0.1012285362903763, 0.2223810344533745, 0.3137066
                                0.3626837833783620, 0.3626837833783620, 0.3137066458778873,
                                0.2223810344533745, 0.1012285362903763};
 
+/* Integration matrix of the same rule: int_{-1}^{x_j} g = sum_i GL_S[j][i] g(x_i) for g a
+ * polynomial of degree <= 7 (the Lagrange interpolant through the nodes, integrated);
+ * on a piece of <= 0.25 s the displacement at the nodes is then exact to round-off. */
+static const double GL_S[8][8] = {
+    {0.0506142681451881, -0.018211886611940037, 0.012561662294061027, -0.008966031226109283,
+     0.006156982736653542, -0.003835350509274062, 0.0019455153281187389, -0.0005550166542337644},
+    {0.1095186435351087, 0.11119051722668685, -0.02727959247156292, 0.016299417716720832,
+     -0.010430704178293511, 0.006279505970927043, -0.0031298698218975582, 0.0008856046086844836},
+    {0.09717507199782581, 0.24171904999434582, 0.156853322938944, -0.031950206723757535,
+     0.01674346544045311, -0.009286931724209392, 0.004451429550570223, -0.0012376113905010302},
+    {0.10373104194116252, 0.21238698029669628, 0.34134226854910765, 0.18134189168918033,
+     -0.03204208264204926, 0.01448241312244411, -0.006395628620721124, 0.001718473168529707},
+    {0.09951006312184661, 0.2287766630740955, 0.2992242327554432, 0.3947258660204113,
+     0.18134189168918172, -0.027635622671220373, 0.009994054156678074, -0.0025025056507862104},
+    {0.10246614768087735, 0.21792960490280414, 0.3229935776020966, 0.34594031793790897,
+     0.39463399010211964, 0.15685332293894333, -0.019338015540971466, 0.004053464292550507},
+    {0.10034293168169181, 0.22551090427527193, 0.30742713990696, 0.3731144875566557,
+     0.3463843656616414, 0.3409862383494502, 0.11119051722668753, -0.008290107244732371},
+    {0.10178355294461006, 0.22043551912525552, 0.3175419963871615, 0.35652680064170883,
+     0.37164981460447216, 0.3011449835838263, 0.24059292106531532, 0.050614268145188296}};
+
 /* Speed, heading and their derivatives at one time. */
 typedef struct kin {
     double u, du;                /* m/s, m/s^2 */
@@ -52,20 +73,6 @@ static kin kinematics(const gf_vehicle_state *st, double t_s)
         k.ddpsi = g->dheading_rate_rad_s * dS / T + g->dheading_rad * ddS / (T * T);
     }
     return k;
-}
-
-/* Displacement (east, north) gained over [a, b] inside the active segment. */
-static void displacement(const gf_vehicle_state *st, double a, double b, double *dE, double *dN)
-{
-    const double half = 0.5 * (b - a);
-    double e = 0.0, n = 0.0;
-    for (int j = 0; j < 8; ++j) {
-        const kin k = kinematics(st, a + half * (GL_X[j] + 1.0));
-        e += GL_W[j] * k.u * sin(k.psi);
-        n += GL_W[j] * k.u * cos(k.psi);
-    }
-    *dE = half * e;
-    *dN = half * n;
 }
 
 /* Truth and sensor rates at t_s with displacement (E, N); increments untouched. */
@@ -163,17 +170,29 @@ static double active_end(const gf_vehicle_state *st)
     return st->active.duration_s > 0.0 ? st->active_t0_s + st->active.duration_s : INFINITY;
 }
 
-/* Integrates displacement and increments over [a, b] inside the active segment. */
+/* Integrates displacement and increments over [a, b] inside the active segment: the
+ * velocity at the 8 nodes gives the displacement at each node (GL_S) and at b (GL_W);
+ * the sensor rates at the nodes give the increments. */
 static gf_status integrate_piece(gf_vehicle_state *st, double a, double b, double dth[3],
                                  double dv[3])
 {
     const double half = 0.5 * (b - a);
+    double tj[8], vE[8], vN[8];
     for (int j = 0; j < 8; ++j) {
-        const double tj = a + half * (GL_X[j] + 1.0);
-        double dE, dN;
-        displacement(st, a, tj, &dE, &dN);
+        tj[j] = a + half * (GL_X[j] + 1.0);
+        const kin k = kinematics(st, tj[j]);
+        vE[j] = k.u * sin(k.psi);
+        vN[j] = k.u * cos(k.psi);
+    }
+    for (int j = 0; j < 8; ++j) {
+        double dE = 0.0, dN = 0.0;
+        for (int i = 0; i < 8; ++i) {
+            dE += GL_S[j][i] * vE[i];
+            dN += GL_S[j][i] * vN[i];
+        }
         gf_vehicle_sample s;
-        const gf_status status = evaluate(st, tj, st->east_m + dE, st->north_m + dN, &s);
+        const gf_status status = evaluate(st, tj[j], st->east_m + half * dE,
+                                          st->north_m + half * dN, &s);
         if (status != GF_OK)
             return status;
         for (int i = 0; i < 3; ++i) {
@@ -181,10 +200,13 @@ static gf_status integrate_piece(gf_vehicle_state *st, double a, double b, doubl
             dv[i] += half * GL_W[j] * s.accel_m_s2[i];
         }
     }
-    double dE, dN;
-    displacement(st, a, b, &dE, &dN);
-    st->east_m += dE;
-    st->north_m += dN;
+    double e = 0.0, n = 0.0;
+    for (int j = 0; j < 8; ++j) {
+        e += GL_W[j] * vE[j];
+        n += GL_W[j] * vN[j];
+    }
+    st->east_m += half * e;
+    st->north_m += half * n;
     return GF_OK;
 }
 

@@ -31,8 +31,9 @@
  *     f^n = dv^n/dt + (2 w_ie^n + w_en^n) x v^n - g^n,      f^b = C_n^b f^n
  *     w_ib^b = w_nb^b + C_n^b (w_ie^n + w_en^n),           w_nb^b = [0, 0, -dpsi/dt]
  *     dw_ib^b/dt = dw_nb^b/dt + C_n^b d(w_ie^n + w_en^n)/dt - w_nb^b x C_n^b (w_ie^n + w_en^n)
- * Increments are the integrals of w_ib^b and f^b over the step (Gauss-Legendre, with
- * the displacement at each node integrated the same way).
+ * Increments are the integrals of w_ib^b and f^b over the step (Gauss-Legendre, the
+ * displacement at each node from the same nodes' velocities by the rule's integration
+ * matrix: exact for degree 7, round-off on pieces of <= 0.25 s).
  */
 #ifndef GF_VEHICLE_H
 #define GF_VEHICLE_H

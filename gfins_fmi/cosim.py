@@ -299,6 +299,12 @@ class CoSimulation:
         -------
         dict "comp.var" -> ndarray (n_rows, size), plus "time" (n_rows,): the master's
         time when the row was read.
+
+        Raises
+        ------
+        FmuRunError
+            An FMU call failed; the message carries the FMU's log, ``partial`` the rows
+            recorded before the failing step.
         """
         h = self.system.step_s if step_s is None else step_s
         stop = self.system.stop_s if stop_s is None else stop_s
@@ -328,6 +334,7 @@ class CoSimulation:
         if progress:
             from tqdm import tqdm
             bar = tqdm(total=n, unit="step", unit_scale=True, desc="co-simulation")
+        done = 0
         try:
             record(0)
             for k in range(n):
@@ -336,8 +343,13 @@ class CoSimulation:
                 self.step(h)
                 self.time_s = t0 + (k + 1) * h
                 record(k + 1)
+                done = k + 1
                 if bar and k % 1000 == 999:
                     bar.update(1000)
+        except FmuRunError as exc:  # keep what was recorded
+            exc.partial = {f"{c}.{v}": a[:done + 1].copy() for (c, v), a in rows.items()}
+            exc.partial["time"] = times[:done + 1].copy()
+            raise
         finally:
             if bar:
                 bar.update(n - bar.n)
@@ -419,9 +431,8 @@ def write_ssp(system: System, path: str | pathlib.Path, name: str = "VehicleNavi
     root = ET.Element(f"{{{_SSD}}}SystemStructureDescription", version="1.0", name=name)
     sysel = ET.SubElement(root, f"{{{_SSD}}}System", name=name,
                           description="gfins_fmi: vehicle FMU connected to a navigator FMU")
-    binding = ET.SubElement(ET.SubElement(sysel, f"{{{_SSD}}}ParameterBindings"),
-                            f"{{{_SSD}}}ParameterBinding", source="resources/parameters.ssv")
-    del binding
+    ET.SubElement(ET.SubElement(sysel, f"{{{_SSD}}}ParameterBindings"),
+                  f"{{{_SSD}}}ParameterBinding", source="resources/parameters.ssv")
     elements = ET.SubElement(sysel, f"{{{_SSD}}}Elements")
     pset = ET.Element(f"{{{_SSV}}}ParameterSet", version="1.0", name=f"{name} start values")
     params_el = ET.SubElement(pset, f"{{{_SSV}}}Parameters")

@@ -311,3 +311,17 @@ def test_cli_cosim_checks_every_runner(tmp_path, navigator, capsys):
     assert (tmp_path / "cosim_errors.csv").is_file()
     assert (tmp_path / "vehicle_navigation.ssp").is_file()
     assert validate(tmp_path / "vehicle_navigation.fmu") == []
+
+
+def test_master_keeps_the_rows_before_a_failing_step():
+    """The vehicle runs north into 89 deg latitude: the FMU refuses the step, the error
+    names the reason and the rows recorded before it are kept."""
+    fast = VehicleProfile(lat0_rad=np.radians(88.99), speed0_m_s=200.0)
+    system = cosim.vehicle_navigation("sins", fast, stop_s=100.0)
+    with cosim.CoSimulation(system) as m:
+        m.initialize()
+        with pytest.raises(FmuRunError, match="89 deg") as info:
+            m.run()
+    part = info.value.partial
+    assert 1 < len(part["time"]) < 10001
+    assert np.all(np.isfinite(part["vehicle.lat"]))

@@ -5,6 +5,8 @@ through the Python master on fmpy's slave classes (FMI 3.0). Four cases:
 * strapdown INS (SINS FMU) with exact IMU outputs;
 * strapdown INS, the vehicle's IMU carrying seed 001's error class, uncompensated;
 * the same errors compensated inside the SINS FMU (its imu_comp parameters);
+* compensated, plus the random errors of a navigation-grade IMU drawn inside the vehicle
+  FMU (angle random walk 0.003 deg/sqrt(h), 10 ug/sqrt(Hz), 0.005 deg/h bias instability);
 * gyro-free 9-accelerometer navigator (qin9, sqrt strategy) with exact array outputs.
 
 Prints the navigation errors and writes docs/figures/cosim_vehicle.png; checks each
@@ -27,6 +29,8 @@ from gfins_fmi.vehicle import VehicleProfile
 
 # seed 001's IMU class (0.01 deg/h gyros, 10 ug-class accelerometers), as in
 # examples/imu_error_navigation.py
+NOISE = gf.ImuNoise(gyro_arw_deg_sqrt_h=0.003, gyro_bias_instability_deg_h=0.005,
+                    gyro_correlation_time_s=300.0, accel_vrw_ug_sqrt_hz=10.0)
 ERRORS = gf.ImuErrors(gyro_bias_deg_h=[0.01, -0.01, 0.008], gyro_scale_ppm=[20.0, -15.0, 10.0],
                       gyro_misalignment_arcsec=[[0, 10, -8], [12, 0, 9], [-10, 7, 0]],
                       accel_bias_ug=[50.0, -40.0, 30.0], accel_scale_ppm=[100.0, -80.0, 60.0],
@@ -43,19 +47,26 @@ def cases(seconds: float):
                                                                    imu_errors=ERRORS),
         "SINS, IMU errors compensated in the FMU": cosim.vehicle_navigation(
             "sins", prof, stop_s=seconds, imu_errors=ERRORS, navigator_parameters=comp),
+        "SINS, errors compensated + IMU noise": cosim.vehicle_navigation(
+            "sins", prof, stop_s=seconds, imu_errors=ERRORS, navigator_parameters=comp,
+            imu_noise=NOISE),
         "gyro-free qin9 (sqrt), exact array": cosim.vehicle_navigation("gfnav_qin9", prof,
                                                                        stop_s=seconds),
     }
 
 
 def check_against_cffi(system, r) -> bool:
-    """The co-simulated navigator equals the cffi navigator on the recorded sensor data."""
-    model = system.components["navigator"][0]
-    if model == "sins" and system.components["navigator"][1].get("imu_comp"):
-        return True  # compensation: covered by tests/test_fmu.py (FMU = batch pipeline)
+    """The co-simulated navigator equals the cffi navigator on the recorded sensor data
+    (with imu_comp, the increments compensated as mean rates exactly as the SINS FMU
+    does: x (1/h) -> gf_imu_compensate -> / (1/h))."""
+    model, nav = system.components["navigator"]
     if model == "sins":
-        sol = cosim.direct_navigation(system, {"dtheta": r["vehicle.dtheta"][1:-1],
-                                               "dv": r["vehicle.dv"][1:-1]})
+        dth, dv = r["vehicle.dtheta"][1:-1], r["vehicle.dv"][1:-1]
+        if nav.get("imu_comp"):
+            k = 1.0 / system.step_s
+            w, f = ERRORS.compensate(dth * k, dv * k)
+            dth, dv = w / k, f / k
+        sol = cosim.direct_navigation(system, {"dtheta": dth, "dv": dv})
         return np.array_equal(sol.lat_rad, r["navigator.lat"][2:, 0])
     sol = cosim.direct_navigation(system, {"A": r["vehicle.A"][:-1, :9]})
     return np.array_equal(sol.lat_rad, r["navigator.lat"][1:, 0])

@@ -99,7 +99,9 @@ class System:
 
 def vehicle_navigation(navigator: str = "gfnav_qin9", profile=None, *, step_s: float = 0.01,
                        stop_s: float | None = None, l_m: float = 0.1, skip_steps: int = 0,
-                       imu_errors=None, array_bias_m_s2=None, navigator_parameters: Mapping | None = None,
+                       imu_errors=None, array_bias_m_s2=None, imu_noise=None,
+                       array_noise_m_s2: float = 0.0, noise_seed: int = 1,
+                       navigator_parameters: Mapping | None = None,
                        hold_height: bool = True) -> System:
     """The vehicle FMU connected to a navigator FMU.
 
@@ -124,6 +126,11 @@ def vehicle_navigation(navigator: str = "gfnav_qin9", profile=None, *, step_s: f
         to compensate).
     array_bias_m_s2 : (n,) optional
         Biases of the array accelerometers.
+    imu_noise : gfins_fmi.ImuNoise, optional
+        Random IMU errors, drawn by the vehicle FMU's own generator (seed ``noise_seed``)
+        with the conventions of ``ImuNoise.sample``.
+    array_noise_m_s2 : float
+        White-noise std per sample of each array accelerometer (drawn by the FMU).
     navigator_parameters : mapping, optional
         More navigator start values (FMI 3.0 names), e.g. ``{"strategy": 3}``.
     hold_height : bool
@@ -146,6 +153,9 @@ def vehicle_navigation(navigator: str = "gfnav_qin9", profile=None, *, step_s: f
         veh["array_layout"] = _LAYOUT[navigator]
     if imu_errors is not None:
         veh.update(imu_errors=1, **imu_errors.fmu_parameters())
+    if imu_noise is not None or array_noise_m_s2 > 0:
+        veh.update(noise=1, noise_seed=int(noise_seed), array_noise=float(array_noise_m_s2),
+                   **(imu_noise.fmu_parameters() if imu_noise is not None else {}))
     if array_bias_m_s2 is not None:
         b = np.zeros(12)
         b[:len(np.ravel(array_bias_m_s2))] = np.ravel(array_bias_m_s2)

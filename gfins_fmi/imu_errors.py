@@ -228,6 +228,22 @@ class ImuNoise:
             if not getattr(self, k) > 0:
                 raise ValueError(f"{k} must be > 0")
 
+    def fmu_parameters(self) -> dict:
+        """The model as start values of the vehicle FMU (SI; its noise = 1 switches it
+        on): the FMU draws from its own seeded generator with the same per-sample
+        conventions as :meth:`sample` (csrc/gf_noise.h)."""
+        deg = np.pi / 180.0
+        return dict(gyro_arw=self.gyro_arw_deg_sqrt_h * deg / 60.0,
+                    gyro_bias_instability=self.gyro_bias_instability_deg_h * DEG_H,
+                    gyro_correlation_time=self.gyro_correlation_time_s,
+                    gyro_rrw=self.gyro_rrw_deg_h_sqrt_h * DEG_H / 60.0,
+                    accel_vrw=self.accel_vrw_ug_sqrt_hz * UG,
+                    accel_bias_instability=self.accel_bias_instability_ug * UG,
+                    accel_correlation_time=self.accel_correlation_time_s,
+                    accel_rrw=self.accel_rrw_ug_sqrt_s * UG,
+                    gyro_band=self.gyro_band_deg_h * DEG_H, accel_band=self.accel_band_ug * UG,
+                    band_hz=self.band_hz)
+
     @staticmethod
     def _gauss_markov(n, dt, sigma, tau, rng):
         # the first-order low-pass recursion with a = exp(-dt/tau), i.e. corner 1/(2 pi tau)

@@ -11,6 +11,7 @@ time t + h versus t0 + (k + 1) h), the bound is stated at the assertion."""
 import numpy as np
 import pytest
 
+import gfins_fmi as gf
 from gfins_fmi import ImuErrors, cosim
 from gfins_fmi.fmu import FmuRunError, _Log, _Slave, fmu_path, validate
 from gfins_fmi.vehicle import Segment, VehicleProfile, simulate_vehicle
@@ -325,3 +326,87 @@ def test_master_keeps_the_rows_before_a_failing_step():
     part = info.value.partial
     assert 1 < len(part["time"]) < 10001
     assert np.all(np.isfinite(part["vehicle.lat"]))
+
+
+# ---- noise in the vehicle FMU -----------------------------------------------------------
+def _vehicle_outputs(params, n=6000, version=2, h=0.01, names=("gyro_rate", "specific_force", "dtheta", "A")):
+    s = _Slave(fmu_path("vehicle", version), version, _Log(), False)
+    try:
+        s.initialize(0.0, n * h, {**PROFILE.as_parameters(), **params})
+        out = {k: [s.get(k)] for k in names}
+        for k in range(n):
+            s.slave.doStep(currentCommunicationPoint=k * h, communicationStepSize=h)
+            for name in names:
+                out[name].append(s.get(name))
+        return {k: np.array(v) for k, v in out.items()}
+    finally:
+        s.close()
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_vehicle_fmu_noise_follows_the_imu_noise_conventions(version):
+    """Each noise process alone, against its definition (gfins_fmi.ImuNoise, csrc/gf_noise.h):
+    white gyro std N / sqrt(h), white accelerometer std ASD sqrt(1/(2h)), Gauss-Markov
+    residual y_k - a y_(k-1) of std sigma sqrt(1 - a^2), random-walk steps of std K sqrt(h),
+    array white noise. 6000 steps x 3 axes: a sample std is within 1.5% (1 sigma, 18000
+    terms: 0.5%) of the truth; the bound 3% is 6 sigma."""
+    h = 0.01
+    clean = _vehicle_outputs({}, version=version)
+    noise = gf.ImuNoise(gyro_arw_deg_sqrt_h=0.05, accel_vrw_ug_sqrt_hz=50.0).fmu_parameters()
+    noisy = _vehicle_outputs({"noise": 1, "noise_seed": 7, "array_noise": 1e-3, **noise},
+                             version=version)
+    g = (noisy["gyro_rate"] - clean["gyro_rate"])[1:]
+    a = (noisy["specific_force"] - clean["specific_force"])[1:]
+    assert np.all(noisy["gyro_rate"][0] == clean["gyro_rate"][0])     # no noise at the start
+    assert np.std(g) == pytest.approx(noise["gyro_arw"] / np.sqrt(h), rel=0.03)
+    assert np.std(a) == pytest.approx(noise["accel_vrw"] * np.sqrt(0.5 / h), rel=0.03)
+    # the increments carry the same sample times h
+    assert np.max(np.abs((noisy["dtheta"] - clean["dtheta"])[1:] - g * h)) < 1e-15
+    A = (noisy["A"] - clean["A"])[1:, :9]
+    assert np.std(A) == pytest.approx(1e-3, rel=0.03)
+    assert np.all(noisy["A"][:, 9:] == 0.0)
+    sigma, tau, K = 2e-5, 0.5, 1e-6
+    gm = _vehicle_outputs({"noise": 1, "gyro_bias_instability": sigma, "gyro_correlation_time": tau,
+                           "accel_rrw": K}, version=version)
+    y = (gm["gyro_rate"] - clean["gyro_rate"])[1:]
+    r = y[1:] - np.exp(-h / tau) * y[:-1]
+    assert np.std(r) == pytest.approx(sigma * np.sqrt(1 - np.exp(-2 * h / tau)), rel=0.03)
+    b = (gm["specific_force"] - clean["specific_force"])[1:]
+    assert np.std(np.diff(b, axis=0)) == pytest.approx(K * np.sqrt(h), rel=0.03)
+
+
+def test_vehicle_fmu_noise_is_seeded_and_restored():
+    p = {"noise": 1, "accel_vrw": 1e-3, "gyro_arw": 1e-4, "array_noise": 1e-3}
+    a = _vehicle_outputs({**p, "noise_seed": 3}, n=300)
+    b = _vehicle_outputs({**p, "noise_seed": 3}, n=300)
+    c = _vehicle_outputs({**p, "noise_seed": 4}, n=300)
+    assert all(np.array_equal(a[k], b[k]) for k in a)
+    assert not np.array_equal(a["A"], c["A"]) and not np.array_equal(a["gyro_rate"], c["gyro_rate"])
+    # an FMU state holds the generators: roll back and replay the same noise
+    system = cosim.vehicle_navigation("gfnav_qin9", PROFILE, stop_s=4.0,
+                                      navigator_parameters={"strategy": 3})
+    system.components["vehicle"][1].update(p)
+    with cosim.CoSimulation(system, fmi_version=3) as m:
+        m.initialize()
+        m.run(stop_s=1.0)
+        st = m.get_state()
+        first = m.run(stop_s=2.0)
+        m.set_state(st)
+        again = m.run(stop_s=2.0)
+    assert all(np.array_equal(first[k], again[k]) for k in first)
+
+
+def test_vehicle_fmu_refuses_bad_noise_parameters():
+    for params, text in [({"noise": 1, "gyro_arw": -1.0}, "gyro_arw"),
+                         ({"noise": 1, "gyro_bias_instability": 1e-5, "gyro_correlation_time": 0.0},
+                          "gyro_correlation_time"),
+                         ({"noise": 1, "array_noise": float("nan")}, "array_noise"),
+                         ({"noise": 2}, "noise")]:
+        log = _Log()
+        s = _Slave(fmu_path("vehicle", 2), 2, log, False)
+        try:
+            with pytest.raises(Exception):
+                s.initialize(0.0, 1.0, params)
+            assert any(text in m for m in log.messages), (params, log.messages)
+        finally:
+            s.close()

@@ -31,6 +31,7 @@ UNITS = {
     "rad/s2": dict(rad=1, s=-2),
     "rad2/s2": dict(rad=2, s=-2),
     "s2/m": dict(m=-1, s=2),
+    "Hz": dict(s=-1),
 }
 
 CAUSALITY_C = {"independent": "FMU_CAUSALITY_INDEPENDENT", "parameter": "FMU_CAUSALITY_PARAMETER",

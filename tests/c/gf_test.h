@@ -38,8 +38,8 @@ static int gf_test_passed = 0, gf_test_failed = 0;
     } while (0)
 
 /* Deterministic uniform random numbers in [lo, hi) (xorshift64*), fixed seed per test. */
-typedef struct { uint64_t s; } gf_rng;
-static inline double gf_rng_uniform(gf_rng *r, double lo, double hi)
+typedef struct { uint64_t s; } test_rng;
+static inline double test_rng_uniform(test_rng *r, double lo, double hi)
 {
     r->s ^= r->s >> 12;
     r->s ^= r->s << 25;

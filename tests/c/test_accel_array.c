@@ -24,10 +24,10 @@ static void independent_output(const double u[3], const double th[3], const doub
     *A = th[0] * a[0] + th[1] * a[1] + th[2] * a[2];
 }
 
-static void random_v3(gf_rng *r, double lo, double hi, double v[3])
+static void random_v3(test_rng *r, double lo, double hi, double v[3])
 {
     for (int k = 0; k < 3; ++k)
-        v[k] = gf_rng_uniform(r, lo, hi);
+        v[k] = test_rng_uniform(r, lo, hi);
 }
 
 static void test_geometry_table(void)
@@ -55,7 +55,7 @@ static void test_geometry_table(void)
 
 static void test_forward_random_geometry(void)
 {
-    gf_rng rng = {12345};
+    test_rng rng = {12345};
     enum { N = 17, SAMPLES = 50 };
     double u[N * 3], th[N * 3];
     for (int i = 0; i < N; ++i) {

@@ -68,13 +68,13 @@ static double independent_output(const double u[3], const double th[3], const do
     return dot3(th, a);
 }
 
-static void random_v3(gf_rng *r, double lo, double hi, double v[3])
+static void random_v3(test_rng *r, double lo, double hi, double v[3])
 {
     for (int k = 0; k < 3; ++k)
-        v[k] = gf_rng_uniform(r, lo, hi);
+        v[k] = test_rng_uniform(r, lo, hi);
 }
 
-static void random_unit(gf_rng *r, double v[3])
+static void random_unit(test_rng *r, double v[3])
 {
     double n;
     do {
@@ -151,7 +151,7 @@ static void householder_apply(size_t m, size_t k, const double *v, double *M)
 }
 
 /* an m x m orthogonal matrix: the product of three random reflections */
-static void random_orthogonal(gf_rng *r, size_t m, double *Q)
+static void random_orthogonal(test_rng *r, size_t m, double *Q)
 {
     double v[64];
     for (size_t i = 0; i < m; ++i)
@@ -159,7 +159,7 @@ static void random_orthogonal(gf_rng *r, size_t m, double *Q)
             Q[i * m + j] = i == j ? 1.0 : 0.0;
     for (int h = 0; h < 3; ++h) {
         for (size_t i = 0; i < m; ++i)
-            v[i] = gf_rng_uniform(r, -1, 1);
+            v[i] = test_rng_uniform(r, -1, 1);
         householder_apply(m, m, v, Q);
     }
 }
@@ -231,14 +231,14 @@ static void test_svd_random(void)
 {
     static const size_t sizes[][2] = {{1, 1}, {2, 2}, {3, 1}, {3, 3}, {6, 6}, {9, 9}, {12, 12},
                                       {20, 12}, {40, 7}, {36, 36}, {50, 30}, {64, 36}, {64, 1}};
-    gf_rng rng = {0x5eedULL};
+    test_rng rng = {0x5eedULL};
     for (size_t c = 0; c < sizeof sizes / sizeof sizes[0]; ++c)
         for (int graded = 0; graded <= 1; ++graded) {
             const size_t m = sizes[c][0], n = sizes[c][1];
             /* graded: column j scaled by 10^(-6 j / n): singular values over 6 decades */
             for (size_t i = 0; i < m; ++i)
                 for (size_t j = 0; j < n; ++j)
-                    svd_A[i * n + j] = gf_rng_uniform(&rng, -1, 1) *
+                    svd_A[i * n + j] = test_rng_uniform(&rng, -1, 1) *
                                        (graded ? pow(10.0, -6.0 * (double)j / (double)n) : 1.0);
             memcpy(svd_U, svd_A, m * n * sizeof *svd_A);
             CHECK(gf_svd(m, n, svd_U, svd_s, svd_V) == GF_OK, "svd %zux%zu", m, n);
@@ -255,7 +255,7 @@ static void test_svd_random(void)
 static void test_svd_known_values(void)
 {
     static double Q1[64 * 64], Q2[36 * 36];
-    gf_rng rng = {4242};
+    test_rng rng = {4242};
     static const size_t sizes[][2] = {{5, 3}, {12, 12}, {64, 36}, {30, 20}};
     double worst = 0.0;
     for (size_t c = 0; c < sizeof sizes / sizeof sizes[0]; ++c) {
@@ -297,11 +297,11 @@ static void test_svd_known_values(void)
 
 static void test_svd_rank_deficient(void)
 {
-    gf_rng rng = {99};
+    test_rng rng = {99};
     const size_t m = 20, n = 8;
     for (size_t i = 0; i < m; ++i)
         for (size_t j = 0; j < n; ++j)
-            svd_A[i * n + j] = gf_rng_uniform(&rng, -1, 1);
+            svd_A[i * n + j] = test_rng_uniform(&rng, -1, 1);
     for (size_t i = 0; i < m; ++i) /* column 5 duplicates column 2 */
         svd_A[i * n + 5] = svd_A[i * n + 2];
     memcpy(svd_U, svd_A, m * n * sizeof *svd_A);
@@ -329,7 +329,7 @@ static void test_svd_rank_deficient(void)
     /* a zero column: its singular value is zero and V's last column is that axis */
     for (size_t i = 0; i < m; ++i)
         for (size_t j = 0; j < n; ++j)
-            svd_A[i * n + j] = j == 3 ? 0.0 : gf_rng_uniform(&rng, -1, 1);
+            svd_A[i * n + j] = j == 3 ? 0.0 : test_rng_uniform(&rng, -1, 1);
     memcpy(svd_U, svd_A, m * n * sizeof *svd_A);
     CHECK(gf_svd(m, n, svd_U, svd_s, svd_V) == GF_OK, "svd zero column");
     CHECK(svd_s[7] <= 1e-15 * svd_s[0], "zero column: s_min = %.3g", svd_s[7]);
@@ -354,10 +354,10 @@ static void test_svd_rank_deficient(void)
 static void test_svd_scaling(void)
 {
     static double B[64 * 36], Ub[64 * 36], sb[36], Vb[36 * 36];
-    gf_rng rng = {777};
+    test_rng rng = {777};
     const size_t m = 30, n = 12;
     for (size_t i = 0; i < m * n; ++i)
-        svd_A[i] = gf_rng_uniform(&rng, -1, 1);
+        svd_A[i] = test_rng_uniform(&rng, -1, 1);
     memcpy(svd_U, svd_A, m * n * sizeof *svd_A);
     CHECK(gf_svd(m, n, svd_U, svd_s, svd_V) == GF_OK, "svd base");
     const int exps[4] = {200, -200, 330, -330};
@@ -404,13 +404,13 @@ static void test_svd_errors(void)
 static void test_cholesky(void)
 {
     static double A[36 * 36], L[36 * 36], B[36 * 36], X[36 * 4], Y[36 * 4];
-    gf_rng rng = {31337};
+    test_rng rng = {31337};
     const size_t sizes[] = {1, 2, 3, 6, 12, 36};
     double worst_f = 0.0, worst_s = 0.0;
     for (size_t c = 0; c < sizeof sizes / sizeof sizes[0]; ++c) {
         const size_t n = sizes[c], k = 4;
         for (size_t i = 0; i < n * n; ++i)
-            B[i] = gf_rng_uniform(&rng, -1, 1);
+            B[i] = test_rng_uniform(&rng, -1, 1);
         for (size_t i = 0; i < n; ++i) /* A = B B^T + 1e-3 n I: SPD, cond up to ~1e5 */
             for (size_t j = 0; j < n; ++j) {
                 double acc = i == j ? 1e-3 * (double)n : 0.0;
@@ -445,7 +445,7 @@ static void test_cholesky(void)
          * plus the rounding of A X here (g_n |A||X|): both below
          * 2 g_(3n+1) sum_j sqrt(A_ii A_jj)|X_j| + g_n sum_j |A_ij||X_j| */
         for (size_t i = 0; i < n * k; ++i)
-            X[i] = gf_rng_uniform(&rng, -2, 2);
+            X[i] = test_rng_uniform(&rng, -2, 2);
         for (size_t i = 0; i < n; ++i)
             for (size_t cc = 0; cc < k; ++cc) {
                 double acc = 0.0;
@@ -548,14 +548,14 @@ static void eig3_measure(const double a[9], const double w[3], const double v[9]
 
 static void test_sym3_eig(void)
 {
-    gf_rng rng = {2024};
+    test_rng rng = {2024};
     double worst_res = 0, worst_orth = 0, worst_val = 0, worst_tr = 0;
     for (int rep = 0; rep < 500; ++rep) {
         double a[9];
-        const double sc = pow(10.0, gf_rng_uniform(&rng, -3, 3));
+        const double sc = pow(10.0, test_rng_uniform(&rng, -3, 3));
         for (int i = 0; i < 3; ++i)
             for (int j = i; j < 3; ++j)
-                a[3 * i + j] = a[3 * j + i] = sc * gf_rng_uniform(&rng, -1, 1);
+                a[3 * i + j] = a[3 * j + i] = sc * test_rng_uniform(&rng, -1, 1);
         double w[3], v[9], e[3], res, orth;
         int sorted;
         gf_sym3_eig(a, w, v);
@@ -824,11 +824,11 @@ static void ref_kalman_update(size_t n, size_t m, double *x, double *P, const do
  * semi-definite (smallest eigenvalue >= -64 eps max|P|). */
 static void test_kalman_random(void)
 {
-    gf_rng rng = {8080};
+    test_rng rng = {8080};
     enum { N = 6, M = 3 };
     double x[N], P[N * N], xr[N], Pr[N * N];
     for (int i = 0; i < N; ++i)
-        x[i] = gf_rng_uniform(&rng, -1, 1);
+        x[i] = test_rng_uniform(&rng, -1, 1);
     for (int i = 0; i < N * N; ++i)
         P[i] = (i % (N + 1) == 0) ? 1.0 : 0.0;
     gf_kalman kf;
@@ -840,19 +840,19 @@ static void test_kalman_random(void)
     for (int k = 0; k < 1500; ++k) {
         double F[N * N], Q[N * N], H[M * N], R[M * M], r[M];
         for (int i = 0; i < N * N; ++i) {
-            F[i] = (i % (N + 1) == 0 ? 1.0 : 0.0) + 0.05 * gf_rng_uniform(&rng, -1, 1);
+            F[i] = (i % (N + 1) == 0 ? 1.0 : 0.0) + 0.05 * test_rng_uniform(&rng, -1, 1);
             Q[i] = (i % (N + 1) == 0) ? 1e-6 : 0.0;
         }
         const size_t m = (size_t)(1 + k % M);
         for (size_t i = 0; i < m * N; ++i)
-            H[i] = gf_rng_uniform(&rng, -1, 1);
+            H[i] = test_rng_uniform(&rng, -1, 1);
         /* R = diag * 10^(-10 .. 0) plus a correlation */
-        const double lev = k < 750 ? pow(10.0, gf_rng_uniform(&rng, -2, 0)) : pow(10.0, gf_rng_uniform(&rng, -10, 0));
+        const double lev = k < 750 ? pow(10.0, test_rng_uniform(&rng, -2, 0)) : pow(10.0, test_rng_uniform(&rng, -10, 0));
         for (size_t i = 0; i < m; ++i)
             for (size_t j = 0; j < m; ++j)
                 R[i * m + j] = i == j ? lev : 0.3 * lev;
         for (size_t i = 0; i < m; ++i)
-            r[i] = gf_rng_uniform(&rng, -1, 1);
+            r[i] = test_rng_uniform(&rng, -1, 1);
         ok &= gf_kalman_predict(&kf, F, (k % 3) ? Q : NULL, 1) == GF_OK;
         /* reference predict */
         double FP[N * N], xp[N];
@@ -1035,7 +1035,7 @@ static void layout_twelve(double l, layout *L)
         }
 }
 
-static void layout_random(gf_rng *r, size_t n, layout *L)
+static void layout_random(test_rng *r, size_t n, layout *L)
 {
     L->name = "random";
     L->n = n;
@@ -1213,7 +1213,7 @@ static void check_solver(const layout *L, const gf_array_solver *s, const expect
     CHECK(dI <= 64 * EPS * s->cond, "%s: pinv H = I (%.3g)", L->name, dI);
 
     /* exact outputs of random motions, w_pred = true w */
-    gf_rng rng = {(uint64_t)(1000 + L->n)};
+    test_rng rng = {(uint64_t)(1000 + L->n)};
     double worst = 0.0, worst_tol = 0.0;
     for (int rep_i = 0; rep_i < 100; ++rep_i) {
         double f[3], w[3], wd[3], A[GF_ARRAY_MAX_SENSORS], x[GF_X_N], p[6], tol[GF_X_N];
@@ -1275,7 +1275,7 @@ static void test_solver_layouts(void)
     }
     /* seed 000 closed forms on exact outputs */
     {
-        gf_rng rng = {55};
+        test_rng rng = {55};
         double worst = 0.0;
         for (int rep = 0; rep < 200; ++rep) {
             double f[3], w[3], wd[3], A[9], x[GF_X_N];
@@ -1323,7 +1323,7 @@ static void test_solver_layouts(void)
     for (int k = 0; k < 3; ++k)
         CHECK_CLOSE(s.noise_gain[3 + k], 1.0 / (sqrt(2.0) * l), 1e-13, "cube6 gain w_dot = 1/(sqrt2 l)");
     {
-        gf_rng rng = {56};
+        test_rng rng = {56};
         double worst = 0.0;
         for (int rep = 0; rep < 200; ++rep) {
             double f[3], w[3], wd[3], A[6], x[GF_X_N], tol[GF_X_N];
@@ -1363,7 +1363,7 @@ static void test_solver_layouts(void)
     check_solver(&L, &s, &all, l);
 
     /* a random array of 20 sensors, and a larger lever arm for layout 12 */
-    gf_rng rng = {20};
+    test_rng rng = {20};
     layout_random(&rng, 20, &L);
     CHECK(to_geometry(&L, &g) == GF_OK, "random20 geometry");
     CHECK(gf_array_solver_init(&s, &g, &unobs) == GF_OK && unobs == 0, "random20 solver");
@@ -1427,7 +1427,7 @@ static void test_solver_unsolvable(void)
      * (u x theta) . w_dot) but computed from other numbers, so the dependency shows as
      * a round-off singular value (~1e-16 s_max), not an exact zero */
     {
-        gf_rng r6 = {66};
+        test_rng r6 = {66};
         layout_random(&r6, 6, &L);
         gf_array_geometry g6;
         gf_array_solver s6;
@@ -1454,7 +1454,7 @@ static void test_solver_unsolvable(void)
     }
     check_unsolvable("qin9, sensors 7 = 8", &L, 0x10);
     /* five random sensors: one null vector touching all six */
-    gf_rng rng = {5};
+    test_rng rng = {5};
     layout_random(&rng, 5, &L);
     check_unsolvable("5 random sensors", &L, 0x3F);
     /* five of Qin's sensors (the radial ones 1..5): f is still determined, w_dot not at all */
@@ -1612,7 +1612,7 @@ typedef struct run_case {
 
 static void make_layout(int id, layout *L)
 {
-    gf_rng rng = {20};
+    test_rng rng = {20};
     switch (id) {
     case 0: layout_cube6(0.1, L); break;
     case 1: layout_qin9(0.1, L); break;
@@ -1942,13 +1942,13 @@ static void test_rate_fused_model(void)
             for (int b = 0; b < m; ++b)
                 R[a * m + b] = s2 * Gi[(6 + a) * k_est + 6 + b];
         double wd_prev[3] = {0, 0, 0}, worst = 0.0, worst_out = 0.0;
-        gf_rng rng = {(uint64_t)(900 + id)};
+        test_rng rng = {(uint64_t)(900 + id)};
         for (int k = 0; k < 50; ++k) {
             double f[3], A[GF_ARRAY_MAX_SENSORS];
             cr_force(k * dt, f);
             outputs(&L, f, kW, zero3, A);
             for (size_t i = 0; i < L.n; ++i)
-                A[i] += gf_rng_uniform(&rng, -1e-3, 1e-3);
+                A[i] += test_rng_uniform(&rng, -1e-3, 1e-3);
             double xo[3], wo[3], wdo[3], Wo[6];
             uint8_t fl;
             CHECK(gf_gfins_step(&st, A, dt, xo, wo, wdo, Wo, &fl) == GF_OK, "fused model step %d", k);

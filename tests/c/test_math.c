@@ -13,13 +13,13 @@ int main(void)
     CHECK(c[0] == 0 && c[1] == 0 && c[2] == 1, "e_x x e_y = e_z, got [%g %g %g]", c[0], c[1], c[2]);
 
     /* skew(a) b = a x b for random vectors (exact: same products, same sums) */
-    gf_rng rng = {0x9E3779B97F4A7C15ULL};
+    test_rng rng = {0x9E3779B97F4A7C15ULL};
     for (int n = 0; n < 100; ++n) {
         double a[3], b[3], sb[3], axb[3];
         gf_mat3 s;
         for (int k = 0; k < 3; ++k) {
-            a[k] = gf_rng_uniform(&rng, -2, 2);
-            b[k] = gf_rng_uniform(&rng, -2, 2);
+            a[k] = test_rng_uniform(&rng, -2, 2);
+            b[k] = test_rng_uniform(&rng, -2, 2);
         }
         gf_m3_skew(a, &s);
         gf_m3_mul_v3(&s, b, sb);
@@ -41,10 +41,10 @@ int main(void)
         double q[4], v[3], mv[3], qv[3], qc[4], qq[4];
         gf_mat3 m, mt, mtm;
         for (int k = 0; k < 4; ++k)
-            q[k] = gf_rng_uniform(&rng, -1, 1);
+            q[k] = test_rng_uniform(&rng, -1, 1);
         CHECK(gf_q_normalize(q, q), "normalisable quaternion");
         for (int k = 0; k < 3; ++k)
-            v[k] = gf_rng_uniform(&rng, -3, 3);
+            v[k] = test_rng_uniform(&rng, -3, 3);
         gf_q_to_dcm(q, &m);
         gf_m3_mul_v3(&m, v, mv);
         gf_q_rotate(q, v, qv);

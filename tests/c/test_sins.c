@@ -132,14 +132,14 @@ static void test_earth_published_values(void)
 
 static void test_earth_against_reference(void)
 {
-    gf_rng rng = {0x5EED0001ULL};
+    test_rng rng = {0x5EED0001ULL};
     double max_rel_g = 0.0, max_rel_R = 0.0, max_ab = 0.0;
     for (int n = 0; n < 2000; ++n) {
-        const double lat = gf_rng_uniform(&rng, -0.5 * PI + 1e-6, 0.5 * PI - 1e-6);
-        const double h = gf_rng_uniform(&rng, -500.0, 20000.0);
+        const double lat = test_rng_uniform(&rng, -0.5 * PI + 1e-6, 0.5 * PI - 1e-6);
+        const double h = test_rng_uniform(&rng, -500.0, 20000.0);
         double v[3];
         for (int k = 0; k < 3; ++k)
-            v[k] = gf_rng_uniform(&rng, -300.0, 300.0);
+            v[k] = test_rng_uniform(&rng, -300.0, 300.0);
         const double sign = (n & 1) ? -1.0 : 1.0;
         gf_earth e;
         CHECK(gf_earth_update(&e, lat, h, v, sign) == GF_OK, "gf_earth_update at lat %g h %g", lat, h);
@@ -271,13 +271,13 @@ static void test_euler_conventions(void)
      * matrix product; the round trip returns the angles. Quaternion: sums of products
      * of rounded half-angle trig values, 4 eps. Round trip: asin and atan2 of DCM
      * entries with ~2 eps absolute error, amplified by 1/cos(theta) -> 32 eps / cos. */
-    gf_rng rng = {0xE0E0E0E0ULL};
+    test_rng rng = {0xE0E0E0E0ULL};
     double max_rt = 0.0;
     enum { NE = 2000 };
     static double qs[NE * 4], es[NE * 3], eb[NE * 3];
     for (int n = 0; n < NE; ++n) {
-        double e[3] = {gf_rng_uniform(&rng, 0.0, 2 * PI), gf_rng_uniform(&rng, -0.5 * PI + 1e-3, 0.5 * PI - 1e-3),
-                       gf_rng_uniform(&rng, -PI, PI)};
+        double e[3] = {test_rng_uniform(&rng, 0.0, 2 * PI), test_rng_uniform(&rng, -0.5 * PI + 1e-3, 0.5 * PI - 1e-3),
+                       test_rng_uniform(&rng, -PI, PI)};
         if (e[2] == -PI)
             e[2] = PI; /* roll range (-pi, pi] */
         double qr[4], Cq[3][3], Ce[3][3];
@@ -953,20 +953,20 @@ static double r_gy[NR * 3], r_ac[NR * 3], r_t[NR];
 /* a smooth, busy motion with noise: increments or rates, and irregular sample times */
 static void make_record(int rates, uint64_t seed)
 {
-    gf_rng rng = {seed};
+    test_rng rng = {seed};
     double t = 0.0;
     for (int k = 0; k < NR; ++k) {
         /* intervals on a 2^-10 s grid: every time sum and difference is exact, so the
          * rows' times do not depend on how the core forms them */
-        const double T = floor((0.01 + gf_rng_uniform(&rng, -0.002, 0.002)) * 1024.0 + 0.5) / 1024.0;
+        const double T = floor((0.01 + test_rng_uniform(&rng, -0.002, 0.002)) * 1024.0 + 0.5) / 1024.0;
         t += T;
         r_t[k] = 50.0 + t;
-        const double w[3] = {0.3 * sin(0.7 * t) + gf_rng_uniform(&rng, -0.01, 0.01),
-                             0.2 * cos(1.1 * t) + gf_rng_uniform(&rng, -0.01, 0.01),
-                             0.5 * sin(0.3 * t) + gf_rng_uniform(&rng, -0.01, 0.01)};
-        const double f[3] = {1.0 + sin(0.5 * t) + gf_rng_uniform(&rng, -0.1, 0.1),
-                             -0.5 + cos(0.2 * t) + gf_rng_uniform(&rng, -0.1, 0.1),
-                             9.8 + 0.3 * sin(0.9 * t) + gf_rng_uniform(&rng, -0.1, 0.1)};
+        const double w[3] = {0.3 * sin(0.7 * t) + test_rng_uniform(&rng, -0.01, 0.01),
+                             0.2 * cos(1.1 * t) + test_rng_uniform(&rng, -0.01, 0.01),
+                             0.5 * sin(0.3 * t) + test_rng_uniform(&rng, -0.01, 0.01)};
+        const double f[3] = {1.0 + sin(0.5 * t) + test_rng_uniform(&rng, -0.1, 0.1),
+                             -0.5 + cos(0.2 * t) + test_rng_uniform(&rng, -0.1, 0.1),
+                             9.8 + 0.3 * sin(0.9 * t) + test_rng_uniform(&rng, -0.1, 0.1)};
         for (int i = 0; i < 3; ++i) {
             r_gy[3 * k + i] = rates ? w[i] : 0.01 * w[i];
             r_ac[3 * k + i] = rates ? f[i] : 0.01 * f[i];

@@ -18,47 +18,82 @@ static size_t array_size(int32_t layout)
     return layout == 0 ? 6u : layout == 1 ? 9u : 12u;
 }
 
-/* Sensor outputs of the current truth sample: IMU (with errors if asked) and array. */
-static gf_status sense(ModelData *d, double dt_s)
+/* Sensor outputs of a truth sample (IMU with errors and noise if asked; array), computed
+ * into *o from d's parameters and generator states; nothing in d changes, so a failed
+ * step leaves the model as it was (the caller commits *o). */
+typedef struct Sensed {
+    double gyro_rad_s[3], accel_m_s2[3], dtheta_rad[3], dv_m_s[3], A_m_s2[VEHICLE_ARRAY_MAX];
+    gf_imu_noise_state imu_noise;
+    gf_rng array_rng;
+} Sensed;
+
+static gf_status sense(const ModelData *d, const gf_vehicle_sample *x, double dt_s, Sensed *o)
 {
-    const gf_vehicle_sample *x = &d->out;
-    double w[3], f[3], mw[3], mf[3];
-    memcpy(w, x->gyro_rad_s, sizeof w);
-    memcpy(f, x->accel_m_s2, sizeof f);
-    memcpy(d->dtheta_rad, x->dtheta_rad, sizeof d->dtheta_rad);
-    memcpy(d->dv_m_s, x->dv_m_s, sizeof d->dv_m_s);
+    double *w = o->gyro_rad_s, *f = o->accel_m_s2;
+    memcpy(w, x->gyro_rad_s, sizeof o->gyro_rad_s);
+    memcpy(f, x->accel_m_s2, sizeof o->accel_m_s2);
+    memcpy(o->dtheta_rad, x->dtheta_rad, sizeof o->dtheta_rad);
+    memcpy(o->dv_m_s, x->dv_m_s, sizeof o->dv_m_s);
+    o->imu_noise = d->imu_noise;
+    o->array_rng = d->array_rng;
+    size_t done = 0;
     if (d->imu_errors) {
-        size_t done = 0;
         gf_status st = gf_imu_apply(&d->imu, 1, x->gyro_rad_s, x->accel_m_s2, NULL, w, f, &done);
         if (st != GF_OK)
             return st;
         if (dt_s > 0.0) { /* increments as mean rates over the step, as the SINS FMU compensates */
+            double mw[3], mf[3], ew[3], ef[3]; /* gf_imu_apply's outputs must not alias its inputs */
             for (int i = 0; i < 3; ++i) {
                 mw[i] = x->dtheta_rad[i] / dt_s;
                 mf[i] = x->dv_m_s[i] / dt_s;
             }
-            double ew[3], ef[3]; /* gf_imu_apply's outputs must not alias its inputs */
             st = gf_imu_apply(&d->imu, 1, mw, mf, NULL, ew, ef, &done);
             if (st != GF_OK)
                 return st;
             for (int i = 0; i < 3; ++i) {
-                d->dtheta_rad[i] = ew[i] * dt_s;
-                d->dv_m_s[i] = ef[i] * dt_s;
+                o->dtheta_rad[i] = ew[i] * dt_s;
+                o->dv_m_s[i] = ef[i] * dt_s;
             }
         }
     }
-    memcpy(d->gyro_rad_s, w, sizeof w);
-    memcpy(d->accel_m_s2, f, sizeof f);
+    if (d->noise && dt_s > 0.0) { /* one noise sample a step, on rates and increments */
+        double gn[3], an[3];
+        const gf_status st = gf_imu_noise_run(&o->imu_noise, 1, dt_s, gn, an);
+        if (st != GF_OK)
+            return st;
+        for (int i = 0; i < 3; ++i) {
+            w[i] += gn[i];
+            f[i] += an[i];
+            o->dtheta_rad[i] += gn[i] * dt_s;
+            o->dv_m_s[i] += an[i] * dt_s;
+        }
+    }
     double A[GF_ARRAY_MAX_SENSORS];
-    size_t done = 0;
     const gf_status st = gf_array_forward(&d->array, 1, x->accel_m_s2, x->gyro_rad_s,
                                           x->gyro_dot_rad_s2, A, &done);
     if (st != GF_OK)
         return st;
     const size_t n = array_size(d->array_layout);
+    double e[VEHICLE_ARRAY_MAX] = {0.0};
+    if (d->noise && dt_s > 0.0 && d->array_noise_m_s2 > 0.0) {
+        gf_rng_normal(&o->array_rng, n, e);
+        for (size_t i = 0; i < n; ++i)
+            e[i] *= d->array_noise_m_s2;
+    }
     for (size_t i = 0; i < VEHICLE_ARRAY_MAX; ++i)
-        d->A_m_s2[i] = i < n ? A[i] + d->array_bias_m_s2[i] : 0.0;
+        o->A_m_s2[i] = i < n ? A[i] + d->array_bias_m_s2[i] + e[i] : 0.0;
     return GF_OK;
+}
+
+static void commit(ModelData *d, const Sensed *o)
+{
+    memcpy(d->gyro_rad_s, o->gyro_rad_s, sizeof d->gyro_rad_s);
+    memcpy(d->accel_m_s2, o->accel_m_s2, sizeof d->accel_m_s2);
+    memcpy(d->dtheta_rad, o->dtheta_rad, sizeof d->dtheta_rad);
+    memcpy(d->dv_m_s, o->dv_m_s, sizeof d->dv_m_s);
+    memcpy(d->A_m_s2, o->A_m_s2, sizeof d->A_m_s2);
+    d->imu_noise = o->imu_noise;
+    d->array_rng = o->array_rng;
 }
 
 FmuStatus model_exit_initialization(FmuInstance *instance, ModelData *d, double start_time_s)
@@ -99,6 +134,30 @@ FmuStatus model_exit_initialization(FmuInstance *instance, ModelData *d, double 
                       ">= 1e-6 m", (int)d->array_layout, d->lever_arm_m);
         return FMU_ERROR;
     }
+    if (d->noise != 0 && d->noise != 1) {
+        fmu_log_error(instance, "parameter noise = %d must be 0 or 1", (int)d->noise);
+        return FMU_ERROR;
+    }
+    {
+        static const char *const names[] = {"gyro_arw", "gyro_bias_instability",
+            "gyro_correlation_time", "gyro_rrw", "accel_vrw", "accel_bias_instability",
+            "accel_correlation_time", "accel_rrw", "gyro_band", "accel_band", "band_hz"};
+        int bad = -1;
+        if (gf_imu_noise_init(&d->imu_noise, &d->noise_params, (uint64_t)(uint32_t)d->noise_seed,
+                              &bad) != GF_OK) {
+            fmu_log_error(instance, "noise parameter %s must be finite and >= 0 (a correlation "
+                          "time or band_hz > 0 where its std is > 0)",
+                          bad >= 0 && bad < 11 ? names[bad] : "?");
+            return FMU_ERROR;
+        }
+        /* the array's generator: another stream of the same seed */
+        gf_rng_seed(&d->array_rng, ((uint64_t)(uint32_t)d->noise_seed) ^ 0xA5A5A5A5A5A5A5A5ULL);
+        if (!(d->array_noise_m_s2 >= 0.0) || !isfinite(d->array_noise_m_s2)) {
+            fmu_log_error(instance, "parameter array_noise = %g m/s2 must be finite and >= 0",
+                          d->array_noise_m_s2);
+            return FMU_ERROR;
+        }
+    }
     if (!gf_all_finite(d->array_bias_m_s2, VEHICLE_ARRAY_MAX)) {
         fmu_log_error(instance, "parameter array_bias must be finite");
         return FMU_ERROR;
@@ -130,11 +189,13 @@ FmuStatus model_exit_initialization(FmuInstance *instance, ModelData *d, double 
         return FMU_ERROR;
     }
     d->active_cmd[0] = d->active_cmd[1] = NAN;
-    st = sense(d, 0.0);
+    Sensed sensed;
+    st = sense(d, &d->out, 0.0, &sensed);
     if (st != GF_OK) {
         fmu_log_error(instance, "sensor outputs at the start failed: %s", gf_status_string(st));
         return FMU_ERROR;
     }
+    commit(d, &sensed);
     return FMU_OK;
 }
 
@@ -165,18 +226,18 @@ FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double 
                                             : gf_status_string(st));
         return FMU_ERROR;
     }
-    const gf_vehicle_sample previous = d->out;
+    Sensed sensed;
+    st = sense(d, &out, h_s, &sensed);
+    if (st != GF_OK) {
+        fmu_log_error(instance, "t = %.9g s: sensor outputs failed: %s", t_s, gf_status_string(st));
+        return FMU_ERROR;
+    }
     if (d->drive == 1) {
         d->active_cmd[0] = d->speed_cmd_m_s;
         d->active_cmd[1] = d->heading_rate_cmd_rad_s;
     }
     d->out = out;
-    st = sense(d, h_s);
-    if (st != GF_OK) {
-        d->out = previous;
-        fmu_log_error(instance, "t = %.9g s: sensor outputs failed: %s", t_s, gf_status_string(st));
-        return FMU_ERROR;
-    }
+    commit(d, &sensed);
     d->vehicle = next;
     return FMU_OK;
 }

@@ -6,6 +6,7 @@
 
 #include "gf_accel_array.h"
 #include "gf_imu_error.h"
+#include "gf_noise.h"
 #include "gf_vehicle.h"
 #include "imu_params.h"
 
@@ -20,6 +21,9 @@ typedef struct ModelData {
     double seg_dheading_rad[GF_VEHICLE_MAX_SEGMENTS];
     double command_time_s, lever_arm_m, array_bias_m_s2[VEHICLE_ARRAY_MAX];
     FmuImuParams imu_params;
+    int32_t noise, noise_seed;
+    gf_imu_noise noise_params;            /* SI, the conventions of gfins_fmi.ImuNoise */
+    double array_noise_m_s2;
     /* inputs */
     double speed_cmd_m_s, heading_rate_cmd_rad_s;
     /* outputs */
@@ -30,6 +34,8 @@ typedef struct ModelData {
     gf_vehicle_state vehicle;
     double active_cmd[2];                 /* command being followed (drive = 1); NaN: none */
     gf_imu_errors imu;
+    gf_imu_noise_state imu_noise;         /* the generators are state: restored with it */
+    gf_rng array_rng;
     gf_array_geometry array;
 } ModelData;
 

@@ -1,0 +1,72 @@
+/* gf_noise.h — random sensor errors for simulation inside the C core (the vehicle FMU):
+ * a seeded generator kept in the caller's struct (no global state: an FMU state holds
+ * it, so a restored state replays the same noise) and the IMU noise model of
+ * gfins_fmi.ImuNoise, in SI units, with the same per-sample conventions:
+ *   gyro white:   std per sample N / sqrt(dt)        (N, angle random walk, rad/sqrt(s))
+ *   accel white:  std per sample S sqrt(1 / (2 dt))  (S, one-sided ASD, m/s^2/sqrt(Hz))
+ *   Gauss-Markov: y_k = a y_(k-1) + (1 - a) x_k, a = exp(-dt / tau), scaled to the
+ *                 stationary std and started in steady state
+ *   band-limited: the same recursion with a = exp(-2 pi f_c dt)
+ *   random walk:  b_k = b_(k-1) + K sqrt(dt) w_k        (K in unit/sqrt(s))
+ * Generator: xoshiro256** (Blackman & Vigna) seeded by splitmix64; normal deviates by
+ * Box-Muller. The numpy generator of ImuNoise.sample and this one draw different
+ * numbers from the same distributions (tests compare the statistics). */
+#ifndef GF_NOISE_H
+#define GF_NOISE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "gf_status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* CDEF BEGIN */
+typedef struct gf_rng {
+    uint64_t s[4];
+    double spare;          /* second Box-Muller deviate */
+    int has_spare;
+} gf_rng;
+
+typedef struct gf_imu_noise {
+    double gyro_arw_rad_sqrt_s;
+    double gyro_gm_std_rad_s, gyro_gm_tau_s;          /* bias instability */
+    double gyro_rrw_rad_s_sqrt_s;                     /* rate random walk */
+    double accel_asd_m_s2_sqrt_hz;                    /* white, one-sided ASD */
+    double accel_gm_std_m_s2, accel_gm_tau_s;
+    double accel_rw_m_s2_sqrt_s;
+    double gyro_band_std_rad_s, accel_band_std_m_s2, band_hz;
+} gf_imu_noise;
+
+typedef struct gf_imu_noise_state {
+    gf_imu_noise p;
+    gf_rng rng;
+    double gyro_gm[3], gyro_rw[3], gyro_band[3];
+    double accel_gm[3], accel_rw[3], accel_band[3];
+    int started;           /* 0 until the first sample (steady-state start drawn then) */
+} gf_imu_noise_state;
+
+/* Seeds a generator (any seed, 0 included). */
+gf_status gf_rng_seed(gf_rng *rng, uint64_t seed);
+/* n standard normal deviates. */
+gf_status gf_rng_normal(gf_rng *rng, size_t n, double *out);
+
+/* Checks the parameters (finite, >= 0; correlation times and band > 0 where the
+ * corresponding std is > 0) and seeds the state. Error: GF_ERR_BAD_PARAMETER with
+ * *bad (may be NULL) = index of the offending field in the struct order, 0-based. */
+gf_status gf_imu_noise_init(gf_imu_noise_state *state, const gf_imu_noise *params,
+                            uint64_t seed, int *bad);
+
+/* n samples of noise for sampling interval dt_s: gyro (n x 3, rad/s) and accel (n x 3,
+ * m/s^2) to add to the sensor rates. Error: GF_ERR_BAD_TIME (dt <= 0). */
+gf_status gf_imu_noise_run(gf_imu_noise_state *state, size_t n, double dt_s, double *gyro_rad_s,
+                           double *accel_m_s2);
+/* CDEF END */
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* GF_NOISE_H */

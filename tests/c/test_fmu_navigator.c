@@ -1,0 +1,264 @@
+/* test_fmu_navigator.c — a navigator FMU model through the FMI 2.0 glue, linked into
+ * this executable so that it runs under ASan/UBSan/LeakSanitizer; compiled twice:
+ * NAV_SINS (fmu/models/sins, increments) and otherwise the gyro-free navigator
+ * (fmu/models/gfnav, GFNAV_LAYOUT 1 = qin9, sqrt strategy). Sensor data: the vehicle
+ * truth source (gf_vehicle) on a short run with a turn.
+ *   1. the FMU equals the core called directly (gf_sins_step / gf_gfnav_run with dt = h)
+ *      on the same samples, bit for bit;
+ *   2. skip_steps = 2: the first two doSteps are ignored and the navigation started at
+ *      t_2 from the state given equals the core started there;
+ *   3. FMU state mid-run: set back and replay, and serialize into a fresh instance: the
+ *      same outputs;
+ *   4. skip_steps < 0 is refused with a logged reason. */
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "fmi2Functions.h"
+#include "fmu_instance.h"
+#include "gf_gfins.h"
+#include "gf_math.h"
+#include "gf_test.h"
+#include "gf_vehicle.h"
+
+#define H_S 0.01
+enum { N = 1500 };   /* 15 s: 2 s rest, start to 15 m/s, a 180 deg turn in 6 s */
+
+static gf_vehicle_sample g_truth[N];
+static double g_A[N][9];
+static char g_log[4096];
+
+static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status,
+                   fmi2String category, fmi2String message, ...)
+{
+    (void)env; (void)name; (void)status; (void)category;
+    va_list ap;
+    va_start(ap, message);
+    const size_t used = strlen(g_log);
+    vsnprintf(g_log + used, sizeof g_log - used, message, ap);
+    va_end(ap);
+}
+
+static const fmi2CallbackFunctions kCallbacks = {logger, calloc, free, NULL, NULL};
+
+static fmi2ValueReference vr(const char *name)
+{
+    for (size_t i = 0; i < sizeof kFmi2Variables / sizeof kFmi2Variables[0]; ++i)
+        if (strcmp(kFmi2Variables[i].name, name) == 0)
+            return kFmi2Variables[i].value_reference;
+    CHECK(0, "no variable %s", name);
+    return 0;
+}
+
+static void set_vec(fmi2Component c, const char *base, const double *v, int n)
+{
+    char name[32];
+    for (int i = 0; i < n; ++i) {
+        snprintf(name, sizeof name, "%s[%d]", base, i + 1);
+        const fmi2ValueReference r = vr(name);
+        fmi2SetReal(c, &r, 1, &v[i]);
+    }
+}
+
+static void set_real(fmi2Component c, const char *name, double v)
+{
+    const fmi2ValueReference r = vr(name);
+    fmi2SetReal(c, &r, 1, &v);
+}
+
+static void set_int(fmi2Component c, const char *name, int v)
+{
+    const fmi2ValueReference r = vr(name);
+    const fmi2Integer x = v;
+    fmi2SetInteger(c, &r, 1, &x);
+}
+
+static void make_data(void)
+{
+    gf_vehicle_profile p;
+    memset(&p, 0, sizeof p);
+    p.lat0_rad = 0.5235987755982988;
+    p.lon0_rad = 1.9896753472735356;
+    p.h0_m = 100.0;
+    p.n_segments = 4;
+    const double seg[4][4] = {{2, 0, 0, 0}, {3, 15, 0, 0}, {1, 0, 0, 0}, {6, 0, 0, GF_PI}};
+    for (int i = 0; i < 4; ++i) {
+        p.segment[i].duration_s = seg[i][0];
+        p.segment[i].dspeed_m_s = seg[i][1];
+        p.segment[i].dheading_rad = seg[i][3];
+    }
+    gf_vehicle_state s;
+    CHECK(gf_vehicle_init(&s, &p, 0.0, &g_truth[0], NULL) == GF_OK, "vehicle");
+    CHECK(gf_vehicle_run(&s, N - 1, H_S, &g_truth[1], NULL) == GF_OK, "vehicle run");
+    gf_array_geometry g;
+    gf9_geometry(0.1, &g);
+    for (int k = 0; k < N; ++k)
+        gf_array_forward(&g, 1, g_truth[k].accel_m_s2, g_truth[k].gyro_rad_s,
+                         g_truth[k].gyro_dot_rad_s2, g_A[k], NULL);
+}
+
+/* Outputs read after each step: q, v, lat, lon. */
+enum { N_OUT = 9 };
+static double g_fmu[N][N_OUT], g_fmu2[N][N_OUT], g_core[N][N_OUT];
+
+static fmi2Component open_ready(int skip)
+{
+    const gf_vehicle_sample *x0 = &g_truth[skip];
+    g_log[0] = '\0';
+    fmi2Component c = fmi2Instantiate("nav", fmi2CoSimulation, INSTANTIATION_TOKEN, "",
+                                      &kCallbacks, fmi2False, fmi2False);
+    CHECK(c != NULL, "instantiate");
+    fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0);
+    fmi2EnterInitializationMode(c);
+    set_vec(c, "q0", x0->q_bn, 4);
+    set_vec(c, "v0", x0->v_n_m_s, 3);
+    set_real(c, "lat0", x0->lat_rad);
+    set_real(c, "lon0", x0->lon_rad);
+    set_real(c, "h0", x0->h_m);
+    set_int(c, "vertical_mode", 1);
+    set_real(c, "hold_height", 100.0);
+    set_int(c, "skip_steps", skip);
+#ifndef NAV_SINS
+    set_vec(c, "omega_init", x0->gyro_rad_s, 3);
+#endif
+    return c;
+}
+
+static void fmu_steps(fmi2Component c, int k0, int k1, double out[][N_OUT])
+{
+    char name[16];
+    fmi2ValueReference r[N_OUT];
+    for (int i = 0; i < 4; ++i) {
+        snprintf(name, sizeof name, "q[%d]", i + 1);
+        r[i] = vr(name);
+    }
+    for (int i = 0; i < 3; ++i) {
+        snprintf(name, sizeof name, "v[%d]", i + 1);
+        r[4 + i] = vr(name);
+    }
+    r[7] = vr("lat");
+    r[8] = vr("lon");
+    for (int k = k0; k < k1; ++k) {
+#ifdef NAV_SINS
+        set_vec(c, "dtheta", g_truth[k].dtheta_rad, 3);
+        set_vec(c, "dv", g_truth[k].dv_m_s, 3);
+#else
+        set_vec(c, "A", g_A[k], 9);
+#endif
+        CHECK(fmi2DoStep(c, k * H_S, H_S, fmi2True) == fmi2OK, "doStep %d: %s", k, g_log);
+        fmi2GetReal(c, r, N_OUT, out[k]);
+    }
+}
+
+/* The core directly from sample k0 (its initial state): rows k0.. of g_core. */
+static void core_run(int k0)
+{
+    const gf_vehicle_sample *x0 = &g_truth[k0];
+#ifdef NAV_SINS
+    gf_sins_config cfg;
+    gf_sins_config_default(&cfg);
+    cfg.vertical = GF_SINS_VERTICAL_HOLD;
+    cfg.hold_height_m = 100.0;
+    gf_sins_state s;
+    CHECK(gf_sins_init(&s, &cfg, x0->q_bn, x0->v_n_m_s, x0->lat_rad, x0->lon_rad, x0->h_m,
+                       k0 * H_S) == GF_OK, "sins init");
+    for (int k = k0; k < N; ++k) {
+        if (k > k0) /* the sample at the start carries no increment */
+            CHECK(gf_sins_step(&s, g_truth[k].dtheta_rad, g_truth[k].dv_m_s, H_S, NAN) == GF_OK,
+                  "sins step");
+        memcpy(g_core[k], s.q_bn, 4 * sizeof(double));
+        memcpy(g_core[k] + 4, s.v_n_m_s, 3 * sizeof(double));
+        g_core[k][7] = s.lat_rad;
+        g_core[k][8] = s.lon_rad;
+    }
+#else
+    gf_array_geometry g;
+    gf9_geometry(0.1, &g);
+    gf_rate_config rc;
+    gf_rate_config_default(&rc);
+    rc.strategy = GF_RATE_SQRT;
+    gf_sins_config sc;
+    gf_sins_config_default(&sc);
+    sc.input = GF_SINS_INPUT_RATES;
+    sc.vertical = GF_SINS_VERTICAL_HOLD;
+    sc.hold_height_m = 100.0;
+    gf_gfnav_state s;
+    CHECK(gf_gfnav_init(&s, &g, &rc, x0->gyro_rad_s, &sc, x0->q_bn, x0->v_n_m_s, x0->lat_rad,
+                        x0->lon_rad, x0->h_m, k0 * H_S, NULL) == GF_OK, "gfnav init");
+    static double q[N][4], v[N][3], pos[N][3];
+    CHECK(gf_gfnav_run(&s, (size_t)(N - k0), g_A[k0], H_S, NULL, q[0], v[0], pos[0], NULL, NULL,
+                       NULL, NULL) == GF_OK, "gfnav run");
+    for (int k = k0; k < N; ++k) {
+        memcpy(g_core[k], q[k - k0], 4 * sizeof(double));
+        memcpy(g_core[k] + 4, v[k - k0], 3 * sizeof(double));
+        g_core[k][7] = pos[k - k0][0];
+        g_core[k][8] = pos[k - k0][1];
+    }
+#endif
+}
+
+static void test_equals_core(int skip)
+{
+    fmi2Component c = open_ready(skip);
+    CHECK(fmi2ExitInitializationMode(c) == fmi2OK, "exit: %s", g_log);
+    fmu_steps(c, 0, N, g_fmu);
+    fmi2FreeInstance(c);
+    core_run(skip);
+    int first_bad = -1;
+    for (int k = skip; k < N && first_bad < 0; ++k)
+        if (memcmp(g_fmu[k], g_core[k], sizeof g_fmu[k]) != 0)
+            first_bad = k;
+    CHECK(first_bad < 0, "skip_steps = %d: FMU differs from the core at step %d", skip, first_bad);
+    /* and it navigates: the exact data keep it on the truth */
+    CHECK(fabs(g_fmu[N - 1][7] - g_truth[N - 1].lat_rad) * 6.4e6 < 0.05, "navigates");
+}
+
+static void test_states(void)
+{
+    fmi2Component c = open_ready(0);
+    fmi2ExitInitializationMode(c);
+    fmu_steps(c, 0, N / 2, g_fmu);
+    fmi2FMUstate st = NULL;
+    CHECK(fmi2GetFMUstate(c, &st) == fmi2OK, "get state");
+    fmu_steps(c, N / 2, N, g_fmu);
+    CHECK(fmi2SetFMUstate(c, st) == fmi2OK, "set state");
+    fmu_steps(c, N / 2, N, g_fmu2);
+    CHECK(memcmp(g_fmu[N / 2], g_fmu2[N / 2], sizeof g_fmu[0] * (N - N / 2)) == 0, "replay");
+    size_t size = 0;
+    fmi2SerializedFMUstateSize(c, st, &size);
+    fmi2Byte *bytes = malloc(size);
+    CHECK(fmi2SerializeFMUstate(c, st, bytes, size) == fmi2OK, "serialize");
+    fmi2FreeFMUstate(c, &st);
+    fmi2FreeInstance(c);
+    fmi2Component d = open_ready(0);
+    fmi2ExitInitializationMode(d);
+    fmi2FMUstate st2 = NULL;
+    CHECK(fmi2DeSerializeFMUstate(d, bytes, size, &st2) == fmi2OK, "deserialize");
+    CHECK(fmi2SetFMUstate(d, st2) == fmi2OK, "set deserialized");
+    memset(g_fmu2, 0, sizeof g_fmu2);
+    fmu_steps(d, N / 2, N, g_fmu2);
+    CHECK(memcmp(g_fmu[N / 2], g_fmu2[N / 2], sizeof g_fmu[0] * (N - N / 2)) == 0,
+          "replay in a fresh instance");
+    fmi2FreeFMUstate(d, &st2);
+    fmi2FreeInstance(d);
+    free(bytes);
+}
+
+static void test_bad_skip(void)
+{
+    fmi2Component c = open_ready(0);
+    set_int(c, "skip_steps", -1);
+    CHECK(fmi2ExitInitializationMode(c) == fmi2Error, "skip_steps = -1 accepted");
+    CHECK(strstr(g_log, "skip_steps") != NULL, "log: %s", g_log);
+    fmi2FreeInstance(c);
+}
+
+int main(void)
+{
+    make_data();
+    test_equals_core(0);
+    test_equals_core(2);
+    test_states();
+    test_bad_skip();
+    TEST_MAIN_END();
+}

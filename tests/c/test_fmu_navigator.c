@@ -10,12 +10,11 @@
  *   3. FMU state mid-run: set back and replay, and serialize into a fresh instance: the
  *      same outputs;
  *   4. skip_steps < 0 is refused with a logged reason. */
-#include <stdarg.h>
-#include <stdlib.h>
 #include <string.h>
 
 #include "fmi2Functions.h"
 #include "fmu_instance.h"
+#include "fmu2_test.h"
 #include "gf_gfins.h"
 #include "gf_math.h"
 #include "gf_test.h"
@@ -26,53 +25,6 @@ enum { N = 1500 };   /* 15 s: 2 s rest, start to 15 m/s, a 180 deg turn in 6 s *
 
 static gf_vehicle_sample g_truth[N];
 static double g_A[N][9];
-static char g_log[4096];
-
-static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status,
-                   fmi2String category, fmi2String message, ...)
-{
-    (void)env; (void)name; (void)status; (void)category;
-    va_list ap;
-    va_start(ap, message);
-    const size_t used = strlen(g_log);
-    vsnprintf(g_log + used, sizeof g_log - used, message, ap);
-    va_end(ap);
-}
-
-static const fmi2CallbackFunctions kCallbacks = {logger, calloc, free, NULL, NULL};
-
-static fmi2ValueReference vr(const char *name)
-{
-    for (size_t i = 0; i < sizeof kFmi2Variables / sizeof kFmi2Variables[0]; ++i)
-        if (strcmp(kFmi2Variables[i].name, name) == 0)
-            return kFmi2Variables[i].value_reference;
-    CHECK(0, "no variable %s", name);
-    return 0;
-}
-
-static void set_vec(fmi2Component c, const char *base, const double *v, int n)
-{
-    char name[32];
-    for (int i = 0; i < n; ++i) {
-        snprintf(name, sizeof name, "%s[%d]", base, i + 1);
-        const fmi2ValueReference r = vr(name);
-        fmi2SetReal(c, &r, 1, &v[i]);
-    }
-}
-
-static void set_real(fmi2Component c, const char *name, double v)
-{
-    const fmi2ValueReference r = vr(name);
-    fmi2SetReal(c, &r, 1, &v);
-}
-
-static void set_int(fmi2Component c, const char *name, int v)
-{
-    const fmi2ValueReference r = vr(name);
-    const fmi2Integer x = v;
-    fmi2SetInteger(c, &r, 1, &x);
-}
-
 static void make_data(void)
 {
     gf_vehicle_profile p;
@@ -104,10 +56,7 @@ static double g_fmu[N][N_OUT], g_fmu2[N][N_OUT], g_core[N][N_OUT];
 static fmi2Component open_ready(int skip)
 {
     const gf_vehicle_sample *x0 = &g_truth[skip];
-    g_log[0] = '\0';
-    fmi2Component c = fmi2Instantiate("nav", fmi2CoSimulation, INSTANTIATION_TOKEN, "",
-                                      &kCallbacks, fmi2False, fmi2False);
-    CHECK(c != NULL, "instantiate");
+    fmi2Component c = instantiate("nav");
     fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0);
     fmi2EnterInitializationMode(c);
     set_vec(c, "q0", x0->q_bn, 4);
@@ -126,16 +75,9 @@ static fmi2Component open_ready(int skip)
 
 static void fmu_steps(fmi2Component c, int k0, int k1, double out[][N_OUT])
 {
-    char name[16];
     fmi2ValueReference r[N_OUT];
-    for (int i = 0; i < 4; ++i) {
-        snprintf(name, sizeof name, "q[%d]", i + 1);
-        r[i] = vr(name);
-    }
-    for (int i = 0; i < 3; ++i) {
-        snprintf(name, sizeof name, "v[%d]", i + 1);
-        r[4 + i] = vr(name);
-    }
+    vrs("q", 4, r);
+    vrs("v", 3, r + 4);
     r[7] = vr("lat");
     r[8] = vr("lon");
     for (int k = k0; k < k1; ++k) {

@@ -9,12 +9,11 @@
  *      deserialize into a fresh instance: identical;
  *   4. bad parameters are refused by exitInitializationMode with a logged reason;
  *   5. commands (drive = 1): a held command is reached after command_time. */
-#include <stdarg.h>
-#include <stdlib.h>
 #include <string.h>
 
 #include "fmi2Functions.h"
 #include "fmu_instance.h"
+#include "fmu2_test.h"
 #include "gf_gfins.h"
 #include "gf_math.h"
 #include "gf_test.h"
@@ -22,40 +21,6 @@
 
 #define H_S 0.01
 enum { N = 3000 };   /* 30 s: rest, start, into the straight run */
-
-static char g_log[4096];
-
-static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status,
-                   fmi2String category, fmi2String message, ...)
-{
-    (void)env; (void)name; (void)category; (void)status;
-    va_list ap;
-    va_start(ap, message);
-    const size_t used = strlen(g_log);
-    vsnprintf(g_log + used, sizeof g_log - used, message, ap);
-    va_end(ap);
-}
-
-static const fmi2CallbackFunctions kCallbacks = {
-    logger, calloc, free, NULL, NULL};
-
-static fmi2ValueReference vr(const char *name)
-{
-    for (size_t i = 0; i < sizeof kFmi2Variables / sizeof kFmi2Variables[0]; ++i)
-        if (strcmp(kFmi2Variables[i].name, name) == 0)
-            return kFmi2Variables[i].value_reference;
-    CHECK(0, "no variable %s", name);
-    return 0;
-}
-
-static void vrs(const char *base, int n, fmi2ValueReference *out)
-{
-    char name[48];
-    for (int i = 0; i < n; ++i) {
-        snprintf(name, sizeof name, "%s[%d]", base, i + 1);
-        out[i] = vr(name);
-    }
-}
 
 /* Outputs compared: q, v, lat, lon, gyro_rate, specific_force, dtheta, dv, A (first 9). */
 enum { N_OUT = 4 + 3 + 2 + 3 + 3 + 3 + 3 + 9 };
@@ -77,24 +42,19 @@ static void init_outputs(void)
 
 static fmi2Component open_ready(const char *name, int imu_errors, double stop_s)
 {
-    fmi2Component c = fmi2Instantiate(name, fmi2CoSimulation, INSTANTIATION_TOKEN, "",
-                                      &kCallbacks, fmi2False, fmi2False);
-    CHECK(c != NULL, "instantiate");
+    fmi2Component c = instantiate(name);
     CHECK(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2True, stop_s) == fmi2OK, "setup");
     CHECK(fmi2EnterInitializationMode(c) == fmi2OK, "enter");
     if (imu_errors) {
-        const fmi2ValueReference on = vr("imu_errors");
-        const fmi2Integer one = 1;
-        fmi2ValueReference r[9];
         const double bias[3] = {1e-6, -2e-6, 3e-6}, scale[3] = {1e-4, -2e-4, 5e-5};
         const double k2[3] = {2e-5, -1e-5, 1.5e-5}, lever[3] = {0.03, -0.02, 0.025};
         const double mis[9] = {0, 5e-5, -4e-5, 6e-5, 0, 3e-5, -5e-5, 4e-5, 0};
-        CHECK(fmi2SetInteger(c, &on, 1, &one) == fmi2OK, "imu_errors");
-        vrs("gyro_bias", 3, r); fmi2SetReal(c, r, 3, bias);
-        vrs("accel_scale", 3, r); fmi2SetReal(c, r, 3, scale);
-        vrs("accel_k2", 3, r); fmi2SetReal(c, r, 3, k2);
-        vrs("lever_arm", 3, r); fmi2SetReal(c, r, 3, lever);
-        vrs("gyro_misalign", 9, r); fmi2SetReal(c, r, 9, mis);
+        set_int(c, "imu_errors", 1);
+        set_vec(c, "gyro_bias", bias, 3);
+        set_vec(c, "accel_scale", scale, 3);
+        set_vec(c, "accel_k2", k2, 3);
+        set_vec(c, "lever_arm", lever, 3);
+        set_vec(c, "gyro_misalign", mis, 9);
     }
     CHECK(fmi2ExitInitializationMode(c) == fmi2OK, "exit: %s", g_log);
     return c;
@@ -207,9 +167,7 @@ static void test_states(void)
 
 static void expect_refused(const char *param, double value, const char *mention)
 {
-    g_log[0] = '\0';
-    fmi2Component c = fmi2Instantiate("bad", fmi2CoSimulation, INSTANTIATION_TOKEN, "",
-                                      &kCallbacks, fmi2False, fmi2False);
+    fmi2Component c = instantiate("bad");
     fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0);
     fmi2EnterInitializationMode(c);
     const fmi2ValueReference r = vr(param);
@@ -226,20 +184,15 @@ static void expect_refused(const char *param, double value, const char *mention)
 
 static void test_commands(void)
 {
-    fmi2Component c = fmi2Instantiate("cmd", fmi2CoSimulation, INSTANTIATION_TOKEN, "",
-                                      &kCallbacks, fmi2False, fmi2False);
+    fmi2Component c = instantiate("cmd");
     fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0);
     fmi2EnterInitializationMode(c);
-    const fmi2ValueReference ir[2] = {vr("drive"), vr("n_segments")};
-    const fmi2Integer iv[2] = {1, 0};
-    fmi2SetInteger(c, ir, 2, iv);
-    const fmi2ValueReference ct = vr("command_time");
-    const double two = 2.0;
-    fmi2SetReal(c, &ct, 1, &two);
+    set_int(c, "drive", 1);
+    set_int(c, "n_segments", 0);
+    set_real(c, "command_time", 2.0);
     CHECK(fmi2ExitInitializationMode(c) == fmi2OK, "exit (commands)");
-    const fmi2ValueReference cmd[2] = {vr("speed_cmd"), vr("heading_rate_cmd")};
-    const double values[2] = {8.0, 0.1};
-    fmi2SetReal(c, cmd, 2, values);
+    set_real(c, "speed_cmd", 8.0);
+    set_real(c, "heading_rate_cmd", 0.1);
     for (int k = 0; k < 400; ++k)
         fmi2DoStep(c, k * H_S, H_S, fmi2True);
     const fmi2ValueReference heading = vr("euler[1]");

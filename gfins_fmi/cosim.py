@@ -21,7 +21,6 @@ outputs read after the previous step (Jacobi), or step the navigator before the 
 from __future__ import annotations
 
 import pathlib
-import shutil
 import tempfile
 import xml.etree.ElementTree as ET
 import zipfile

@@ -21,12 +21,9 @@ PROFILE = VehicleProfile.seed001(align_s=2.0, accel_s=3.0, turn_times_s=(6.0,), 
 STOP_S = 16.0
 
 
-def _nav(r, prefix, sep="."):
-    return {k: np.asarray(r[f"{prefix}{sep}{k}"]) for k in ("lat", "lon", "h")}
-
-
-def _rows(r, name, n, sep="_"):
-    return np.stack([r[f"{name}{sep}{i}"] for i in range(1, n + 1)], 1)
+def _rows(r, name, n):
+    """Columns name_1 .. name_n of a container result as an (rows, n) array."""
+    return np.stack([r[f"{name}_{i}"] for i in range(1, n + 1)], 1)
 
 
 # ---- the vehicle FMU ------------------------------------------------------------------

@@ -75,12 +75,12 @@ static kin kinematics(const gf_vehicle_state *st, double t_s)
     return k;
 }
 
-/* Truth and sensor rates at t_s with displacement (E, N); increments untouched. */
-static gf_status evaluate(const gf_vehicle_state *st, double t_s, double E, double N,
+/* Truth and sensor rates at t_s, with the kinematics k at t_s and the displacement
+ * (E, N); increments untouched. */
+static gf_status evaluate(const gf_vehicle_state *st, double t_s, kin k, double E, double N,
                           gf_vehicle_sample *out)
 {
     const gf_vehicle_profile *p = &st->profile;
-    const kin k = kinematics(st, t_s);
     const double h = p->h0_m;
     const double kN = 1.0 / (st->R_M0_m + h), kE = 1.0 / ((st->R_N0_m + h) * cos(p->lat0_rad));
     const double sp = sin(k.psi), cp = cos(k.psi);
@@ -113,32 +113,26 @@ static gf_status evaluate(const gf_vehicle_state *st, double t_s, double E, doub
     /* d(w_ie + w_en)/dt */
     const double w_in_dot[3] = {-ddL, -W * s * dL + ddlam * c - dlam * s * dL,
                                 W * c * dL + ddlam * s + dlam * c * dL};
-    /* C_n^b for C_b^n = Rz(-psi): x_b = [c x_E - s x_N, s x_E + c x_N, x_U] */
-#define TO_BODY(x, y)                                                                        \
-    do {                                                                                     \
-        (y)[0] = cp * (x)[0] - sp * (x)[1];                                                  \
-        (y)[1] = sp * (x)[0] + cp * (x)[1];                                                  \
-        (y)[2] = (x)[2];                                                                     \
-    } while (0)
-    double w_in_b[3], w_in_dot_b[3], f_b[3], tmp[3];
-    TO_BODY(w_in, w_in_b);
-    TO_BODY(w_in_dot, w_in_dot_b);
-    TO_BODY(f_n, f_b);
-#undef TO_BODY
-    const double w_nb[3] = {0.0, 0.0, -k.dpsi};
-    gf_v3_add(w_nb, w_in_b, out->gyro_rad_s);
-    gf_v3_cross(w_nb, w_in_b, tmp);
-    out->gyro_dot_rad_s2[0] = w_in_dot_b[0] - tmp[0];
-    out->gyro_dot_rad_s2[1] = w_in_dot_b[1] - tmp[1];
-    out->gyro_dot_rad_s2[2] = -k.ddpsi + w_in_dot_b[2] - tmp[2];
-    gf_v3_copy(f_b, out->accel_m_s2);
-    gf_v3_copy(v, out->v_n_m_s);
+    /* attitude: heading psi, level; C_n^b = (C_b^n)^T rotates ENU vectors into the body */
     const double euler[3] = {k.psi, 0.0, 0.0};
     st_e = gf_euler_to_quat(euler, out->q_bn);
     if (st_e == GF_OK)
         st_e = gf_quat_to_euler(out->q_bn, out->euler_rad);
     if (st_e != GF_OK)
         return st_e;
+    gf_mat3 C_bn;
+    gf_q_to_dcm(out->q_bn, &C_bn);
+    double w_in_b[3], w_in_dot_b[3], tmp[3];
+    gf_m3t_mul_v3(&C_bn, w_in, w_in_b);
+    gf_m3t_mul_v3(&C_bn, w_in_dot, w_in_dot_b);
+    gf_m3t_mul_v3(&C_bn, f_n, out->accel_m_s2);
+    const double w_nb[3] = {0.0, 0.0, -k.dpsi};
+    gf_v3_add(w_nb, w_in_b, out->gyro_rad_s);
+    gf_v3_cross(w_nb, w_in_b, tmp);
+    out->gyro_dot_rad_s2[0] = w_in_dot_b[0] - tmp[0];
+    out->gyro_dot_rad_s2[1] = w_in_dot_b[1] - tmp[1];
+    out->gyro_dot_rad_s2[2] = -k.ddpsi + w_in_dot_b[2] - tmp[2];
+    gf_v3_copy(v, out->v_n_m_s);
     out->time_s = t_s;
     out->lat_rad = L;
     out->lon_rad = lam;
@@ -178,11 +172,12 @@ static gf_status integrate_piece(gf_vehicle_state *st, double a, double b, doubl
 {
     const double half = 0.5 * (b - a);
     double tj[8], vE[8], vN[8];
+    kin kj[8];
     for (int j = 0; j < 8; ++j) {
         tj[j] = a + half * (GL_X[j] + 1.0);
-        const kin k = kinematics(st, tj[j]);
-        vE[j] = k.u * sin(k.psi);
-        vN[j] = k.u * cos(k.psi);
+        kj[j] = kinematics(st, tj[j]);
+        vE[j] = kj[j].u * sin(kj[j].psi);
+        vN[j] = kj[j].u * cos(kj[j].psi);
     }
     for (int j = 0; j < 8; ++j) {
         double dE = 0.0, dN = 0.0;
@@ -191,7 +186,7 @@ static gf_status integrate_piece(gf_vehicle_state *st, double a, double b, doubl
             dN += GL_S[j][i] * vN[i];
         }
         gf_vehicle_sample s;
-        const gf_status status = evaluate(st, tj[j], st->east_m + half * dE,
+        const gf_status status = evaluate(st, tj[j], kj[j], st->east_m + half * dE,
                                           st->north_m + half * dN, &s);
         if (status != GF_OK)
             return status;
@@ -263,7 +258,7 @@ gf_status gf_vehicle_init(gf_vehicle_state *state, const gf_vehicle_profile *pro
     s.R_M0_m = e.R_M_m;
     s.R_N0_m = e.R_N_m;
     gf_vehicle_sample first_sample;
-    status = evaluate(&s, start_time_s, 0.0, 0.0, &first_sample);
+    status = evaluate(&s, start_time_s, kinematics(&s, start_time_s), 0.0, 0.0, &first_sample);
     if (status != GF_OK)
         return status;
     memset(first_sample.dtheta_rad, 0, sizeof first_sample.dtheta_rad);
@@ -322,7 +317,7 @@ gf_status gf_vehicle_step(gf_vehicle_state *state, double t_end_s, gf_vehicle_sa
             activate_next(&s, seg_end);
     }
     gf_vehicle_sample out;
-    const gf_status status = evaluate(&s, t_end, s.east_m, s.north_m, &out);
+    const gf_status status = evaluate(&s, t_end, kinematics(&s, t_end), s.east_m, s.north_m, &out);
     if (status != GF_OK)
         return status;
     memcpy(out.dtheta_rad, dth, sizeof dth);

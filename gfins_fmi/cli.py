@@ -170,51 +170,31 @@ def _analyze(args) -> int:
 
 
 def _cosim(args) -> int:
-    import time
-
     import numpy as np
 
     from gfins_fmi import cosim
     from gfins_fmi.vehicle import VehicleProfile
     out = pathlib.Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    profile = VehicleProfile.seed001(align_s=args.align)
-    system = cosim.vehicle_navigation(args.navigator, profile, step_s=args.step, stop_s=args.seconds)
-    t0 = time.perf_counter()
-    with cosim.CoSimulation(system, fmi_version=args.fmi) as m:
-        m.initialize()
-        r = m.run(progress=not args.quiet)
-    wall = time.perf_counter() - t0
-    e = cosim.navigation_errors(r)
-    d = cosim.differences_from_direct(system, r, "master")
-    print(f"vehicle + {args.navigator}, {args.seconds:g} s at {1 / args.step:g} Hz, FMI "
-          f"{args.fmi}.0, Python master: {wall:.1f} s")
+    res = cosim.compare_runners(args.navigator, VehicleProfile.seed001(align_s=args.align),
+                                args.seconds, out, step_s=args.step, fmi_version=args.fmi,
+                                progress=not args.quiet)
+    e = res["master"]["errors"]
+    print(f"vehicle + {args.navigator}, {args.seconds:g} s at {1 / args.step:g} Hz")
     print(f"  navigation error: horizontal max {e['horizontal_m'].max():.4g} m (final "
           f"{e['horizontal_m'][-1]:.4g} m), velocity max {e['velocity_m_s'].max():.3g} m/s, "
           f"attitude max {np.degrees(e['attitude_rad'].max()):.3g} deg")
-    print(f"  co-simulated vs cffi navigator on the same sensor data: |dlat| {d['lat_rad']:.3g} "
-          f"rad, |dv| {d['v_m_s']:.3g} m/s")
-    ok = d["lat_rad"] == 0.0 and d["v_m_s"] == 0.0
+    names = {"master": f"Python master (FMI {args.fmi}.0)", "ssp": "fmpy SSP simulator",
+             "container": "fmpy container FMU (FMI 2.0)"}
+    for runner, r in res.items():
+        where = f" {r['path']}" if r["path"] else ""
+        print(f"  {names[runner]}{where}: {r['wall_s']:.1f} s; vs the cffi navigator on the "
+              f"same sensor data |dlat| {r['diff']['lat_rad']:.3g} rad, |dv| "
+              f"{r['diff']['v_m_s']:.3g} m/s")
     np.savetxt(out / "cosim_errors.csv", np.c_[e["t_s"], e["horizontal_m"], e["velocity_m_s"],
                                                e["attitude_rad"]], delimiter=",",
                header="t_s,horizontal_error_m,velocity_error_m_s,attitude_error_rad", comments="")
-    # the same system as an SSP file and as a container FMU (FMI 2.0)
-    skip = cosim.vehicle_navigation(args.navigator, profile, step_s=args.step,
-                                    stop_s=args.seconds, skip_steps=1)
-    ssp = cosim.write_ssp(skip, out / "vehicle_navigation.ssp")
-    t0 = time.perf_counter()
-    rs = cosim.run_ssp(ssp, args.seconds, args.step)
-    ds = cosim.differences_from_direct(skip, rs, "ssp")
-    print(f"  SSP {ssp} (fmpy SSP simulator, {time.perf_counter() - t0:.1f} s): |dlat| "
-          f"{ds['lat_rad']:.3g} rad, |dv| {ds['v_m_s']:.3g} m/s vs cffi")
-    cont = cosim.write_container(skip, out / "vehicle_navigation.fmu", fmi_version=2)
-    t0 = time.perf_counter()
-    rc = cosim.run_container(cont, args.seconds, args.step)
-    dc = cosim.differences_from_direct(skip, rc, "container")
-    print(f"  container {cont} (fmpy, {time.perf_counter() - t0:.1f} s): |dlat| "
-          f"{dc['lat_rad']:.3g} rad, |dv| {dc['v_m_s']:.3g} m/s vs cffi")
-    ok = ok and max(ds.values()) == 0.0 and max(dc.values()) == 0.0
     print(f"  errors -> {out / 'cosim_errors.csv'}")
+    ok = all(max(r["diff"].values()) == 0.0 for r in res.values())
     print("cosim " + ("passed: every co-simulation equals the cffi pipeline bit for bit"
                       if ok else "FAILED: a co-simulation differs from the cffi pipeline"))
     return 0 if ok else 1

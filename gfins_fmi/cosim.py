@@ -20,8 +20,11 @@ outputs read after the previous step (Jacobi), or step the navigator before the 
 """
 from __future__ import annotations
 
+import contextlib
+import json
 import pathlib
 import tempfile
+import types
 import xml.etree.ElementTree as ET
 import zipfile
 from dataclasses import dataclass, field
@@ -33,7 +36,7 @@ from gfins_fmi.fmu import MODELS, FmuRunError, _Log, _Slave, fmu_path
 
 __all__ = ["System", "Connection", "vehicle_navigation", "CoSimulation", "write_ssp",
            "run_ssp", "write_container", "run_container", "direct_navigation",
-           "navigation_errors", "differences_from_direct", "NAVIGATORS"]
+           "navigation_errors", "differences_from_direct", "compare_runners", "NAVIGATORS"]
 
 #: navigator name -> (FMU model, vehicle outputs connected to the navigator inputs)
 NAVIGATORS = {"gfnav_cube6": ("gfnav_cube6", [("A", "A", 6)]),
@@ -603,35 +606,28 @@ def write_container(system: System, path: str | pathlib.Path, fmi_version: int =
     return path
 
 
-class _container_json_fixes:
-    """Two workarounds for fmpy 0.3.x's container.json writer, active while a container
+@contextlib.contextmanager
+def _container_json_fixes(module):
+    """Three workarounds for fmpy 0.3.x's container.json writer, active while a container
     is written: (1) FMI 3.0 array connections have a numpy integer size that json cannot
     write ("Object of type int64 is not JSON serializable"); (2) FMI 2.0 connections get
     the FMI 2.0 type names (Real, Integer), which the container binary refuses
     ("unknown variant `Real`"): renamed to Float64, Int32; (3) an array start value is
     written as one string, which the container cannot parse: split into elements."""
-
-    def __init__(self, module):
-        self.module = module
-
-    def __enter__(self):
-        import json
-        import types
-
-        def dump(data, f, **kw):
-            for v in data.get("variables", []):  # (3) array start values: one per element
-                if "start" in v and len(v["start"]) == 1 and " " in str(v["start"][0]):
-                    v["start"] = str(v["start"][0]).split()
-            for c in data.get("connections", []):
-                c["variableType"] = {"Real": "Float64", "Integer": "Int32"}.get(
-                    c["variableType"], c["variableType"])
-            json.dump(data, f, default=int, **kw)
-        self.saved = self.module.json
-        self.module.json = types.SimpleNamespace(dump=dump)
-        return self
-
-    def __exit__(self, *exc):
-        self.module.json = self.saved
+    def dump(data, f, **kw):
+        for v in data.get("variables", []):
+            if "start" in v and len(v["start"]) == 1 and " " in str(v["start"][0]):
+                v["start"] = str(v["start"][0]).split()
+        for c in data.get("connections", []):
+            c["variableType"] = {"Real": "Float64", "Integer": "Int32"}.get(
+                c["variableType"], c["variableType"])
+        json.dump(data, f, default=int, **kw)
+    saved = module.json
+    module.json = types.SimpleNamespace(dump=dump)
+    try:
+        yield
+    finally:
+        module.json = saved
 
 
 def run_container(path: str | pathlib.Path, stop_s: float, step_s: float,
@@ -644,7 +640,23 @@ def run_container(path: str | pathlib.Path, stop_s: float, step_s: float,
 
 
 # ---- reference: the navigator through cffi --------------------------------------------
-def direct_navigation(system: System, sensors: Mapping[str, np.ndarray], start_time_s: float = 0.0):
+def _start_values(model: str, given: Mapping) -> Callable:
+    """A lookup of a component's start values: the system's, else the FMU's own (its
+    modelDescription), so the cffi reference runs with exactly what the FMU runs."""
+    variables = _fmu_variables(model, 3)
+
+    def value(name):
+        if name in given:
+            return given[name]
+        v = variables[name]
+        cast = float if v.type == "Float64" else int
+        items = [cast(x) for x in str(v.start).split()]
+        return items if v.dimensions else items[0]
+    return value
+
+
+def direct_navigation(system: System, sensors: Mapping[str, np.ndarray], start_time_s: float = 0.0,
+                      imu_errors=None):
     """Run the system's navigator through cffi (no FMU) on sensor records.
 
     Parameters
@@ -653,6 +665,10 @@ def direct_navigation(system: System, sensors: Mapping[str, np.ndarray], start_t
         ``{"A": (n, n_sensors)}`` array samples at t_k = start + (skip + k) h for a
         gyro-free navigator, or ``{"dtheta": (n, 3), "dv": (n, 3)}`` increments over
         (t_(k-1), t_k], k = skip + 1 ... for the SINS.
+    imu_errors : gfins_fmi.ImuErrors, optional
+        The error model the SINS FMU compensates (``imu_comp = 1``; its
+        ``fmu_parameters()`` must be the navigator's): the increments are compensated
+        as mean rates over the step with the FMU's arithmetic before navigating.
 
     Returns
     -------
@@ -661,26 +677,38 @@ def direct_navigation(system: System, sensors: Mapping[str, np.ndarray], start_t
         increment, row 0 the initial state).
     """
     from gfins_fmi.gyrofree import STRATEGIES, GyroFreeNavigator, layout
-    from gfins_fmi.sins import NavState, SinsConfig, Strapdown
+    from gfins_fmi.sins import _VERTICAL, NavState, SinsConfig, Strapdown
     model, nav = system.components["navigator"]
+    value = _start_values(model, nav)
     h = system.step_s
-    t0 = start_time_s + nav.get("skip_steps", 0) * h
-    init = NavState(np.asarray(nav["q0"], float), np.asarray(nav["v0"], float), nav["lat0"],
-                    nav["lon0"], nav["h0"], t0)
-    vertical = {0: "free", 1: "hold", 2: "baro"}[nav.get("vertical_mode", 0)]
-    cfg = dict(vertical=vertical, hold_height_m=nav.get("hold_height", 0.0))
+    t0 = start_time_s + value("skip_steps") * h
+    init = NavState(np.asarray(value("q0"), float), np.asarray(value("v0"), float),
+                    value("lat0"), value("lon0"), value("h0"), t0)
+    vertical = {v: k for k, v in _VERTICAL.items()}[value("vertical_mode")]
+    cfg = dict(vertical=vertical, hold_height_m=value("hold_height"), baro_tau_s=value("baro_tau"))
     if model.startswith("gfnav_"):
-        strategy = {v: k for k, v in STRATEGIES.items()}[nav.get("strategy",
-                                                              {"gfnav_cube6": 0, "gfnav_qin9": 1, "gfnav_12": 2}[model])]
-        g = layout(model[len("gfnav_"):], nav.get("l", 0.1))
-        navi = GyroFreeNavigator(g, init, strategy=strategy,
-                                 omega_init_rad_s=nav.get("omega_init", (0.0, 0.0, 0.0)),
-                                 accel_noise_m_s2=nav.get("accel_noise", 1e-4),
-                                 sins=SinsConfig(**cfg))
+        strategy = {v: k for k, v in STRATEGIES.items()}[value("strategy")]
+        navi = GyroFreeNavigator(layout(model[len("gfnav_"):], value("l")), init, strategy=strategy,
+                                 omega_init_rad_s=value("omega_init"),
+                                 accel_noise_m_s2=value("accel_noise"), sins=SinsConfig(**cfg))
         sol, _ = navi.run(sensors["A"], h)
         return sol
-    sd = Strapdown(init, SinsConfig(input="increments", coning=bool(nav.get("coning", 1)), **cfg))
-    return sd.run(sensors["dtheta"], sensors["dv"], h)
+    if value("lowpass_sections"):
+        raise ValueError("direct_navigation: the SINS FMU's low-pass is not reproduced here; "
+                         "filter the record with gfins_fmi.filters.BiquadFilter first")
+    dth, dv = sensors["dtheta"], sensors["dv"]
+    if value("imu_comp"):
+        if imu_errors is None or not all(np.array_equal(v, value(k))
+                                         for k, v in imu_errors.fmu_parameters().items()):
+            raise ValueError("the navigator compensates IMU errors (imu_comp = 1): pass the "
+                             "ImuErrors whose fmu_parameters() it was given as imu_errors")
+        k = 1.0 / h                                    # the FMU's arithmetic, to the bit
+        w, f = imu_errors.compensate(dth * k, dv * k)
+        dth, dv = w / k, f / k
+    sd = Strapdown(init, SinsConfig(input="increments", coning=bool(value("coning")),
+                                    max_rate_rad_s=value("max_rate"),
+                                    max_specific_force_m_s2=value("max_specific_force"), **cfg))
+    return sd.run(dth, dv, h)
 
 
 def navigation_errors(result: Mapping) -> dict:
@@ -708,17 +736,18 @@ def navigation_errors(result: Mapping) -> dict:
                 attitude_rad=attitude_error_rad(result["navigator.q"][1:], result["vehicle.q"][:-1]))
 
 
-def differences_from_direct(system: System, result, kind: str = "master") -> dict:
+def differences_from_direct(system: System, result, kind: str = "master", imu_errors=None) -> dict:
     """Max |difference| between a co-simulated navigator and :func:`direct_navigation`
     on the sensor data recorded in ``result`` (0.0 when bit-identical).
 
     ``kind``: "master" (a :meth:`CoSimulation.run` result), "ssp" (:func:`run_ssp`) or
     "container" (:func:`run_container`, FMI 2.0). The rows are aligned as each runner
-    records them (see their docstrings). Returns {"lat_rad": ..., "v_m_s": ...}.
+    records them (see their docstrings); ``imu_errors`` as for :func:`direct_navigation`.
+    Returns {"lat_rad": ..., "v_m_s": ...}.
     """
     model, nav = system.components["navigator"]
     gyro_free = model.startswith("gfnav_")
-    n_in = {"gfnav_cube6": 6, "gfnav_qin9": 9, "gfnav_12": 12}.get(model, 3)
+    n_in = NAVIGATORS[model][1][0][2] if gyro_free else 3
 
     def col(name, i=None):
         """A column of an SSP or container result (FMI 2.0 scalar names)."""
@@ -748,6 +777,52 @@ def differences_from_direct(system: System, result, kind: str = "master") -> dic
             first = off + 2
         lat = col("navigator.lat")[first:]
         v = np.stack([col("navigator.v", i) for i in (1, 2, 3)], 1)[first:]
-    sol = direct_navigation(system, data)
+    sol = direct_navigation(system, data, imu_errors=imu_errors)
     return {"lat_rad": float(np.max(np.abs(sol.lat_rad - lat))),
             "v_m_s": float(np.max(np.abs(sol.v_n_m_s - v)))}
+
+
+def compare_runners(navigator: str, profile, stop_s: float, out_dir: str | pathlib.Path,
+                    step_s: float = 0.01, fmi_version: int = 3,
+                    runners: Iterable[str] = ("master", "ssp", "container"),
+                    progress: bool = False) -> dict:
+    """Run vehicle + ``navigator`` along ``profile`` through each runner and compare each
+    navigation solution with the cffi navigator on the sensor data that runner recorded.
+
+    "master": :class:`CoSimulation` (FMI ``fmi_version``); "ssp": an SSP file in
+    ``out_dir`` run by fmpy's SSP simulator; "container": an FMI 2.0 container FMU in
+    ``out_dir`` run by fmpy (both with ``skip_steps = 1``, see :func:`run_ssp`).
+
+    Returns
+    -------
+    dict runner -> {"wall_s", "diff" ({"lat_rad", "v_m_s"}), "path" (written file or
+    None)}; the "master" entry also has "errors" (:func:`navigation_errors`).
+    """
+    import time
+    out_dir = pathlib.Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    out = {}
+    for runner in runners:
+        skip = 0 if runner == "master" else 1
+        system = vehicle_navigation(navigator, profile, step_s=step_s, stop_s=stop_s,
+                                    skip_steps=skip)
+        t0 = time.perf_counter()
+        path = None
+        if runner == "master":
+            with CoSimulation(system, fmi_version=fmi_version) as m:
+                m.initialize()
+                result = m.run(progress=progress)
+        elif runner == "ssp":
+            path = write_ssp(system, out_dir / "vehicle_navigation.ssp")
+            result = run_ssp(path, stop_s, step_s)
+        elif runner == "container":
+            path = write_container(system, out_dir / "vehicle_navigation.fmu", fmi_version=2)
+            result = run_container(path, stop_s, step_s)
+        else:
+            raise ValueError(f"runner must be 'master', 'ssp' or 'container'; got {runner!r}")
+        entry = dict(wall_s=time.perf_counter() - t0, path=path,
+                     diff=differences_from_direct(system, result, runner))
+        if runner == "master":
+            entry["errors"] = navigation_errors(result)
+        out[runner] = entry
+    return out

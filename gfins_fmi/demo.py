@@ -145,25 +145,17 @@ def _cosim(out_dir: pathlib.Path, echo) -> dict:
     from gfins_fmi.vehicle import VehicleProfile
     prof = VehicleProfile.seed001(align_s=5.0, accel_s=10.0, turn_times_s=(20.0,), turn_s=15.0)
     stop = 60.0
-    system = cosim.vehicle_navigation("gfnav_qin9", prof, stop_s=stop)
-    t0 = time.perf_counter()
-    with cosim.CoSimulation(system, fmi_version=2) as m:
-        m.initialize()
-        r = m.run()
-    t_m = time.perf_counter() - t0
-    e = cosim.navigation_errors(r)
-    d_master = cosim.differences_from_direct(system, r, "master")
-    skip = cosim.vehicle_navigation("gfnav_qin9", prof, stop_s=stop, skip_steps=1)
-    t0 = time.perf_counter()
-    rs = cosim.run_ssp(cosim.write_ssp(skip, out_dir / "vehicle_navigation.ssp"), stop, skip.step_s)
-    t_s = time.perf_counter() - t0
-    d_ssp = cosim.differences_from_direct(skip, rs, "ssp")
+    res = cosim.compare_runners("gfnav_qin9", prof, stop, out_dir, fmi_version=2,
+                                runners=("master", "ssp"))
+    e = res["master"]["errors"]
     echo(f"\n[co-simulation] vehicle FMU (rest, 15 m/s, a 180 deg turn) -> gyro-free navigator "
-         f"FMU (qin9), {stop:g} s at 100 Hz: Python master {t_m:.2f} s, fmpy SSP {t_s:.2f} s; "
-         f"max horizontal error {e['horizontal_m'].max():.3g} m; vs cffi on the same data: "
-         f"master |dlat| {d_master['lat_rad']:.1g} rad, SSP |dlat| {d_ssp['lat_rad']:.1g} rad")
+         f"FMU (qin9), {stop:g} s at 100 Hz: Python master {res['master']['wall_s']:.2f} s, fmpy "
+         f"SSP {res['ssp']['wall_s']:.2f} s; max horizontal error {e['horizontal_m'].max():.3g} m; "
+         f"vs cffi on the same data: master |dlat| {res['master']['diff']['lat_rad']:.1g} rad, "
+         f"SSP |dlat| {res['ssp']['diff']['lat_rad']:.1g} rad")
     return dict(max_horizontal_error_m=float(e["horizontal_m"].max()),
-                master_diff=max(d_master.values()), ssp_diff=max(d_ssp.values()))
+                master_diff=max(res["master"]["diff"].values()),
+                ssp_diff=max(res["ssp"]["diff"].values()))
 
 
 def _strapdown(out_dir: pathlib.Path, duration_s: float, dt_s: float, l_m: float, echo) -> dict:

@@ -1385,6 +1385,15 @@ static void test_solver_layouts(void)
           "layout12 errors");
 }
 
+/* Sensor `to` becomes a copy of sensor `from` (same place, same axis). */
+static void copy_sensor(layout *L, size_t from, size_t to)
+{
+    for (int k = 0; k < 3; ++k) {
+        L->u[to][k] = L->u[from][k];
+        L->th[to][k] = L->th[from][k];
+    }
+}
+
 /* Unsolvable geometries: GF_ERR_SINGULAR_GEOMETRY, and the unobservable bits are the
  * unknowns touched by the null space of [f, w_dot] (products from the rate), computed
  * here from H^T H. */
@@ -1416,10 +1425,7 @@ static void test_solver_unsolvable(void)
     check_unsolvable("zero lever arms", &L, 0x38);
     /* cube6 with sensor 2 a copy of sensor 1: null vector in f_x, f_z, wd_x, wd_z */
     layout_cube6(0.1, &L);
-    for (int k = 0; k < 3; ++k) {
-        L.u[1][k] = L.u[0][k];
-        L.th[1][k] = L.th[0][k];
-    }
+    copy_sensor(&L, 0, 1);
     check_unsolvable("cube6, sensors 1 = 2", &L, 0x2D);
     /* a random minimal array (6 sensors: f and w_dot, products from the rate) with
      * sensor 2 = sensor 1 moved along its sensing axis by 37 mm: the f and w_dot
@@ -1448,10 +1454,7 @@ static void test_solver_unsolvable(void)
     }
     /* qin9 with sensor 8 a copy of sensor 7: w_dot_y alone (even from the rate) */
     layout_qin9(0.1, &L);
-    for (int k = 0; k < 3; ++k) {
-        L.u[7][k] = L.u[6][k];
-        L.th[7][k] = L.th[6][k];
-    }
+    copy_sensor(&L, 6, 7);
     check_unsolvable("qin9, sensors 7 = 8", &L, 0x10);
     /* five random sensors: one null vector touching all six */
     test_rng rng = {5};

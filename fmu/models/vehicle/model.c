@@ -13,11 +13,6 @@
 #include "gf_math.h"
 #include "model.h"
 
-static size_t array_size(int32_t layout)
-{
-    return layout == 0 ? 6u : layout == 1 ? 9u : 12u;
-}
-
 /* Sensor outputs of a truth sample (IMU with errors and noise if asked; array), computed
  * into *o from d's parameters and generator states; nothing in d changes, so a failed
  * step leaves the model as it was (the caller commits *o). */
@@ -73,7 +68,7 @@ static gf_status sense(const ModelData *d, const gf_vehicle_sample *x, double dt
                                           x->gyro_dot_rad_s2, A, &done);
     if (st != GF_OK)
         return st;
-    const size_t n = array_size(d->array_layout);
+    const size_t n = d->array.n_sensors;
     double e[VEHICLE_ARRAY_MAX] = {0.0};
     if (d->noise && dt_s > 0.0 && d->array_noise_m_s2 > 0.0) {
         gf_rng_normal(&o->array_rng, n, e);

@@ -318,6 +318,7 @@ gf_status gf_ins_init(gf_ins_filter *f, const gf_ins_config *cfg, double t0_s,
     f->nav0 = f->nav;
     memcpy(f->sensors0, f->sensors, sizeof f->sensors);
     f->last_nhc_t_s = f->last_zupt_t_s = -INFINITY;
+    f->last_regular_t_s = t0_s;
     refresh_scale(f);
     refresh_std(f);
     return GF_OK;
@@ -1389,7 +1390,9 @@ gf_status gf_ins_step(gf_ins_filter *f, double t_s, const double *gyro, const do
             return st;
         if (f->cfg.zupt)
             standstill_update(f, T);
-        if (f->cfg.prop_interval_s == 0.0 || f->acc_T_s >= f->cfg.prop_interval_s - GF_INS_TIME_EPS_S) {
+        /* the regular grid: measurement instants propagate too, but do not move it */
+        if (t_s - f->last_regular_t_s >= f->cfg.prop_interval_s - GF_INS_TIME_EPS_S) {
+            f->last_regular_t_s = t_s;
             st = propagate(f, epochs);
             if (st == GF_OK && f->cfg.nhc &&
                 t_s - f->last_nhc_t_s >= f->cfg.nhc_interval_s - GF_INS_TIME_EPS_S) {
@@ -1550,22 +1553,50 @@ static double normal_quantile(double p)
     return x - u / (1.0 + 0.5 * x * u);
 }
 
+/* chi-square distribution function for integer m by its closed forms:
+ *   m = 2k:     1 - e^(-x/2) sum_{i<k} (x/2)^i / i!
+ *   m = 2k + 1: erf(sqrt(x/2)) - e^(-x/2) sum_{i<k} (x/2)^(i+1/2) / Gamma(i + 3/2) */
+static double chi2_cdf(int m, double x)
+{
+    const double y = 0.5 * x;
+    double sum = 0.0, term;
+    if (m % 2 == 0) {
+        term = 1.0;
+        for (int i = 0; i < m / 2; ++i) {
+            sum += term;
+            term *= y / (i + 1);
+        }
+        return 1.0 - exp(-y) * sum;
+    }
+    term = sqrt(y) / (0.5 * sqrt(GF_PI));            /* y^(1/2) / Gamma(3/2) */
+    for (int i = 0; i < m / 2; ++i) {
+        sum += term;
+        term *= y / (i + 1.5);
+    }
+    return erf(sqrt(y)) - exp(-y) * sum;
+}
+
 gf_status gf_chi2_quantile(int32_t m, double p, double *q)
 {
     if (!q)
         return GF_ERR_NULL_POINTER;
     if (m < 1 || m > GF_KF_MAX_M || !(p > 0.0 && p < 1.0))
         return GF_ERR_BAD_PARAMETER;
-    if (m == 1) {
-        const double z = normal_quantile(0.5 * (1.0 + p));
-        *q = z * z;
-    } else if (m == 2) {
-        *q = -2.0 * log(1.0 - p);
-    } else {
-        const double z = normal_quantile(p), k = 2.0 / (9.0 * m);
-        const double t = 1.0 - k + z * sqrt(k);
-        *q = m * t * t * t;
+    /* Wilson-Hilferty start, then Newton steps on the closed-form distribution */
+    const double z = normal_quantile(p), k = 2.0 / (9.0 * m);
+    const double t = 1.0 - k + z * sqrt(k);
+    double x = fmax(m * t * t * t, 1e-3);
+    const double log_norm = -0.5 * m * log(2.0) - log(tgamma(0.5 * m));
+    for (int it = 0; it < 50; ++it) {
+        const double pdf = exp(log_norm + (0.5 * m - 1.0) * log(x) - 0.5 * x);
+        double step = (chi2_cdf(m, x) - p) / pdf;
+        if (step > 0.5 * x)           /* keep x > 0 */
+            step = 0.5 * x;
+        x -= step;
+        if (fabs(step) < 1e-13 * x)
+            break;
     }
+    *q = x;
     return GF_OK;
 }
 

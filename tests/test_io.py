@@ -9,11 +9,13 @@ velocity against position differences).
 """
 from __future__ import annotations
 
+import copy
 import dataclasses
 import datetime
 import math
 import os
 import pathlib
+import pickle
 
 import numpy as np
 import pytest
@@ -140,6 +142,8 @@ def test_records_are_frozen_read_only_float64_copies():
         r.gyro[0, 0] = 0.0
     assert len(r) == 2 and r.duration_s == 1.0 and r.units == ("rad", "m/s")
     assert "ImuRecord(kind='increments', n=2" in repr(r)
+    for twin in (pickle.loads(pickle.dumps(r)), copy.deepcopy(r)):   # process pools, copies
+        assert np.array_equal(twin.gyro, r.gyro) and not twin.gyro.flags.writeable
 
 
 @pytest.mark.parametrize("make, match", [

@@ -176,6 +176,13 @@ class _Record:
     def __len__(self) -> int:
         return int(self.t_s.shape[0])
 
+    def __setstate__(self, state: dict) -> None:
+        """Unpickling and deep copies give fresh arrays: make them read-only too."""
+        for value in state.values():
+            if isinstance(value, np.ndarray):
+                value.flags.writeable = False
+        self.__dict__.update(state)
+
     @property
     def duration_s(self) -> float:
         """Time from the first to the last sample (s)."""

@@ -695,7 +695,7 @@ def direct_navigation(system: System, sensors: Mapping[str, np.ndarray], start_t
         return sol
     if value("lowpass_sections"):
         raise ValueError("direct_navigation: the SINS FMU's low-pass is not reproduced here; "
-                         "filter the record with gfins_fmi.filters.BiquadFilter first")
+                         "filter the record with gfins_fmi.signal_conditioning.BiquadFilter first")
     dth, dv = sensors["dtheta"], sensors["dv"]
     if value("imu_comp"):
         if imu_errors is None or not all(np.array_equal(v, value(k))

@@ -300,7 +300,7 @@ def run_sins_fmu(gyro, accel, dt_s: float, initial, *, config=None, h_ext_m=None
 
     ``imu_errors`` (:class:`gfins_fmi.ImuErrors`) switches on the FMU's compensation of
     its inputs; ``lowpass_sos`` (n_sections <= 8, 6) its low-pass after it (the same as
-    ``ImuErrors.compensate`` followed by ``filters.BiquadFilter`` on the six channels).
+    ``ImuErrors.compensate`` followed by ``signal_conditioning.BiquadFilter`` on the six channels).
 
     Returns a :class:`gfins_fmi.NavSolution`.
     """

@@ -318,13 +318,13 @@ def test_gfnav_fmu_errors(circle, version):
 def test_sins_fmu_compensation_and_lowpass_equal_the_batch_pipeline(circle, version, mode):
     """imu_comp + lowpass in the FMU = ImuErrors.compensate -> BiquadFilter -> Strapdown
     (increments are compensated as mean rates over the step, exactly as the FMU does)."""
-    from gfins_fmi import filters
+    from gfins_fmi import signal_conditioning
     tr = circle
     x0 = gf.NavState.from_trajectory(tr, 0)
     e = gf.ImuErrors.random(np.random.default_rng(4), gyro_bias_deg_h=10, gyro_scale_ppm=1000,
                             gyro_misalignment_arcsec=100, accel_bias_ug=1000, accel_scale_ppm=1000,
                             accel_misalignment_arcsec=100, accel_k2_ug_g2=50, lever_arm_cm=3)
-    sos = filters.design_cheby2(20.0, 100.0, order=4)
+    sos = signal_conditioning.design_cheby2(20.0, 100.0, order=4)
     dt = tr.dt_s
     if mode == "rates":
         g_out, a_out = e.apply(tr.gyro_rad_s, tr.accel_m_s2)
@@ -335,7 +335,7 @@ def test_sins_fmu_compensation_and_lowpass_equal_the_batch_pipeline(circle, vers
         k = 1.0 / dt                                  # the FMU's arithmetic, to the bit
         g_c, a_c = e.compensate(g_out * k, a_out * k)
         g_c, a_c = g_c / k, a_c / k
-    y = filters.BiquadFilter(sos, 6).filter(np.c_[g_c, a_c])
+    y = signal_conditioning.BiquadFilter(sos, 6).filter(np.c_[g_c, a_c])
     cfg = gf.SinsConfig(input=mode)
     ref = gf.Strapdown(x0, cfg).run(y[:, :3], y[:, 3:], dt_s=dt)
     out = run_sins_fmu(g_out, a_out, dt, x0, config=cfg, imu_errors=e, lowpass_sos=sos,

@@ -46,7 +46,7 @@ MODEL = dict(
         dict(name="lowpass_sos", causality="parameter", variability="fixed", type="Float64",
              shape=(48,), start=0.0, field="lowpass_sos",
              description="Low-pass sections [b0 b1 b2 1 a1 a2] x lowpass_sections (e.g. "
-                         "gfins_fmi.filters.design_cheby2), applied after the compensation"),
+                         "gfins_fmi.signal_conditioning.design_cheby2), applied after the compensation"),
         dict(name="dtheta", causality="input", variability="continuous", type="Float64",
              shape=(3,), unit=_RAD, start=0.0, field="dtheta_rad",
              description="Gyro angle increment over the step ending now, body axes "

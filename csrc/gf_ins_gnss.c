@@ -108,6 +108,8 @@ static int config_check(const gf_ins_config *c)
     if (!pos_finite(c->still_window_s) || !pos_finite(c->still_accel_std_m_s2) ||
         !pos_finite(c->still_gyro_rad_s))
         return 34;
+    if (!nonneg_finite(c->max_latency_s))
+        return 35;
     return 0;
 }
 
@@ -874,10 +876,11 @@ static void hyp_rate(const gf_ins_filter *f, const nav_hyp *hy, const double w_c
 }
 
 /* body velocity of the odometer point: C^T v + w_eb x l */
-static void odo_point_velocity(const gf_ins_filter *f, const nav_hyp *hy, double out[3])
+static void odo_point_velocity(const gf_ins_filter *f, const nav_hyp *hy, const double w_comp[3],
+                               double out[3])
 {
     double w_ib[3], w_eb[3], vb[3], wl[3];
-    hyp_rate(f, hy, f->w_ib_b_rad_s, w_ib, w_eb);
+    hyp_rate(f, hy, w_comp, w_ib, w_eb);
     gf_m3t_mul_v3(&hy->C, hy->v, vb);
     gf_v3_cross(w_eb, f->cfg.odo_lever_m, wl);
     gf_v3_add(vb, wl, out);
@@ -886,7 +889,7 @@ static void odo_point_velocity(const gf_ins_filter *f, const nav_hyp *hy, double
 /* The full (nonlinear) prediction of a measurement from a hypothesis; positions in the
  * nominal's local frame. */
 static void meas_predict(const gf_ins_filter *f, const local_frame *lf, const nav_hyp *hy,
-                         int32_t type, double *y)
+                         const double w_comp[3], int32_t type, double *y)
 {
     switch (type) {
     case GF_INS_MEAS_GNSS_POS: {
@@ -900,7 +903,7 @@ static void meas_predict(const gf_ins_filter *f, const local_frame *lf, const na
     }
     case GF_INS_MEAS_GNSS_VEL: {
         double w_ib[3], w_eb[3], wl[3], cwl[3];
-        hyp_rate(f, hy, f->w_ib_b_rad_s, w_ib, w_eb);
+        hyp_rate(f, hy, w_comp, w_ib, w_eb);
         gf_v3_cross(w_eb, f->cfg.gnss_lever_m, wl);
         gf_m3_mul_v3(&hy->C, wl, cwl);
         gf_v3_add(hy->v, cwl, y);
@@ -911,13 +914,13 @@ static void meas_predict(const gf_ins_filter *f, const local_frame *lf, const na
         break;
     case GF_INS_MEAS_ODO: {
         double u[3];
-        odo_point_velocity(f, hy, u);
+        odo_point_velocity(f, hy, w_comp, u);
         y[0] = (1.0 + hy->s[S_ODO]) * u[1];
         break;
     }
     case GF_INS_MEAS_NHC: {
         double u[3];
-        odo_point_velocity(f, hy, u);
+        odo_point_velocity(f, hy, w_comp, u);
         y[0] = u[0];
         y[1] = u[2];
         break;
@@ -946,13 +949,13 @@ static void skew_rows(const double a[3], double S[3][3])
 
 /* The linearised model H (m x n) of a measurement at the nominal (EKF). */
 static void meas_jacobian(const gf_ins_filter *f, const local_frame *lf, const nav_hyp *nom,
-                          int32_t type, double *H)
+                          const double w_comp[3], int32_t type, double *H)
 {
     const int n = f->n_states;
     const int m = meas_rows(type);
     memset(H, 0, (size_t)(m * n) * sizeof *H);
 #define HH(i, j) H[(i) * n + (j)]
-    const double *w = type == GF_INS_MEAS_ZARU ? f->still_w : f->w_ib_b_rad_s;
+    const double *w = type == GF_INS_MEAS_ZARU ? f->still_w : w_comp;
     switch (type) {
     case GF_INS_MEAS_GNSS_POS: {
         double cl[3], S[3][3];
@@ -1020,7 +1023,7 @@ static void meas_jacobian(const gf_ins_filter *f, const local_frame *lf, const n
         }
         if (type == GF_INS_MEAS_ODO && f->idx_odo >= 0) {
             double u[3];
-            odo_point_velocity(f, nom, u);
+            odo_point_velocity(f, nom, w_comp, u);
             HH(0, f->idx_odo) = -u[1];
         }
         break;
@@ -1086,18 +1089,22 @@ static void log_entry(gf_ins_log *log, double t, int32_t type, int32_t status, i
 }
 
 /* One update of type `type` (external measurement *ms, or internal with ms NULL and
- * std std_int). */
-static gf_status update(gf_ins_filter *f, int32_t type, const gf_ins_meas *ms, double std_int,
-                        gf_ins_epochs *ep, gf_ins_log *log)
+ * std std_int). The measurement is predicted from the nominal `ref` with compensated
+ * rate `w_ref` (the current ones, or their past values for a delayed measurement: the
+ * error state is then taken as unchanged over the delay) and the correction goes to the
+ * current nominal. */
+static gf_status update_at(gf_ins_filter *f, int32_t type, const gf_ins_meas *ms, double std_int,
+                           const gf_sins_state *ref, const double *w_ref, gf_ins_epochs *ep,
+                           gf_ins_log *log)
 {
     const int n = f->n_states, m = meas_rows(type);
     local_frame lf;
-    local_frame_of(&f->nav, &lf);
+    local_frame_of(ref, &lf);
     const double zero[NMAX] = {0};
     nav_hyp nom;
-    hyp_from_state(f, &f->nav, f->sensors, zero, &nom);
+    hyp_from_state(f, ref, f->sensors, zero, &nom);
     double y_nom[3], z[3] = {0, 0, 0}, r[3], R[9] = {0}, s_std[3];
-    meas_predict(f, &lf, &nom, type, y_nom);
+    meas_predict(f, &lf, &nom, w_ref, type, y_nom);
     if (ms)
         meas_value(&lf, ms, type, z);
     for (int i = 0; i < m; ++i) {
@@ -1120,8 +1127,8 @@ static gf_status update(gf_ins_filter *f, int32_t type, const gf_ins_meas *ms, d
         for (int p = 0; p < np; ++p) {
             nav_hyp hy;
             double y[3];
-            hyp_from_state(f, &f->nav, f->sensors, X + p * n, &hy);
-            meas_predict(f, &lf, &hy, type, y);
+            hyp_from_state(f, ref, f->sensors, X + p * n, &hy);
+            meas_predict(f, &lf, &hy, w_ref, type, y);
             for (int i = 0; i < m; ++i)
                 Zp[p * m + i] = y_nom[i] - y[i];
         }
@@ -1139,7 +1146,7 @@ static gf_status update(gf_ins_filter *f, int32_t type, const gf_ins_meas *ms, d
         st = gf_ukf_update(&f->kf, &f->ukf_w, X, (size_t)m, Zp, r, R, gate, &nis, &accepted);
     } else {
         double H[3 * NMAX];
-        meas_jacobian(f, &lf, &nom, type, H);
+        meas_jacobian(f, &lf, &nom, w_ref, type, H);
         for (int i = 0; i < m; ++i) {                      /* sqrt diag (H P H^T + R) */
             double acc = R[i * m + i];
             for (int a = 0; a < n; ++a) {
@@ -1180,6 +1187,12 @@ static gf_status update(gf_ins_filter *f, int32_t type, const gf_ins_meas *ms, d
     memcpy(f->sensors0, f->sensors, sizeof f->sensors);
     refresh_std(f);
     return epoch_update(f, ep, dx);
+}
+
+static gf_status update(gf_ins_filter *f, int32_t type, const gf_ins_meas *ms, double std_int,
+                        gf_ins_epochs *ep, gf_ins_log *log)
+{
+    return update_at(f, type, ms, std_int, &f->nav, f->w_ib_b_rad_s, ep, log);
 }
 
 /* ---- the sample ---------------------------------------------------------------------------- */
@@ -1270,6 +1283,72 @@ static gf_status meas_check(const gf_ins_meas *ms)
     return GF_OK;
 }
 
+/* ---- delayed measurements ---------------------------------------------------------------- */
+
+static void history_push(gf_ins_filter *f)
+{
+    gf_ins_history *h = f->hist + f->hist_head;
+    h->t_s = f->t_s;
+    memcpy(h->q_bn, f->nav.q_bn, sizeof h->q_bn);
+    gf_v3_copy(f->nav.v_n_m_s, h->v_n_m_s);
+    h->lat_rad = f->nav.lat_rad;
+    h->lon_rad = f->nav.lon_rad;
+    h->h_m = f->nav.h_m;
+    gf_v3_copy(f->w_ib_b_rad_s, h->w_ib_b_rad_s);
+    f->hist_head = (f->hist_head + 1) % GF_INS_HISTORY;
+    if (f->hist_count < GF_INS_HISTORY)
+        f->hist_count++;
+}
+
+/* The nominal at time t from the history (linear between samples, the quaternion by
+ * normalised linear interpolation); 0 if t is not covered. */
+static int history_at(const gf_ins_filter *f, double t, gf_sins_state *ref, double w[3])
+{
+    for (int k = 0; k + 1 < f->hist_count; ++k) {
+        /* newest first: b is the later entry, a the one before it */
+        const int ib = (f->hist_head - 1 - k + 2 * GF_INS_HISTORY) % GF_INS_HISTORY;
+        const int ia = (ib - 1 + GF_INS_HISTORY) % GF_INS_HISTORY;
+        const gf_ins_history *a = f->hist + ia, *b = f->hist + ib;
+        if (t > b->t_s + GF_INS_TIME_EPS_S)
+            return 0;
+        if (t < a->t_s - GF_INS_TIME_EPS_S)
+            continue;
+        const double u = b->t_s > a->t_s ? fmin(1.0, fmax(0.0, (t - a->t_s) / (b->t_s - a->t_s))) : 1.0;
+        double q[4], v[3];
+        const double sgn = gf_v3_dot(a->q_bn + 1, b->q_bn + 1) + a->q_bn[0] * b->q_bn[0] < 0 ? -1.0 : 1.0;
+        for (int i = 0; i < 4; ++i)
+            q[i] = (1.0 - u) * a->q_bn[i] + u * sgn * b->q_bn[i];
+        for (int i = 0; i < 3; ++i) {
+            v[i] = (1.0 - u) * a->v_n_m_s[i] + u * b->v_n_m_s[i];
+            w[i] = (1.0 - u) * a->w_ib_b_rad_s[i] + u * b->w_ib_b_rad_s[i];
+        }
+        *ref = f->nav;
+        return gf_sins_set_navigation(ref, q, v, (1.0 - u) * a->lat_rad + u * b->lat_rad,
+                                      a->lon_rad + u * wrap_pi(b->lon_rad - a->lon_rad),
+                                      (1.0 - u) * a->h_m + u * b->h_m) == GF_OK;
+    }
+    return 0;
+}
+
+/* A measurement valid at or before the filter's time: a delayed update, or stale. */
+static gf_status past_measurement(gf_ins_filter *f, const gf_ins_meas *ms, gf_ins_epochs *ep,
+                                  gf_ins_log *log)
+{
+    gf_sins_state ref;
+    double w[3];
+    if (f->cfg.max_latency_s > 0.0 && f->t_s - ms->t_s <= f->cfg.max_latency_s &&
+        history_at(f, ms->t_s, &ref, w)) {
+        const gf_status st = propagate(f, ep);
+        if (st != GF_OK)
+            return st;
+        return update_at(f, ms->type, ms, 0.0, &ref, w, ep, log);
+    }
+    f->n_rejected++;
+    log_entry(log, ms->t_s, ms->type, GF_INS_REJECTED_STALE, meas_rows(ms->type), NAN, ms->z,
+              ms->std);
+    return GF_OK;
+}
+
 /* what sizes or indexes arrays in a filter handed in by a caller (cheap: every step) */
 static int layout_is_valid(const gf_ins_filter *f)
 {
@@ -1332,11 +1411,10 @@ gf_status gf_ins_step(gf_ins_filter *f, double t_s, const double *gyro, const do
         gf_v3_copy(a, f->f_b_m_s2);
         f->t_s = t_s;
         f->nav.time_s = t_s;
-        for (size_t j = 0; j < n_meas; ++j) {
-            f->n_rejected++;
-            log_entry(log, meas[j].t_s, meas[j].type, GF_INS_REJECTED_STALE,
-                      meas_rows(meas[j].type), NAN, meas[j].z, meas[j].std);
-        }
+        for (size_t j = 0; j < n_meas && st == GF_OK; ++j)
+            st = past_measurement(f, meas + j, epochs, log);
+        if (st != GF_OK)
+            return st;
     } else {
         double rem_g[3], rem_a[3];
         gf_v3_copy(gyro, rem_g);
@@ -1346,9 +1424,7 @@ gf_status gf_ins_step(gf_ins_filter *f, double t_s, const double *gyro, const do
         for (size_t j = 0; j < n_meas && st == GF_OK; ++j) {
             const gf_ins_meas *ms = meas + j;
             if (ms->t_s <= t_prev + GF_INS_TIME_EPS_S) {
-                f->n_rejected++;
-                log_entry(log, ms->t_s, ms->type, GF_INS_REJECTED_STALE, meas_rows(ms->type),
-                          NAN, ms->z, ms->std);
+                st = past_measurement(f, ms, epochs, log);
                 continue;
             }
             if (!done && ms->t_s < t_s - GF_INS_TIME_EPS_S) {
@@ -1414,6 +1490,8 @@ gf_status gf_ins_step(gf_ins_filter *f, double t_s, const double *gyro, const do
     gf_v3_copy(accel, f->prev_accel_raw);
     f->have_sample = 1;
     f->n_imu++;
+    if (f->cfg.max_latency_s > 0.0)
+        history_push(f);
     return GF_OK;
 }
 

@@ -60,7 +60,12 @@
  *   ZARU: w_ib^b - C_n^b w_ie^n = 0 (mean over the standstill detector's window).
  * Measurements carry their time of validity; the IMU interval that contains it is
  * split there (increments in proportion to time, rates interpolated linearly), the
- * covariance is propagated to that instant and the update is made there.
+ * covariance is propagated to that instant and the update is made there. A measurement
+ * that arrives late (valid before the current sample, by up to max_latency_s, within the
+ * last GF_INS_HISTORY samples) is predicted from the nominal state of its time of
+ * validity (kept, interpolated between samples) and corrects the current state, the
+ * error state being taken as constant over the delay (its change over a delay of
+ * 0.1-0.5 s is second order for the slowly varying INS errors).
  * Innovation gating: NIS r^T S^-1 r above the chi-square quantile of the configured
  * probability for m degrees of freedom rejects the measurement (logged).
  */
@@ -153,6 +158,9 @@ typedef struct gf_ins_config {
     double still_window_s;          /* standstill detector averaging time, s */
     double still_accel_std_m_s2;    /* standstill: std of |f| over the window below this */
     double still_gyro_rad_s;        /* ... and mean |w| over the window below this */
+    double max_latency_s;           /* > 0: measurements valid up to this long before the
+                                       current sample are used (delayed update, see above);
+                                       older ones, and all past ones with 0, are stale */
 } gf_ins_config;
 
 typedef struct gf_ins_meas {
@@ -204,6 +212,16 @@ typedef struct gf_ins_output {
     int8_t *standstill;             /* n: detector output */
 } gf_ins_output;
 
+/* The nominal state after one IMU sample, kept for delayed measurements. */
+#define GF_INS_HISTORY 128
+typedef struct gf_ins_history {
+    double t_s;
+    double q_bn[4];
+    double v_n_m_s[3];
+    double lat_rad, lon_rad, h_m;
+    double w_ib_b_rad_s[3];
+} gf_ins_history;
+
 typedef struct gf_ins_filter {
     gf_ins_config cfg;
     int32_t n_states;
@@ -228,6 +246,8 @@ typedef struct gf_ins_filter {
     int32_t standstill;
     double last_nhc_t_s, last_zupt_t_s;
     double last_regular_t_s;        /* time of the last propagation on the regular grid */
+    gf_ins_history hist[GF_INS_HISTORY];  /* ring of the last samples (max_latency_s > 0) */
+    int32_t hist_head, hist_count;
     uint64_t n_imu, n_updates, n_rejected;
 } gf_ins_filter;
 

@@ -50,7 +50,8 @@ _BAD_FIELD = {1: "input", 2: "coning", 3: "filter", 4: "scale_factors/baro_bias/
               7: "max_rate_rad_s/max_specific_force_m_s2", 8: "ukf_alpha/ukf_beta/ukf_kappa",
               30: "gnss_lever_arm_m/odometer_lever_arm_m", 31: "gate_probability",
               32: "nhc_std_m_s/nhc_interval_s", 33: "zupt_std_m_s/zaru_std_rad_s/zupt_interval_s",
-              34: "standstill_window_s/standstill_accel_std_m_s2/standstill_gyro_rad_s"}
+              34: "standstill_window_s/standstill_accel_std_m_s2/standstill_gyro_rad_s",
+              35: "max_latency_s"}
 
 
 class FilterError(GfinsError, ValueError):
@@ -111,6 +112,9 @@ class FilterConfig:
     ukf_alpha, ukf_beta, ukf_kappa : sigma-point parameters (seed 004: beta 2, kappa 0,
         alpha small; 0.5 keeps the points within ~2 sigma).
     max_imu_gap_s : a longer IMU interval stops the run with :class:`FilterError`.
+    max_latency_s : measurements handed in after their time of validity (the FMU, a
+        receiver with latency) are used up to this late (0: such measurements are stale);
+        see docs/estimation.md.
     """
 
     imu: ImuNoise = field(default_factory=ImuNoise)
@@ -146,6 +150,7 @@ class FilterConfig:
     ukf_beta: float = 2.0
     ukf_kappa: float = 0.0
     max_imu_gap_s: float = 0.5
+    max_latency_s: float = 0.0
     max_rate_rad_s: float = 50.0
     max_specific_force_m_s2: float = 1000.0
 
@@ -223,6 +228,7 @@ class FilterConfig:
         cfg.still_window_s = self.standstill_window_s
         cfg.still_accel_std_m_s2 = self.standstill_accel_std_m_s2
         cfg.still_gyro_rad_s = self.standstill_gyro_rad_s
+        cfg.max_latency_s = float(self.max_latency_s)
         n = ffi.new("int32_t *")
         st = lib.gf_ins_state_count(cfg, n)
         if st != lib.GF_OK:

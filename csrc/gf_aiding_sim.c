@@ -441,6 +441,54 @@ static int check_odo(const gf_odo_params *o)
     return 0;
 }
 
+const char *gf_aiding_bad_string(int bad)
+{
+    if (bad >= GF_AIDING_BAD_GNSS_OUTAGE)
+        return "must have start < end, both finite";
+    switch (bad) {
+    case GF_AIDING_BAD_GNSS_ENABLED:
+    case GF_AIDING_BAD_BARO_ENABLED:
+    case GF_AIDING_BAD_ODO_ENABLED:
+        return "must be 0 or 1";
+    case GF_AIDING_BAD_GNSS_RATE:
+    case GF_AIDING_BAD_BARO_RATE:
+    case GF_AIDING_BAD_ODO_RATE:
+        return "must be finite, > 0 and <= 1000 Hz";
+    case GF_AIDING_BAD_GNSS_LATENCY:
+        return "must be finite, >= 0 s and latency x rate <= 14 (epochs awaiting delivery)";
+    case GF_AIDING_BAD_GNSS_LEVER_ARM:
+    case GF_AIDING_BAD_ODO_LEVER_ARM:
+        return "must be finite with |l| <= 100 m";
+    case GF_AIDING_BAD_GNSS_GM_TAU:
+    case GF_AIDING_BAD_BARO_GM_TAU:
+        return "must be finite and > 0 s where its std is > 0 (>= 0 otherwise)";
+    case GF_AIDING_BAD_GNSS_QUALITY:
+        return "must be 0 .. 6 (RTKLIB Q: 1 fix, 2 float, 3 SBAS, 4 DGPS, 5 single, 6 PPP)";
+    case GF_AIDING_BAD_GNSS_N_OUTAGES:
+        return "must be 0 .. 8 (GF_AIDING_MAX_OUTAGES)";
+    case GF_AIDING_BAD_GNSS_PERIODIC:
+        return "(first, period, duration) must be finite, period and duration >= 0, and "
+               "a duration > 0 needs 0 < duration <= period";
+    case GF_AIDING_BAD_BARO_BIAS0:
+        return "must be finite";
+    case GF_AIDING_BAD_ODO_SCALE:
+        return "must be finite with |k| < 0.5";
+    case GF_AIDING_BAD_GNSS_OFFSET:
+    case GF_AIDING_BAD_GNSS_POS_STD:
+    case GF_AIDING_BAD_GNSS_VEL_STD:
+    case GF_AIDING_BAD_GNSS_GM_STD:
+    case GF_AIDING_BAD_BARO_OFFSET:
+    case GF_AIDING_BAD_BARO_STD:
+    case GF_AIDING_BAD_BARO_RW:
+    case GF_AIDING_BAD_BARO_GM_STD:
+    case GF_AIDING_BAD_ODO_OFFSET:
+    case GF_AIDING_BAD_ODO_STD:
+        return "must be finite and >= 0";
+    default:
+        return "is out of range";
+    }
+}
+
 static void clear_output(gf_aiding_output *out)
 {
     memset(out, 0, sizeof *out);

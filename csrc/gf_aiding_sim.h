@@ -190,6 +190,11 @@ gf_status gf_aiding_init(gf_aiding_sim *sim, const gf_aiding_params *params,
                          const gf_vehicle_state *vehicle, uint64_t seed, gf_aiding_output *out,
                          int *bad);
 
+/* What a refused parameter (bad: GF_AIDING_BAD_*) must satisfy, as a static phrase
+ * without the parameter's name ("must be finite and >= 0"): callers prefix their own
+ * name of it (FMU parameter, Python attribute). Never NULL. */
+const char *gf_aiding_bad_string(int bad);
+
 /* Advances to t_end_s (>= the time of the last call): measures every epoch reached and
  * delivers those due. out->*_new = number delivered by this call; out's epochs are the
  * newest delivered (unchanged when none: the caller holds them). A step that spans

@@ -406,7 +406,7 @@ int main(void)
     expect_refused("gnss_rate", 0.0, "gnss_rate");
     expect_refused("gnss_latency", 20.0, "gnss_latency");
     expect_refused("gnss_n_outages", 9, "gnss_n_outages");
-    expect_refused("gnss_outage_duration", 1.0, "gnss_outage_period");
+    expect_refused("gnss_outage_duration", 1.0, "gnss_outage_first/_period/_duration");
     expect_refused("baro_bias_gm_std", -0.1, "baro_bias_gm_std");
     expect_refused("odo_scale_error", 0.6, "odo_scale_error");
     test_aiding_equals_core();

@@ -97,47 +97,33 @@ static void commit(ModelData *d, const Sensed *o)
 /* Why gf_aiding_init refused the parameters (bad: GF_AIDING_BAD_*), by FMU name. */
 static void log_bad_aiding(FmuInstance *instance, int bad)
 {
-    static const struct { int code; const char *text; } k[] = {
-        {GF_AIDING_BAD_GNSS_ENABLED, "gnss must be 0 or 1"},
-        {GF_AIDING_BAD_GNSS_RATE, "gnss_rate must be finite, > 0 and <= 1000 Hz"},
-        {GF_AIDING_BAD_GNSS_OFFSET, "gnss_offset must be finite and >= 0"},
-        {GF_AIDING_BAD_GNSS_LATENCY, "gnss_latency must be finite, >= 0 and gnss_latency x "
-                                     "gnss_rate <= 14 (epochs awaiting delivery)"},
-        {GF_AIDING_BAD_GNSS_LEVER_ARM, "gnss_lever_arm must be finite, |l| <= 100 m"},
-        {GF_AIDING_BAD_GNSS_POS_STD, "gnss_pos_std must be finite and >= 0"},
-        {GF_AIDING_BAD_GNSS_VEL_STD, "gnss_vel_std must be finite and >= 0"},
-        {GF_AIDING_BAD_GNSS_GM_STD, "gnss_pos_gm_std must be finite and >= 0"},
-        {GF_AIDING_BAD_GNSS_GM_TAU, "gnss_pos_gm_tau must be finite and > 0 (>= 0 when "
-                                    "gnss_pos_gm_std is 0)"},
-        {GF_AIDING_BAD_GNSS_QUALITY, "gnss_q must be 0 .. 6 (RTKLIB Q)"},
-        {GF_AIDING_BAD_GNSS_N_OUTAGES, "gnss_n_outages must be 0 .. 8"},
-        {GF_AIDING_BAD_GNSS_PERIODIC, "gnss_outage_first must be finite, gnss_outage_period "
-                                      "and gnss_outage_duration >= 0, and a duration > 0 "
-                                      "needs 0 < duration <= period"},
-        {GF_AIDING_BAD_BARO_ENABLED, "baro must be 0 or 1"},
-        {GF_AIDING_BAD_BARO_RATE, "baro_rate must be finite, > 0 and <= 1000 Hz"},
-        {GF_AIDING_BAD_BARO_OFFSET, "baro_offset must be finite and >= 0"},
-        {GF_AIDING_BAD_BARO_STD, "baro_std must be finite and >= 0"},
-        {GF_AIDING_BAD_BARO_BIAS0, "baro_bias0 must be finite"},
-        {GF_AIDING_BAD_BARO_RW, "baro_bias_rw must be finite and >= 0"},
-        {GF_AIDING_BAD_BARO_GM_STD, "baro_bias_gm_std must be finite and >= 0"},
-        {GF_AIDING_BAD_BARO_GM_TAU, "baro_bias_gm_tau must be finite and > 0 (>= 0 when "
-                                    "baro_bias_gm_std is 0)"},
-        {GF_AIDING_BAD_ODO_ENABLED, "odo must be 0 or 1"},
-        {GF_AIDING_BAD_ODO_RATE, "odo_rate must be finite, > 0 and <= 1000 Hz"},
-        {GF_AIDING_BAD_ODO_OFFSET, "odo_offset must be finite and >= 0"},
-        {GF_AIDING_BAD_ODO_LEVER_ARM, "odo_lever_arm must be finite, |l| <= 100 m"},
-        {GF_AIDING_BAD_ODO_SCALE, "odo_scale_error must be finite and |k| < 0.5"},
-        {GF_AIDING_BAD_ODO_STD, "odo_std must be finite and >= 0"}};
+    static const struct { int code; const char *name; } k[] = {
+        {GF_AIDING_BAD_GNSS_ENABLED, "gnss"}, {GF_AIDING_BAD_GNSS_RATE, "gnss_rate"},
+        {GF_AIDING_BAD_GNSS_OFFSET, "gnss_offset"}, {GF_AIDING_BAD_GNSS_LATENCY, "gnss_latency"},
+        {GF_AIDING_BAD_GNSS_LEVER_ARM, "gnss_lever_arm"},
+        {GF_AIDING_BAD_GNSS_POS_STD, "gnss_pos_std"}, {GF_AIDING_BAD_GNSS_VEL_STD, "gnss_vel_std"},
+        {GF_AIDING_BAD_GNSS_GM_STD, "gnss_pos_gm_std"},
+        {GF_AIDING_BAD_GNSS_GM_TAU, "gnss_pos_gm_tau"}, {GF_AIDING_BAD_GNSS_QUALITY, "gnss_q"},
+        {GF_AIDING_BAD_GNSS_N_OUTAGES, "gnss_n_outages"},
+        {GF_AIDING_BAD_GNSS_PERIODIC, "gnss_outage_first/_period/_duration"},
+        {GF_AIDING_BAD_BARO_ENABLED, "baro"}, {GF_AIDING_BAD_BARO_RATE, "baro_rate"},
+        {GF_AIDING_BAD_BARO_OFFSET, "baro_offset"}, {GF_AIDING_BAD_BARO_STD, "baro_std"},
+        {GF_AIDING_BAD_BARO_BIAS0, "baro_bias0"}, {GF_AIDING_BAD_BARO_RW, "baro_bias_rw"},
+        {GF_AIDING_BAD_BARO_GM_STD, "baro_bias_gm_std"},
+        {GF_AIDING_BAD_BARO_GM_TAU, "baro_bias_gm_tau"},
+        {GF_AIDING_BAD_ODO_ENABLED, "odo"}, {GF_AIDING_BAD_ODO_RATE, "odo_rate"},
+        {GF_AIDING_BAD_ODO_OFFSET, "odo_offset"}, {GF_AIDING_BAD_ODO_LEVER_ARM, "odo_lever_arm"},
+        {GF_AIDING_BAD_ODO_SCALE, "odo_scale_error"}, {GF_AIDING_BAD_ODO_STD, "odo_std"}};
+    const char *why = gf_aiding_bad_string(bad);
     if (bad >= GF_AIDING_BAD_GNSS_OUTAGE) {
         const int i = bad - GF_AIDING_BAD_GNSS_OUTAGE + 1;
-        fmu_log_error(instance, "GNSS outage %d: gnss_outage_start[%d] < gnss_outage_end[%d] "
-                      "must hold, both finite", i, i, i);
+        fmu_log_error(instance, "GNSS outage %d (gnss_outage_start[%d], gnss_outage_end[%d]) %s",
+                      i, i, i, why);
         return;
     }
     for (size_t i = 0; i < sizeof k / sizeof k[0]; ++i)
         if (k[i].code == bad) {
-            fmu_log_error(instance, "aiding sensor parameter refused: %s", k[i].text);
+            fmu_log_error(instance, "parameter %s %s", k[i].name, why);
             return;
         }
     fmu_log_error(instance, "aiding sensor parameters refused (code %d)", bad);

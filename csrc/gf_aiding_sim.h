@@ -3,8 +3,8 @@
  * and gfins_fmi.vehicle.simulate_vehicle both call this module, so a run of either with
  * the same parameters and seed gives the same bits).
  *
- * Geometry (docs/CONVENTIONS_AIDING.md of the integrated-navigation wave; the filters use
- * the same definitions). x is the vehicle truth at the epoch (gf_vehicle_sample):
+ * Geometry (the conventions of the integrated-navigation wave, which its filters share;
+ * docs/cosim.md). x is the vehicle truth at the epoch (gf_vehicle_sample):
  * C = C_b^n of q_b^n, w_ib^b the true rate, v^n the ENU velocity, (L, lambda, h) the IMU.
  *   GNSS antenna at lever arm l_gnss (m, body RFU, IMU -> phase centre):
  *     l^n = C l_gnss

@@ -174,12 +174,9 @@ static void run(fmi2Component c, int k0, int k1, double out[][N_OUT])
     }
 }
 
-static void test_equals_core(int imu_errors)
+/* The FMU's default profile (seed 001, 60 s alignment), for direct calls. */
+static gf_vehicle_profile default_profile(void)
 {
-    fmi2Component c = open_ready("vehicle", imu_errors, N * H_S);
-    run(c, 0, N, g_a);
-    fmi2FreeInstance(c);
-    /* the same motion directly: the FMU's default profile (seed 001, 60 s alignment) */
     gf_vehicle_profile p;
     memset(&p, 0, sizeof p);
     p.lat0_rad = 0.5235987755982988;
@@ -194,6 +191,16 @@ static void test_equals_core(int imu_errors)
         p.segment[i].dheading_rate_rad_s = seg[i][2];
         p.segment[i].dheading_rad = seg[i][3];
     }
+    return p;
+}
+
+static void test_equals_core(int imu_errors)
+{
+    fmi2Component c = open_ready("vehicle", imu_errors, N * H_S);
+    run(c, 0, N, g_a);
+    fmi2FreeInstance(c);
+    /* the same motion directly */
+    const gf_vehicle_profile p = default_profile();
     gf_vehicle_state s;
     gf_vehicle_sample x;
     CHECK(gf_vehicle_init(&s, &p, 0.0, &x, NULL) == GF_OK, "direct init");
@@ -255,17 +262,7 @@ static void test_aiding_equals_core(void)
     fmi2GetInteger(c, g_aid_int, N_AID_INT, g_cnt_a[0]);
     run(c, 0, N, g_a);
     fmi2FreeInstance(c);
-    gf_vehicle_profile p;
-    memset(&p, 0, sizeof p);
-    p.lat0_rad = 0.5235987755982988;
-    p.lon0_rad = 1.9896753472735356;
-    p.h0_m = 100.0;
-    p.n_segments = 3;
-    const double seg[3][4] = {{60, 0, 0, 0}, {20, 15, 0, 0}, {220, 0, 0, 0}};
-    for (int i = 0; i < 3; ++i) {
-        p.segment[i].duration_s = seg[i][0];
-        p.segment[i].dspeed_m_s = seg[i][1];
-    }
+    const gf_vehicle_profile p = default_profile();
     gf_vehicle_state s;
     CHECK(gf_vehicle_init(&s, &p, 0.0, NULL, NULL) == GF_OK, "direct init");
     const gf_aiding_params a = aiding_params();

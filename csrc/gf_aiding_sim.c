@@ -17,7 +17,15 @@
  * glue's tolerance on communication points (fmu_common.c), so that an epoch at a
  * communication point is delivered in the step that ends there whatever the master's
  * clock rounding. */
-static double reach(double t_end_s) { return t_end_s + 1e-9 * fmax(1.0, fabs(t_end_s)); }
+static double tol(double t_s) { return 1e-9 * fmax(1.0, fabs(t_s)); }
+
+static double reach(double t_end_s) { return t_end_s + tol(t_end_s); }
+
+/* t_end may fall short of the time already reached by the tolerance (a master's clock) */
+static int time_ok(const gf_aiding_sim *s, double t_end_s)
+{
+    return isfinite(t_end_s) && t_end_s >= s->t_s - tol(s->t_s);
+}
 
 static double epoch_time(double t0_s, double offset_s, double rate_hz, uint64_t k)
 {
@@ -337,7 +345,7 @@ static gf_status advance(gf_aiding_sim *s, double t_end_s, sink *k)
         }
     }
     deliver_due(s, lim, k);
-    s->t_s = t_end_s;
+    s->t_s = fmax(s->t_s, t_end_s);
     return GF_OK;
 }
 
@@ -540,12 +548,12 @@ gf_status gf_aiding_step(gf_aiding_sim *sim, double t_end_s, gf_aiding_output *o
 {
     if (!sim || !out)
         return GF_ERR_NULL_POINTER;
-    if (!isfinite(t_end_s) || !(t_end_s >= sim->t_s))
+    if (!time_ok(sim, t_end_s))
         return GF_ERR_BAD_TIME;
     const double lim = reach(t_end_s);
     const int due = sim->queue_n > 0 && sim->queue[sim->queue_head].t_delivered_s <= lim;
     if (!due && !(next_epoch(sim) <= lim)) { /* nothing to do (most steps): no copies */
-        sim->t_s = t_end_s;
+        sim->t_s = fmax(sim->t_s, t_end_s);
         out->gnss_new = out->baro_new = out->odo_new = 0;
         return GF_OK;
     }
@@ -567,7 +575,7 @@ gf_status gf_aiding_sync(gf_aiding_sim *sim, const gf_vehicle_state *vehicle)
     if (!sim || !vehicle)
         return GF_ERR_NULL_POINTER;
     const double t = vehicle->time_s;
-    if (!isfinite(t) || next_epoch(sim) < t - 1e-9 * fmax(1.0, fabs(t)))
+    if (!isfinite(t) || next_epoch(sim) < t - tol(t))
         return GF_ERR_BAD_TIME;
     sim->vehicle = *vehicle;
     return GF_OK;
@@ -586,7 +594,7 @@ gf_status gf_aiding_run(gf_aiding_sim *sim, double t_end_s, gf_gnss_epoch *gnss,
     if (!sim || (sim->p.gnss.enabled && (!gnss || !n_gnss)) ||
         (sim->p.baro.enabled && (!baro || !n_baro)) || (sim->p.odo.enabled && (!odo || !n_odo)))
         return GF_ERR_NULL_POINTER;
-    if (!isfinite(t_end_s) || !(t_end_s >= sim->t_s))
+    if (!time_ok(sim, t_end_s))
         return GF_ERR_BAD_TIME;
     gf_aiding_sim s = *sim;
     sink k = {gnss, gnss_cap, 0, baro, baro_cap, 0, odo, odo_cap, 0, NULL, 0};

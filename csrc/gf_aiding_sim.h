@@ -195,12 +195,13 @@ gf_status gf_aiding_init(gf_aiding_sim *sim, const gf_aiding_params *params,
  * name of it (FMU parameter, Python attribute). Never NULL. */
 const char *gf_aiding_bad_string(int bad);
 
-/* Advances to t_end_s (>= the time of the last call): measures every epoch reached and
- * delivers those due. out->*_new = number delivered by this call; out's epochs are the
- * newest delivered (unchanged when none: the caller holds them). A step that spans
- * several epochs of a sensor delivers them all; out shows the newest (gf_aiding_run
- * keeps every one). Errors: GF_ERR_BAD_TIME (t_end before the last call or non-finite),
- * GF_ERR_DIVERGED (the vehicle passed +-89 deg latitude); sim and out unchanged. */
+/* Advances to t_end_s (>= the time of the last call, less tol): measures every epoch
+ * reached and delivers those due. out->*_new = number delivered by this call; out's
+ * epochs are the newest delivered (unchanged when none: the caller holds them). A step
+ * that spans several epochs of a sensor delivers them all; out shows the newest
+ * (gf_aiding_run keeps every one). Errors: GF_ERR_BAD_TIME (t_end non-finite or before
+ * the last call by more than tol), GF_ERR_DIVERGED (the vehicle passed +-89 deg
+ * latitude); sim and out unchanged. */
 gf_status gf_aiding_step(gf_aiding_sim *sim, double t_end_s, gf_aiding_output *out);
 
 /* Drive mode: the vehicle has been commanded at its time t_c (gf_vehicle_command):

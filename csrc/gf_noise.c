@@ -100,18 +100,30 @@ gf_status gf_imu_noise_init(gf_imu_noise_state *state, const gf_imu_noise *param
     return gf_rng_seed(&state->rng, seed);
 }
 
-/* One step of the first-order recursion y = a y + (1 - a) x, x ~ N(0, sx^2), for the
- * stationary std `std`; the first call draws y from the stationary distribution. */
+gf_status gf_gauss_markov_step(gf_rng *rng, size_t n, const double *std, double a, int first,
+                               double *y)
+{
+    if (!rng || (n && (!std || !y)))
+        return GF_ERR_NULL_POINTER;
+    if (!(a >= 0.0 && a <= 1.0))
+        return GF_ERR_BAD_PARAMETER;
+    for (size_t i = 0; i < n; ++i) {
+        if (!(std[i] > 0.0))
+            continue;
+        /* a = 1 (tau >> dt): no innovation, the process is a constant */
+        const double sx = a < 1.0 ? std[i] / sqrt((1.0 - a) / (1.0 + a)) : 0.0;
+        if (first)
+            y[i] = std[i] * normal(rng);
+        y[i] = a * y[i] + (1.0 - a) * sx * normal(rng);
+    }
+    return GF_OK;
+}
+
+/* The three axes of one IMU process (one std for the three). */
 static void lowpass(gf_rng *r, double y[3], double std, double a, int first)
 {
-    if (!(std > 0.0))
-        return;
-    const double sx = std / sqrt((1.0 - a) / (1.0 + a));
-    for (int i = 0; i < 3; ++i) {
-        if (first)
-            y[i] = std * normal(r);
-        y[i] = a * y[i] + (1.0 - a) * sx * normal(r);
-    }
+    const double s3[3] = {std, std, std};
+    gf_gauss_markov_step(r, 3, s3, a, first, y);
 }
 
 gf_status gf_imu_noise_run(gf_imu_noise_state *state, size_t n, double dt_s, double *gyro_rad_s,

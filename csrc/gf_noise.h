@@ -53,6 +53,14 @@ gf_status gf_rng_seed(gf_rng *rng, uint64_t seed);
 /* n standard normal deviates. */
 gf_status gf_rng_normal(gf_rng *rng, size_t n, double *out);
 
+/* One step of n first-order Gauss-Markov processes sharing a = exp(-dt / tau) (the
+ * recursion above), component i of stationary std std[i]: y_i = a y_i + (1 - a) x_i,
+ * x_i ~ N(0, std_i^2 (1 + a) / (1 - a)); first != 0 draws y_i from the stationary
+ * distribution before the step. Components with std[i] <= 0 draw nothing and are left
+ * unchanged. The IMU noise model and the aiding-sensor simulation (gf_aiding_sim) use it. */
+gf_status gf_gauss_markov_step(gf_rng *rng, size_t n, const double *std, double a, int first,
+                               double *y);
+
 /* Checks the parameters (finite, >= 0; correlation times and band > 0 where the
  * corresponding std is > 0) and seeds the state. Error: GF_ERR_BAD_PARAMETER with
  * *bad (may be NULL) = index of the offending field in the struct order, 0-based. */

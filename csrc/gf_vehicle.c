@@ -258,14 +258,27 @@ gf_status gf_vehicle_init(gf_vehicle_state *state, const gf_vehicle_profile *pro
     s.R_M0_m = e.R_M_m;
     s.R_N0_m = e.R_N_m;
     gf_vehicle_sample first_sample;
-    status = evaluate(&s, start_time_s, kinematics(&s, start_time_s), 0.0, 0.0, &first_sample);
+    status = gf_vehicle_truth(&s, &first_sample);
     if (status != GF_OK)
         return status;
-    memset(first_sample.dtheta_rad, 0, sizeof first_sample.dtheta_rad);
-    memset(first_sample.dv_m_s, 0, sizeof first_sample.dv_m_s);
     *state = s;
     if (first)
         *first = first_sample;
+    return GF_OK;
+}
+
+gf_status gf_vehicle_truth(const gf_vehicle_state *state, gf_vehicle_sample *sample)
+{
+    if (!state || !sample)
+        return GF_ERR_NULL_POINTER;
+    gf_vehicle_sample out;
+    const gf_status status = evaluate(state, state->time_s, kinematics(state, state->time_s),
+                                      state->east_m, state->north_m, &out);
+    if (status != GF_OK)
+        return status;
+    memset(out.dtheta_rad, 0, sizeof out.dtheta_rad);
+    memset(out.dv_m_s, 0, sizeof out.dv_m_s);
+    *sample = out;
     return GF_OK;
 }
 

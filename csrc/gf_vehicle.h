@@ -113,6 +113,12 @@ gf_status gf_vehicle_command(gf_vehicle_state *state, double speed_m_s,
  * GF_ERR_DIVERGED (latitude beyond +-89 deg); the state is unchanged on error. */
 gf_status gf_vehicle_step(gf_vehicle_state *state, double t_end_s, gf_vehicle_sample *sample);
 
+/* The truth at the state's own time (state->time_s): pose, velocity and sensor rates,
+ * zero increments; the state is not changed. For evaluating a copy of a vehicle that has
+ * been stepped to a time (gf_aiding_sim measures its epochs so).
+ * Errors: GF_ERR_DIVERGED (latitude beyond +-89 deg). */
+gf_status gf_vehicle_truth(const gf_vehicle_state *state, gf_vehicle_sample *sample);
+
 /* n steps: samples[k] at t + (k + 1) dt_s, t the state's time (times computed, not
  * accumulated). *n_done = samples written. */
 gf_status gf_vehicle_run(gf_vehicle_state *state, size_t n, double dt_s,

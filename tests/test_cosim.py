@@ -393,12 +393,17 @@ def test_vehicle_fmu_noise_is_seeded_and_restored():
     assert all(np.array_equal(first[k], again[k]) for k in first)
 
 
-def test_vehicle_fmu_refuses_bad_noise_parameters():
+def test_vehicle_fmu_refuses_bad_noise_and_aiding_parameters():
     for params, text in [({"noise": 1, "gyro_arw": -1.0}, "gyro_arw"),
                          ({"noise": 1, "gyro_bias_instability": 1e-5, "gyro_correlation_time": 0.0},
                           "gyro_correlation_time"),
                          ({"noise": 1, "array_noise": float("nan")}, "array_noise"),
-                         ({"noise": 2}, "noise")]:
+                         ({"noise": 2}, "noise"),
+                         ({"gnss": 1, "gnss_rate": -1.0}, "gnss_rate must be finite"),
+                         ({"gnss": 1, "gnss_n_outages": 1, "gnss_outage_start": [3.0] + [0.0] * 7,
+                           "gnss_outage_end": [2.0] + [0.0] * 7}, "GNSS outage 1"),
+                         ({"baro": 1, "baro_std": float("nan")}, "baro_std"),
+                         ({"odo": 3}, "odo must be 0 or 1")]:
         log = _Log()
         s = _Slave(fmu_path("vehicle", 2), 2, log, False)
         try:

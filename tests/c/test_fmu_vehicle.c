@@ -8,12 +8,16 @@
  *   3. FMU state: get mid-run, run on, set back, run again: identical; serialize,
  *      deserialize into a fresh instance: identical;
  *   4. bad parameters are refused by exitInitializationMode with a logged reason;
- *   5. commands (drive = 1): a held command is reached after command_time. */
+ *   5. commands (drive = 1): a held command is reached after command_time;
+ *   6. GNSS, barometer, odometer: every epoch delivered by the FMU equals the epoch of
+ *      gf_aiding_run called directly with the same parameters and seed, bit for bit, in
+ *      the first step that reaches its delivery time; the FMU state (3.) holds them. */
 #include <string.h>
 
 #include "fmi2Functions.h"
 #include "fmu_instance.h"
 #include "fmu2_test.h"
+#include "gf_aiding_sim.h"
 #include "gf_gfins.h"
 #include "gf_math.h"
 #include "gf_test.h"
@@ -40,11 +44,84 @@ static void init_outputs(void)
     vrs("A", 9, p);
 }
 
+/* The aiding sensors of test 6, as FMU parameters and as gf_aiding_params. */
+static const double kGnssLever[3] = {0.3, 1.1, 1.6}, kGnssPosStd[3] = {1.0, 1.2, 2.5};
+static const double kGnssGm[3] = {0.4, 0.4, 0.9}, kOdoLever[3] = {0.75, -1.2, -0.35};
+
+static void set_aiding(fmi2Component c)
+{
+    set_int(c, "gnss", 1);
+    set_real(c, "gnss_rate", 5.0);
+    set_real(c, "gnss_offset", 0.0137);
+    set_real(c, "gnss_latency", 0.12);
+    set_vec(c, "gnss_lever_arm", kGnssLever, 3);
+    set_vec(c, "gnss_pos_std", kGnssPosStd, 3);
+    set_vec(c, "gnss_pos_gm_std", kGnssGm, 3);
+    set_real(c, "gnss_pos_gm_tau", 20.0);
+    set_int(c, "gnss_n_outages", 1);
+    set_real(c, "gnss_outage_start[1]", 10.0);
+    set_real(c, "gnss_outage_end[1]", 14.0);
+    set_real(c, "gnss_outage_first", 20.0);
+    set_real(c, "gnss_outage_period", 6.0);
+    set_real(c, "gnss_outage_duration", 2.0);
+    set_int(c, "baro", 1);
+    set_real(c, "baro_rate", 25.0);
+    set_real(c, "baro_offset", 0.004);
+    set_real(c, "baro_bias0", 3.0);
+    set_real(c, "baro_bias_rw", 0.02);
+    set_int(c, "odo", 1);
+    set_real(c, "odo_rate", 50.0);
+    set_real(c, "odo_offset", 0.0051);
+    set_vec(c, "odo_lever_arm", kOdoLever, 3);
+    set_real(c, "odo_scale_error", 0.004);
+    set_int(c, "noise_seed", 11);
+}
+
+static gf_aiding_params aiding_params(void)
+{
+    gf_aiding_params a;
+    memset(&a, 0, sizeof a);
+    a.gnss.enabled = 1;
+    a.gnss.quality = 5;
+    a.gnss.rate_hz = 5.0;
+    a.gnss.offset_s = 0.0137;
+    a.gnss.latency_s = 0.12;
+    memcpy(a.gnss.lever_arm_m, kGnssLever, sizeof kGnssLever);
+    memcpy(a.gnss.pos_std_m, kGnssPosStd, sizeof kGnssPosStd);
+    const double vel_std[3] = {0.05, 0.05, 0.1}; /* the FMU's default */
+    memcpy(a.gnss.vel_std_m_s, vel_std, sizeof vel_std);
+    memcpy(a.gnss.pos_gm_std_m, kGnssGm, sizeof kGnssGm);
+    a.gnss.pos_gm_tau_s = 20.0;
+    a.gnss.n_outages = 1;
+    a.gnss.outage_start_s[0] = 10.0;
+    a.gnss.outage_end_s[0] = 14.0;
+    a.gnss.outage_first_s = 20.0;
+    a.gnss.outage_period_s = 6.0;
+    a.gnss.outage_duration_s = 2.0;
+    a.baro.enabled = 1;
+    a.baro.rate_hz = 25.0;
+    a.baro.offset_s = 0.004;
+    a.baro.std_m = 0.5;
+    a.baro.bias0_m = 3.0;
+    a.baro.bias_rw_m_sqrt_s = 0.02;
+    a.baro.bias_gm_tau_s = 100.0;
+    a.odo.enabled = 1;
+    a.odo.rate_hz = 50.0;
+    a.odo.offset_s = 0.0051;
+    memcpy(a.odo.lever_arm_m, kOdoLever, sizeof kOdoLever);
+    a.odo.scale_error = 0.004;
+    a.odo.std_m_s = 0.05;
+    return a;
+}
+
+/* imu_errors: 0 none, 1 the IMU errors below, 2 the same and the aiding sensors */
 static fmi2Component open_ready(const char *name, int imu_errors, double stop_s)
 {
     fmi2Component c = instantiate(name);
     CHECK(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2True, stop_s) == fmi2OK, "setup");
     CHECK(fmi2EnterInitializationMode(c) == fmi2OK, "enter");
+    if (imu_errors == 2)
+        set_aiding(c);
     if (imu_errors) {
         const double bias[3] = {1e-6, -2e-6, 3e-6}, scale[3] = {1e-4, -2e-4, 5e-5};
         const double k2[3] = {2e-5, -1e-5, 1.5e-5}, lever[3] = {0.03, -0.02, 0.025};
@@ -60,22 +137,46 @@ static fmi2Component open_ready(const char *name, int imu_errors, double stop_s)
     return c;
 }
 
+static double g_a[N][N_OUT], g_b[N][N_OUT];
+
+/* Aiding outputs read after each step (reals, then the three counts). */
+enum { N_AID = 1 + 3 + 3 + 3 + 3 + 3 + 3 + 3, N_AID_INT = 3 };
+static fmi2ValueReference g_aid[N_AID], g_aid_int[N_AID_INT];
+
+static void init_aiding_outputs(void)
+{
+    static const char *const scalars[] = {"gnss_time_s", "gnss_lat_rad", "gnss_lon_rad",
+        "gnss_h_m", "baro_time_s", "baro_h_m", "baro_std_m", "odo_time_s", "odo_speed_m_s",
+        "odo_std_m_s"};
+    fmi2ValueReference *p = g_aid;
+    for (int i = 0; i < 10; ++i)
+        *p++ = vr(scalars[i]);
+    vrs("gnss_vel_enu_m_s", 3, p); p += 3;
+    vrs("gnss_pos_std_m", 3, p); p += 3;
+    vrs("gnss_vel_std_m_s", 3, p);
+    g_aid_int[0] = vr("gnss_valid");
+    g_aid_int[1] = vr("baro_valid");
+    g_aid_int[2] = vr("odo_valid");
+}
+
+static double g_aid_a[3001][N_AID], g_aid_b[3001][N_AID];
+static fmi2Integer g_cnt_a[3001][N_AID_INT], g_cnt_b[3001][N_AID_INT];
+
 static void run(fmi2Component c, int k0, int k1, double out[][N_OUT])
 {
     for (int k = k0; k < k1; ++k) {
         CHECK(fmi2DoStep(c, k * H_S, H_S, fmi2True) == fmi2OK, "doStep %d", k);
         fmi2GetReal(c, g_out, N_OUT, out[k]);
+        double (*aid)[N_AID] = out == g_a ? g_aid_a : g_aid_b;
+        fmi2Integer (*cnt)[N_AID_INT] = out == g_a ? g_cnt_a : g_cnt_b;
+        fmi2GetReal(c, g_aid, N_AID, aid[k + 1]);
+        fmi2GetInteger(c, g_aid_int, N_AID_INT, cnt[k + 1]);
     }
 }
 
-static double g_a[N][N_OUT], g_b[N][N_OUT];
-
-static void test_equals_core(int imu_errors)
+/* The FMU's default profile (seed 001, 60 s alignment), for direct calls. */
+static gf_vehicle_profile default_profile(void)
 {
-    fmi2Component c = open_ready("vehicle", imu_errors, N * H_S);
-    run(c, 0, N, g_a);
-    fmi2FreeInstance(c);
-    /* the same motion directly: the FMU's default profile (seed 001, 60 s alignment) */
     gf_vehicle_profile p;
     memset(&p, 0, sizeof p);
     p.lat0_rad = 0.5235987755982988;
@@ -90,6 +191,16 @@ static void test_equals_core(int imu_errors)
         p.segment[i].dheading_rate_rad_s = seg[i][2];
         p.segment[i].dheading_rad = seg[i][3];
     }
+    return p;
+}
+
+static void test_equals_core(int imu_errors)
+{
+    fmi2Component c = open_ready("vehicle", imu_errors, N * H_S);
+    run(c, 0, N, g_a);
+    fmi2FreeInstance(c);
+    /* the same motion directly */
+    const gf_vehicle_profile p = default_profile();
     gf_vehicle_state s;
     gf_vehicle_sample x;
     CHECK(gf_vehicle_init(&s, &p, 0.0, &x, NULL) == GF_OK, "direct init");
@@ -138,9 +249,72 @@ static void test_equals_core(int imu_errors)
     CHECK(worst < 0, "imu_errors = %d: FMU differs from the core at step %d", imu_errors, worst);
 }
 
+/* 6. the aiding sensors against gf_aiding_run on the same vehicle and seed */
+enum { CAP = 4000 };
+static gf_gnss_epoch g_gnss[CAP];
+static gf_baro_epoch g_baro[CAP];
+static gf_odo_epoch g_odo[CAP];
+
+static void test_aiding_equals_core(void)
+{
+    fmi2Component c = open_ready("aiding", 2, N * H_S);
+    fmi2GetReal(c, g_aid, N_AID, g_aid_a[0]);
+    fmi2GetInteger(c, g_aid_int, N_AID_INT, g_cnt_a[0]);
+    run(c, 0, N, g_a);
+    fmi2FreeInstance(c);
+    const gf_vehicle_profile p = default_profile();
+    gf_vehicle_state s;
+    CHECK(gf_vehicle_init(&s, &p, 0.0, NULL, NULL) == GF_OK, "direct init");
+    const gf_aiding_params a = aiding_params();
+    gf_aiding_sim sim;
+    CHECK(gf_aiding_init(&sim, &a, &s, 11, NULL, NULL) == GF_OK, "direct aiding init");
+    size_t n[3];
+    CHECK(gf_aiding_run(&sim, N * H_S, g_gnss, CAP, &n[0], g_baro, CAP, &n[1], g_odo, CAP, &n[2]) ==
+              GF_OK, "direct aiding run");
+    /* 5 Hz over 30 s less the outages [10, 14), [20, 22), [26, 28): 150 - 20 - 10 - 10 */
+    CHECK(n[0] == 110 && n[1] == 750 && n[2] == 1500, "epochs %zu %zu %zu", n[0], n[1], n[2]);
+    size_t seen[3] = {0, 0, 0};
+    int bad_step = -1;
+    for (int k = 0; k <= N; ++k) {
+        const double *y = g_aid_a[k];
+        const fmi2Integer *cnt = g_cnt_a[k];
+        const double t_end = k * H_S, t_prev = (k - 1) * H_S;
+        if (cnt[0] == 1) {
+            const gf_gnss_epoch *e = &g_gnss[seen[0]++];
+            const double want[13] = {e->t_s, e->lat_rad, e->lon_rad, e->h_m,
+                e->vel_enu_m_s[0], e->vel_enu_m_s[1], e->vel_enu_m_s[2],
+                e->pos_std_m[0], e->pos_std_m[1], e->pos_std_m[2],
+                e->vel_std_m_s[0], e->vel_std_m_s[1], e->vel_std_m_s[2]};
+            const double got[13] = {y[0], y[1], y[2], y[3], y[10], y[11], y[12], y[13], y[14],
+                                    y[15], y[16], y[17], y[18]};
+            if (memcmp(want, got, sizeof want) != 0 || !(e->t_delivered_s <= t_end) ||
+                !(e->t_delivered_s > t_prev))
+                bad_step = k;
+        }
+        if (cnt[1] == 1) {
+            const gf_baro_epoch *e = &g_baro[seen[1]++];
+            const double want[3] = {e->t_s, e->h_m, e->std_m};
+            if (memcmp(want, y + 4, sizeof want) != 0 || !(e->t_s <= t_end && e->t_s > t_prev))
+                bad_step = k;
+        }
+        if (cnt[2] == 1) {
+            const gf_odo_epoch *e = &g_odo[seen[2]++];
+            const double want[3] = {e->t_s, e->speed_m_s, e->std_m_s};
+            if (memcmp(want, y + 7, sizeof want) != 0 || !(e->t_s <= t_end && e->t_s > t_prev))
+                bad_step = k;
+        }
+        if (cnt[0] > 1 || cnt[1] > 1 || cnt[2] > 1)
+            bad_step = k;
+    }
+    CHECK(bad_step < 0, "aiding outputs differ from the core at step %d", bad_step);
+    CHECK(seen[0] == n[0] && seen[1] == n[1] && seen[2] == n[2], "epochs delivered %zu %zu %zu",
+          seen[0], seen[1], seen[2]);
+    CHECK(isnan(g_aid_a[0][0]) && g_cnt_a[0][0] == 0, "no GNSS epoch at the start (offset)");
+}
+
 static void test_states(void)
 {
-    fmi2Component c = open_ready("vehicle", 1, N * H_S);
+    fmi2Component c = open_ready("vehicle", 2, N * H_S);
     run(c, 0, N / 2, g_a);
     fmi2FMUstate st = NULL;
     CHECK(fmi2GetFMUstate(c, &st) == fmi2OK, "get state");
@@ -148,18 +322,23 @@ static void test_states(void)
     CHECK(fmi2SetFMUstate(c, st) == fmi2OK, "set state");
     run(c, N / 2, N, g_b);
     CHECK(memcmp(g_a[N / 2], g_b[N / 2], sizeof g_a[0] * (N - N / 2)) == 0, "replay after set");
+    CHECK(memcmp(g_aid_a[N / 2 + 1], g_aid_b[N / 2 + 1], sizeof g_aid_a[0] * (N - N / 2)) == 0 &&
+          memcmp(g_cnt_a[N / 2 + 1], g_cnt_b[N / 2 + 1], sizeof g_cnt_a[0] * (N - N / 2)) == 0,
+          "aiding replay after set");
     size_t size = 0;
     CHECK(fmi2SerializedFMUstateSize(c, st, &size) == fmi2OK, "size");
     fmi2Byte *bytes = malloc(size);
     CHECK(fmi2SerializeFMUstate(c, st, bytes, size) == fmi2OK, "serialize");
     fmi2FreeFMUstate(c, &st);
     fmi2FreeInstance(c);
-    fmi2Component d = open_ready("fresh", 1, N * H_S);
+    fmi2Component d = open_ready("fresh", 2, N * H_S);
     fmi2FMUstate st2 = NULL;
     CHECK(fmi2DeSerializeFMUstate(d, bytes, size, &st2) == fmi2OK, "deserialize");
     CHECK(fmi2SetFMUstate(d, st2) == fmi2OK, "set deserialized");
     run(d, N / 2, N, g_b);
     CHECK(memcmp(g_a[N / 2], g_b[N / 2], sizeof g_a[0] * (N - N / 2)) == 0, "replay after deserialize");
+    CHECK(memcmp(g_aid_a[N / 2 + 1], g_aid_b[N / 2 + 1], sizeof g_aid_a[0] * (N - N / 2)) == 0,
+          "aiding replay after deserialize");
     fmi2FreeFMUstate(d, &st2);
     fmi2FreeInstance(d);
     free(bytes);
@@ -170,6 +349,11 @@ static void expect_refused(const char *param, double value, const char *mention)
     fmi2Component c = instantiate("bad");
     fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0);
     fmi2EnterInitializationMode(c);
+    /* an aiding sensor's parameters are checked when it is enabled */
+    static const char *const sensors[] = {"gnss", "baro", "odo"};
+    for (int i = 0; i < 3; ++i)
+        if (strncmp(param, sensors[i], strlen(sensors[i])) == 0 && param[strlen(sensors[i])] == '_')
+            set_int(c, sensors[i], 1);
     const fmi2ValueReference r = vr(param);
     if (kFmi2Variables[r - 1].type == FMU_TYPE_INT32) {
         const fmi2Integer v = (fmi2Integer)value;
@@ -206,6 +390,7 @@ static void test_commands(void)
 int main(void)
 {
     init_outputs();
+    init_aiding_outputs();
     test_equals_core(0);
     test_equals_core(1);
     test_states();
@@ -214,6 +399,14 @@ int main(void)
     expect_refused("array_layout", 7, "array_layout");
     expect_refused("command_time", -1.0, "command_time");
     expect_refused("speed0", -2.0, "speed0");
+    expect_refused("gnss", 2, "gnss must be 0 or 1");
+    expect_refused("gnss_rate", 0.0, "gnss_rate");
+    expect_refused("gnss_latency", 20.0, "gnss_latency");
+    expect_refused("gnss_n_outages", 9, "gnss_n_outages");
+    expect_refused("gnss_outage_duration", 1.0, "gnss_outage_first/_period/_duration");
+    expect_refused("baro_bias_gm_std", -0.1, "baro_bias_gm_std");
+    expect_refused("odo_scale_error", 0.6, "odo_scale_error");
+    test_aiding_equals_core();
     test_commands();
     TEST_MAIN_END();
 }

@@ -1,10 +1,13 @@
 /* model.c — the vehicle as an FMU model: FMI-agnostic, calls gf_vehicle (truth),
- * gf_imu_error (IMU errors) and gf_array_forward (accelerometer array).
+ * gf_imu_error (IMU errors), gf_array_forward (accelerometer array) and gf_aiding_sim
+ * (GNSS receiver, barometer, odometer).
  *
  * Sampling: after exitInitializationMode the outputs describe the start time (zero
  * increments); doStep(t, h) moves the vehicle to t + h (an absolute time, so a long run
  * keeps no time drift beyond the master's own) and the outputs describe t + h, the
- * increments covering (t, t + h]. Any step size is handled. */
+ * increments covering (t, t + h]. Any step size is handled. An aiding epoch (valid at
+ * t_v, due at t_v + latency) is delivered in the first step whose end reaches the due
+ * time; its values depend on the parameters and the seed only (gf_aiding_sim.h). */
 #include <math.h>
 #include <string.h>
 
@@ -89,6 +92,41 @@ static void commit(ModelData *d, const Sensed *o)
     memcpy(d->A_m_s2, o->A_m_s2, sizeof d->A_m_s2);
     d->imu_noise = o->imu_noise;
     d->array_rng = o->array_rng;
+}
+
+/* Why gf_aiding_init refused the parameters (bad: GF_AIDING_BAD_*), by FMU name. */
+static void log_bad_aiding(FmuInstance *instance, int bad)
+{
+    static const struct { int code; const char *name; } k[] = {
+        {GF_AIDING_BAD_GNSS_ENABLED, "gnss"}, {GF_AIDING_BAD_GNSS_RATE, "gnss_rate"},
+        {GF_AIDING_BAD_GNSS_OFFSET, "gnss_offset"}, {GF_AIDING_BAD_GNSS_LATENCY, "gnss_latency"},
+        {GF_AIDING_BAD_GNSS_LEVER_ARM, "gnss_lever_arm"},
+        {GF_AIDING_BAD_GNSS_POS_STD, "gnss_pos_std"}, {GF_AIDING_BAD_GNSS_VEL_STD, "gnss_vel_std"},
+        {GF_AIDING_BAD_GNSS_GM_STD, "gnss_pos_gm_std"},
+        {GF_AIDING_BAD_GNSS_GM_TAU, "gnss_pos_gm_tau"}, {GF_AIDING_BAD_GNSS_QUALITY, "gnss_q"},
+        {GF_AIDING_BAD_GNSS_N_OUTAGES, "gnss_n_outages"},
+        {GF_AIDING_BAD_GNSS_PERIODIC, "gnss_outage_first/_period/_duration"},
+        {GF_AIDING_BAD_BARO_ENABLED, "baro"}, {GF_AIDING_BAD_BARO_RATE, "baro_rate"},
+        {GF_AIDING_BAD_BARO_OFFSET, "baro_offset"}, {GF_AIDING_BAD_BARO_STD, "baro_std"},
+        {GF_AIDING_BAD_BARO_BIAS0, "baro_bias0"}, {GF_AIDING_BAD_BARO_RW, "baro_bias_rw"},
+        {GF_AIDING_BAD_BARO_GM_STD, "baro_bias_gm_std"},
+        {GF_AIDING_BAD_BARO_GM_TAU, "baro_bias_gm_tau"},
+        {GF_AIDING_BAD_ODO_ENABLED, "odo"}, {GF_AIDING_BAD_ODO_RATE, "odo_rate"},
+        {GF_AIDING_BAD_ODO_OFFSET, "odo_offset"}, {GF_AIDING_BAD_ODO_LEVER_ARM, "odo_lever_arm"},
+        {GF_AIDING_BAD_ODO_SCALE, "odo_scale_error"}, {GF_AIDING_BAD_ODO_STD, "odo_std"}};
+    const char *why = gf_aiding_bad_string(bad);
+    if (bad >= GF_AIDING_BAD_GNSS_OUTAGE) {
+        const int i = bad - GF_AIDING_BAD_GNSS_OUTAGE + 1;
+        fmu_log_error(instance, "GNSS outage %d (gnss_outage_start[%d], gnss_outage_end[%d]) %s",
+                      i, i, i, why);
+        return;
+    }
+    for (size_t i = 0; i < sizeof k / sizeof k[0]; ++i)
+        if (k[i].code == bad) {
+            fmu_log_error(instance, "parameter %s %s", k[i].name, why);
+            return;
+        }
+    fmu_log_error(instance, "aiding sensor parameters refused (code %d)", bad);
 }
 
 FmuStatus model_exit_initialization(FmuInstance *instance, ModelData *d, double start_time_s)
@@ -190,6 +228,20 @@ FmuStatus model_exit_initialization(FmuInstance *instance, ModelData *d, double 
         fmu_log_error(instance, "sensor outputs at the start failed: %s", gf_status_string(st));
         return FMU_ERROR;
     }
+    /* aiding sensors: their own streams of noise_seed; epochs due at the start delivered */
+    bad = 0;
+    st = gf_aiding_init(&d->aiding_sim, &d->aiding, &d->vehicle, (uint64_t)(uint32_t)d->noise_seed,
+                        &d->aiding_out, &bad);
+    if (st == GF_ERR_BAD_PARAMETER) {
+        log_bad_aiding(instance, bad);
+        return FMU_ERROR;
+    }
+    if (st == GF_OK)
+        st = gf_aiding_step(&d->aiding_sim, start_time_s, &d->aiding_out);
+    if (st != GF_OK) {
+        fmu_log_error(instance, "aiding sensors at the start failed: %s", gf_status_string(st));
+        return FMU_ERROR;
+    }
     commit(d, &sensed);
     return FMU_OK;
 }
@@ -213,6 +265,20 @@ FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double 
     }
     /* the vehicle's clock is the master's: step to t + h, starting from t */
     next.time_s = t_s;
+    /* a command changes the motion from t: the aiding sensors' copy of the vehicle takes
+     * it (their epochs up to t were measured by the previous steps) */
+    const int sync = d->drive == 1 && changed &&
+                     (d->aiding.gnss.enabled || d->aiding.baro.enabled || d->aiding.odo.enabled);
+    gf_aiding_sim synced;
+    if (sync) {
+        synced = d->aiding_sim;
+        const gf_status st = gf_aiding_sync(&synced, &next);
+        if (st != GF_OK) {
+            fmu_log_error(instance, "t = %.9g s: aiding sensors cannot take the command: %s",
+                          t_s, gf_status_string(st));
+            return FMU_ERROR;
+        }
+    }
     gf_vehicle_sample out;
     gf_status st = gf_vehicle_step(&next, t_s + h_s, &out);
     if (st != GF_OK) {
@@ -227,6 +293,17 @@ FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double 
         fmu_log_error(instance, "t = %.9g s: sensor outputs failed: %s", t_s, gf_status_string(st));
         return FMU_ERROR;
     }
+    /* last: it changes its state only on success, and nothing after it can fail */
+    gf_aiding_sim *aid = sync ? &synced : &d->aiding_sim;
+    st = gf_aiding_step(aid, t_s + h_s, &d->aiding_out);
+    if (st != GF_OK) {
+        fmu_log_error(instance, "t = %.9g s: aiding sensors failed: %s", t_s,
+                      st == GF_ERR_DIVERGED ? "the vehicle reached |latitude| = 89 deg"
+                                            : gf_status_string(st));
+        return FMU_ERROR;
+    }
+    if (sync)
+        d->aiding_sim = synced;
     if (d->drive == 1) {
         d->active_cmd[0] = d->speed_cmd_m_s;
         d->active_cmd[1] = d->heading_rate_cmd_rad_s;

@@ -5,6 +5,7 @@
 #include <stdint.h>
 
 #include "gf_accel_array.h"
+#include "gf_aiding_sim.h"
 #include "gf_imu_error.h"
 #include "gf_noise.h"
 #include "gf_vehicle.h"
@@ -24,12 +25,14 @@ typedef struct ModelData {
     int32_t noise, noise_seed;
     gf_imu_noise noise_params;            /* SI, the conventions of gfins_fmi.ImuNoise */
     double array_noise_m_s2;
+    gf_aiding_params aiding;              /* GNSS, barometer, odometer (gf_aiding_sim.h) */
     /* inputs */
     double speed_cmd_m_s, heading_rate_cmd_rad_s;
     /* outputs */
     gf_vehicle_sample out;                /* truth (and ideal sensors) */
     double gyro_rad_s[3], accel_m_s2[3], dtheta_rad[3], dv_m_s[3];
     double A_m_s2[VEHICLE_ARRAY_MAX];
+    gf_aiding_output aiding_out;          /* newest epochs and how many the last step delivered */
     /* internal */
     gf_vehicle_state vehicle;
     double active_cmd[2];                 /* command being followed (drive = 1); NaN: none */
@@ -37,6 +40,7 @@ typedef struct ModelData {
     gf_imu_noise_state imu_noise;         /* the generators are state: restored with it */
     gf_rng array_rng;
     gf_array_geometry array;
+    gf_aiding_sim aiding_sim;             /* its generators and vehicle copy: restored with it */
 } ModelData;
 
 #endif /* VEHICLE_MODEL_H */

@@ -1,7 +1,8 @@
 """Interface of the vehicle FMU (gf_vehicle): a level ground vehicle following a profile
 of segments or driven by speed / heading-rate commands, with the outputs of the sensors
-riding it — an IMU (rates and increments, optionally corrupted by the IMU error model)
-and an accelerometer array of a chosen layout. fmu/tools/fmugen.py makes the FMI 2.0
+riding it — an IMU (rates and increments, optionally corrupted by the IMU error model),
+an accelerometer array of a chosen layout and, when enabled, the aiding sensors: a GNSS
+receiver, a barometer and an odometer (csrc/gf_aiding_sim.h). fmu/tools/fmugen.py makes the FMI 2.0
 and 3.0 modelDescription.xml and the C table from it."""
 
 import math
@@ -27,12 +28,113 @@ def _p(name, unit, start, field, description, type_="Float64", shape=()):
     return d
 
 
-def _out(name, unit, shape, field, description):
-    d = dict(name=name, causality="output", variability="discrete", type="Float64",
+def _out(name, unit, shape, field, description, type_="Float64"):
+    d = dict(name=name, causality="output", variability="discrete", type=type_,
              shape=shape, field=field, description=description)
     if unit:
         d["unit"] = unit
     return d
+
+
+MAX_OUTAGES = 8  # GF_AIDING_MAX_OUTAGES
+
+
+def _aiding_parameters():
+    """GNSS receiver, barometer, odometer (csrc/gf_aiding_sim.h; gfins_fmi.vehicle's
+    GnssReceiver, Barometer, Odometer .fmu_parameters() give them). All off by default."""
+    g, b, o = "aiding.gnss.", "aiding.baro.", "aiding.odo."
+    return [
+        _p("gnss", None, 0, g + "enabled", "1: simulate a GNSS receiver (outputs gnss_*)",
+           type_="Int32"),
+        _p("gnss_rate", "Hz", 1.0, g + "rate_hz", "GNSS epoch rate, 0 < rate <= 1000 Hz"),
+        _p("gnss_offset", "s", 0.0, g + "offset_s",
+           "Epoch k is valid at start time + gnss_offset + k / gnss_rate, offset >= 0"),
+        _p("gnss_latency", "s", 0.0, g + "latency_s",
+           "An epoch valid at t is delivered at t + latency, >= 0 (latency x rate <= 14)"),
+        _p("gnss_lever_arm", "m", 0.0, g + "lever_arm_m",
+           "Antenna phase centre from the IMU, body right-front-up, |l| <= 100 m", shape=(3,)),
+        _p("gnss_pos_std", "m", [1.0, 1.0, 2.0], g + "pos_std_m",
+           "White position error std, east, north, up", shape=(3,)),
+        _p("gnss_vel_std", "m/s", [0.05, 0.05, 0.1], g + "vel_std_m_s",
+           "White velocity error std, east, north, up", shape=(3,)),
+        _p("gnss_pos_gm_std", "m", 0.0, g + "pos_gm_std_m",
+           "First-order Gauss-Markov position error, stationary std east, north, up",
+           shape=(3,)),
+        _p("gnss_pos_gm_tau", "s", 100.0, g + "pos_gm_tau_s",
+           "Correlation time of the Gauss-Markov position error, > 0"),
+        _p("gnss_q", None, 5, g + "quality", "Solution quality reported with every epoch "
+           "(RTKLIB Q: 1 fix, 2 float, 3 SBAS, 4 DGPS, 5 single, 6 PPP, 0 unknown)",
+           type_="Int32"),
+        _p("gnss_n_outages", None, 0, g + "n_outages",
+           f"Number of outage intervals used, 0 .. {MAX_OUTAGES}", type_="Int32"),
+        _p("gnss_outage_start", "s", 0.0, g + "outage_start_s",
+           "Outage intervals [start, end), absolute times: epochs valid inside are not "
+           "delivered", shape=(MAX_OUTAGES,)),
+        _p("gnss_outage_end", "s", 0.0, g + "outage_end_s", "Ends of the outage intervals "
+           "(> start)", shape=(MAX_OUTAGES,)),
+        _p("gnss_outage_first", "s", 0.0, g + "outage_first_s",
+           "Periodic outages: start of the first (absolute time)"),
+        _p("gnss_outage_period", "s", 0.0, g + "outage_period_s",
+           "Periodic outages: one every period (> 0 when gnss_outage_duration > 0)"),
+        _p("gnss_outage_duration", "s", 0.0, g + "outage_duration_s",
+           "Periodic outages: length of each, 0 (none) .. period"),
+        _p("baro", None, 0, b + "enabled", "1: simulate a barometer (outputs baro_*)",
+           type_="Int32"),
+        _p("baro_rate", "Hz", 10.0, b + "rate_hz", "Barometer rate, 0 < rate <= 1000 Hz"),
+        _p("baro_offset", "s", 0.0, b + "offset_s",
+           "Sample k at start time + baro_offset + k / baro_rate, >= 0"),
+        _p("baro_std", "m", 0.5, b + "std_m", "White noise std of the barometric height"),
+        _p("baro_bias0", "m", 0.0, b + "bias0_m", "Constant part of the barometer bias"),
+        _p("baro_bias_rw", None, 0.0, b + "bias_rw_m_sqrt_s",
+           "Random walk of the barometer bias, m/sqrt(s)"),
+        _p("baro_bias_gm_std", "m", 0.0, b + "bias_gm_std_m",
+           "Gauss-Markov part of the barometer bias, stationary std"),
+        _p("baro_bias_gm_tau", "s", 100.0, b + "bias_gm_tau_s",
+           "Correlation time of the Gauss-Markov bias, > 0"),
+        _p("odo", None, 0, o + "enabled", "1: simulate an odometer (outputs odo_*)",
+           type_="Int32"),
+        _p("odo_rate", "Hz", 10.0, o + "rate_hz", "Odometer rate, 0 < rate <= 1000 Hz"),
+        _p("odo_offset", "s", 0.0, o + "offset_s",
+           "Sample k at start time + odo_offset + k / odo_rate, >= 0"),
+        _p("odo_lever_arm", "m", 0.0, o + "lever_arm_m",
+           "Wheel contact point from the IMU, body right-front-up, |l| <= 100 m", shape=(3,)),
+        _p("odo_scale_error", None, 0.0, o + "scale_error",
+           "Odometer scale-factor error k (measured = (1 + k) true + noise), |k| < 0.5"),
+        _p("odo_std", "m/s", 0.05, o + "std_m_s", "White noise std of the odometer speed"),
+    ]
+
+
+def _aiding_outputs():
+    g, b, o = "aiding_out.gnss.", "aiding_out.baro.", "aiding_out.odo."
+    held = " (held between epochs; NaN before the first)"
+    return [
+        _out("gnss_valid", None, (), "aiding_out.gnss_new",
+             "Number of GNSS epochs delivered by the last step (normally 0 or 1; more when "
+             "a step spans several epochs: the gnss_* outputs show the newest)", type_="Int32"),
+        _out("gnss_time_s", "s", (), g + "t_s", "Time of validity of the GNSS epoch" + held),
+        _out("gnss_lat_rad", "rad", (), g + "lat_rad", "GNSS antenna latitude, measured" + held),
+        _out("gnss_lon_rad", "rad", (), g + "lon_rad", "GNSS antenna longitude, measured" + held),
+        _out("gnss_h_m", "m", (), g + "h_m", "GNSS antenna height, measured" + held),
+        _out("gnss_vel_enu_m_s", "m/s", (3,), g + "vel_enu_m_s",
+             "GNSS antenna velocity east, north, up, measured" + held),
+        _out("gnss_pos_std_m", "m", (3,), g + "pos_std_m",
+             "Reported position std east, north, up" + held),
+        _out("gnss_vel_std_m_s", "m/s", (3,), g + "vel_std_m_s",
+             "Reported velocity std east, north, up" + held),
+        _out("gnss_quality", None, (), "aiding_out.gnss_quality",
+             "Reported solution quality (RTKLIB Q; 0 before the first epoch)", type_="Int32"),
+        _out("baro_valid", None, (), "aiding_out.baro_new",
+             "Number of barometer samples delivered by the last step", type_="Int32"),
+        _out("baro_time_s", "s", (), b + "t_s", "Time of the barometer sample" + held),
+        _out("baro_h_m", "m", (), b + "h_m", "Barometric height (with bias and noise)" + held),
+        _out("baro_std_m", "m", (), b + "std_m", "Reported barometer std" + held),
+        _out("odo_valid", None, (), "aiding_out.odo_new",
+             "Number of odometer samples delivered by the last step", type_="Int32"),
+        _out("odo_time_s", "s", (), o + "t_s", "Time of the odometer sample" + held),
+        _out("odo_speed_m_s", "m/s", (), o + "speed_m_s",
+             "Odometer forward speed (with scale error and noise)" + held),
+        _out("odo_std_m_s", "m/s", (), o + "std_m_s", "Reported odometer std" + held),
+    ]
 
 
 MODEL = dict(
@@ -42,8 +144,11 @@ MODEL = dict(
         "Level ground vehicle on WGS-84 following a segment profile (speed, heading-rate "
         "and heading changes by C2 smooth steps; seed 001's vehicle test by default) or "
         "speed / heading-rate commands, with its true pose and the exact outputs of an "
-        "IMU and an accelerometer array riding it. The outputs after doStep(t, h) "
-        "describe t + h; increments cover (t, t + h]."),
+        "IMU and an accelerometer array riding it, and optionally a GNSS receiver, a "
+        "barometer and an odometer. The outputs after doStep(t, h) describe t + h; "
+        "increments cover (t, t + h]; an aiding epoch is delivered in the first step "
+        "whose end reaches its delivery time (gnss_valid, baro_valid, odo_valid count "
+        "them)."),
     default_experiment=dict(start_time=0.0, stop_time=600.0, step_size=0.01),
     variables=[
         _p("lat0", "rad", 0.5235987755982988, "profile.lat0_rad", "Start latitude, |lat0| < 89 deg"),
@@ -74,7 +179,8 @@ MODEL = dict(
         *_COMMON["imu_error_parameters"](),
         _p("noise", None, 0, "noise", "1: add the random errors below to the IMU and array "
            "outputs after the start sample (ImuNoise.fmu_parameters() gives them)", type_="Int32"),
-        _p("noise_seed", None, 1, "noise_seed", "Seed of the noise generators", type_="Int32"),
+        _p("noise_seed", None, 1, "noise_seed", "Seed of the noise generators: IMU, array "
+           "and the GNSS, barometer and odometer (the seed of simulate_vehicle)", type_="Int32"),
         # units with square roots have no FMI unit (integer exponents only): in the text
         _p("gyro_arw", None, 0.0, "noise_params.gyro_arw_rad_sqrt_s",
            "Gyro angle random walk N, rad/sqrt(s): rate noise std per sample N / sqrt(h)"),
@@ -105,6 +211,7 @@ MODEL = dict(
         _p("l", "m", 0.1, "lever_arm_m", "Lever arm of the array layout, >= 1e-6 m"),
         _p("array_bias", "m/s2", 0.0, "array_bias_m_s2", "Bias of each array accelerometer",
            shape=(12,)),
+        *_aiding_parameters(),
         dict(name="speed_cmd", causality="input", variability="continuous", type="Float64",
              shape=(), unit="m/s", start=0.0, field="speed_cmd_m_s",
              description="drive = 1: commanded speed, >= 0"),
@@ -125,5 +232,6 @@ MODEL = dict(
         _out("angular_accel", "rad/s2", (3,), "out.gyro_dot_rad_s2", "True d w_ib^b / dt"),
         _out("A", "m/s2", (12,), "A_m_s2", "Accelerometer-array outputs (layout array_layout)"),
         _out("time_s", "s", (), "out.time_s", "Time that the outputs describe"),
+        *_aiding_outputs(),
     ],
 )

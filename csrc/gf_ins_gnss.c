@@ -97,7 +97,7 @@ static int config_check(const gf_ins_config *c)
             return 10 + (int)i;
     if (!gf_all_finite(c->gnss_lever_m, 3) || !gf_all_finite(c->odo_lever_m, 3))
         return 30;
-    if (!(c->gate_prob == 0.0 || (c->gate_prob > 0.0 && c->gate_prob < 1.0)))
+    if (!(c->gate_prob == 0.0 || (c->gate_prob > 0.0 && c->gate_prob < 1.0)) || c->gate_reset_count < 0)
         return 31;
     if ((c->nhc & ~1) || (c->nhc && (!pos_finite(c->nhc_std_m_s) || !nonneg_finite(c->nhc_interval_s))))
         return 32;
@@ -1113,8 +1113,14 @@ static gf_status update_at(gf_ins_filter *f, int32_t type, const gf_ins_meas *ms
         r[i] = y_nom[i] - z[i];
     }
     double gate = 0.0;
-    if (f->cfg.gate_prob > 0.0)
+    int forced = 0;
+    if (f->cfg.gate_prob > 0.0) {
         gf_chi2_quantile(m, f->cfg.gate_prob, &gate);
+        if (f->cfg.gate_reset_count > 0 && f->gate_run[type] >= f->cfg.gate_reset_count) {
+            gate = 0.0;          /* the gate has rejected too many in a row: apply this one */
+            forced = 1;
+        }
+    }
     double nis = NAN;
     int accepted = 0;
     gf_status st;
@@ -1170,11 +1176,13 @@ static gf_status update_at(gf_ins_filter *f, int32_t type, const gf_ins_meas *ms
         return st;
     if (!accepted) {
         f->n_rejected++;
+        f->gate_run[type]++;
         log_entry(log, t, type, GF_INS_REJECTED_GATE, m, nis, r, s_std);
         return GF_OK;
     }
     f->n_updates++;
-    log_entry(log, t, type, GF_INS_ACCEPTED, m, nis, r, s_std);
+    f->gate_run[type] = 0;
+    log_entry(log, t, type, forced ? GF_INS_FORCED : GF_INS_ACCEPTED, m, nis, r, s_std);
     double dx[NMAX];
     memcpy(dx, f->kf.x, (size_t)n * sizeof *dx);
     st = feedback(f);

@@ -114,6 +114,9 @@ extern "C" {
 #define GF_INS_REJECTED_GATE 1     /* NIS above the gate */
 #define GF_INS_REJECTED_SINGULAR 2 /* innovation covariance not positive definite */
 #define GF_INS_REJECTED_STALE 3    /* time of validity at or before the filter's time */
+#define GF_INS_FORCED 4            /* applied above the gate: the previous gate_reset_count
+                                      of its kind were all rejected (a gate that rejects
+                                      everything after a divergence would never recover) */
 
 typedef struct gf_ins_noise {
     double gyro_arw_rad_sqrt_s;     /* gyro white noise (angle random walk), rad/sqrt(s) */
@@ -148,6 +151,8 @@ typedef struct gf_ins_config {
     double gnss_lever_m[3];         /* IMU -> GNSS antenna, body axes, m */
     double odo_lever_m[3];          /* IMU -> odometer wheel contact point, body axes, m */
     double gate_prob;               /* NIS gate probability in (0, 1); 0: no gate */
+    int32_t gate_reset_count;       /* > 0: after this many consecutive gate rejections of
+                                       one kind the next is applied (GF_INS_FORCED); 0: never */
     int32_t nhc;                    /* 1: non-holonomic constraint updates */
     double nhc_std_m_s;
     double nhc_interval_s;          /* at most one NHC update per interval */
@@ -249,6 +254,7 @@ typedef struct gf_ins_filter {
     gf_ins_history hist[GF_INS_HISTORY];  /* ring of the last samples (max_latency_s > 0) */
     int32_t hist_head, hist_count;
     uint64_t n_imu, n_updates, n_rejected;
+    int32_t gate_run[8];            /* consecutive gate rejections per measurement type */
 } gf_ins_filter;
 
 /* Defaults: increments with coning, EKF, 15 states, propagation every 0.1 s, IMU gap

@@ -38,7 +38,7 @@ MEAS_TYPES = {int(lib.GF_INS_MEAS_GNSS_POS): "gnss_pos", int(lib.GF_INS_MEAS_GNS
 #: outcome of an update (GF_INS_ACCEPTED, GF_INS_REJECTED_*)
 UPDATE_STATUS = {int(lib.GF_INS_ACCEPTED): "accepted", int(lib.GF_INS_REJECTED_GATE): "gate",
                  int(lib.GF_INS_REJECTED_SINGULAR): "singular",
-                 int(lib.GF_INS_REJECTED_STALE): "stale"}
+                 int(lib.GF_INS_REJECTED_STALE): "stale", int(lib.GF_INS_FORCED): "forced"}
 #: the sensor-error estimates, in the order of every ``sensors`` array
 SENSOR_NAMES = ("bg_x_rad_s", "bg_y_rad_s", "bg_z_rad_s", "ba_x_m_s2", "ba_y_m_s2", "ba_z_m_s2",
                 "sg_x", "sg_y", "sg_z", "sa_x", "sa_y", "sa_z", "baro_bias_m", "odo_scale")
@@ -102,6 +102,9 @@ class FilterConfig:
     gnss_lever_arm_m, odometer_lever_arm_m : IMU -> antenna and IMU -> wheel contact point,
         body axes (right, front, up), m.
     gate_probability : NIS gate (chi-square probability; None: no gate).
+    gate_reset_count : after this many consecutive gate rejections of one measurement kind
+        the next one is applied anyway (logged as "forced"), so that a filter that has
+        drifted away recovers; 0: never.
     nhc, nhc_std_m_s, nhc_interval_s : non-holonomic constraint (lateral and vertical
         velocity of the odometer point = 0) for ground vehicles.
     zupt, zupt_std_m_s, zaru_std_rad_s, zupt_interval_s : zero-velocity (and, with
@@ -136,6 +139,7 @@ class FilterConfig:
     gnss_lever_arm_m: tuple = (0.0, 0.0, 0.0)
     odometer_lever_arm_m: tuple = (0.0, 0.0, 0.0)
     gate_probability: Optional[float] = 0.9999
+    gate_reset_count: int = 5
     nhc: bool = False
     nhc_std_m_s: float = 0.1
     nhc_interval_s: float = 0.1
@@ -222,6 +226,10 @@ class FilterConfig:
         cfg.gnss_lever_m = list(self.gnss_lever_arm_m)
         cfg.odo_lever_m = list(self.odometer_lever_arm_m)
         cfg.gate_prob = float(self.gate_probability or 0.0)
+        if isinstance(self.gate_reset_count, bool) or not isinstance(self.gate_reset_count, (int, np.integer)) \
+                or self.gate_reset_count < 0:
+            raise ValueError(f"gate_reset_count must be an integer >= 0; got {self.gate_reset_count!r}")
+        cfg.gate_reset_count = int(self.gate_reset_count)
         cfg.nhc, cfg.nhc_std_m_s, cfg.nhc_interval_s = int(bool(self.nhc)), self.nhc_std_m_s, self.nhc_interval_s
         cfg.zupt, cfg.zupt_std_m_s = int(bool(self.zupt)), self.zupt_std_m_s
         cfg.zaru_std_rad_s, cfg.zupt_interval_s = self.zaru_std_rad_s, self.zupt_interval_s
@@ -402,7 +410,8 @@ class IntegratedSolution:
 
     def rejected(self) -> np.ndarray:
         """The updates that were not applied (gate, singular, stale)."""
-        return self.innovations[self.innovations["status"] != lib.GF_INS_ACCEPTED]
+        st = self.innovations["status"]
+        return self.innovations[(st != lib.GF_INS_ACCEPTED) & (st != lib.GF_INS_FORCED)]
 
     def innovations_of(self, kind: str) -> np.ndarray:
         """Rows of the innovation log of one measurement kind (``MEAS_TYPES`` values)."""

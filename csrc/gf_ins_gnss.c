@@ -1083,8 +1083,8 @@ static void log_entry(gf_ins_log *log, double t, int32_t type, int32_t status, i
     e->m = m;
     e->nis = nis;
     for (int i = 0; i < m && i < 3; ++i) {
-        e->r[i] = r[i];
-        e->s_std[i] = s_std[i];
+        e->r[i] = r ? r[i] : NAN;
+        e->s_std[i] = s_std ? s_std[i] : NAN;
     }
 }
 
@@ -1352,8 +1352,7 @@ static gf_status past_measurement(gf_ins_filter *f, const gf_ins_meas *ms, gf_in
         return update_at(f, ms->type, ms, 0.0, &ref, w, ep, log);
     }
     f->n_rejected++;
-    log_entry(log, ms->t_s, ms->type, GF_INS_REJECTED_STALE, meas_rows(ms->type), NAN, ms->z,
-              ms->std);
+    log_entry(log, ms->t_s, ms->type, GF_INS_REJECTED_STALE, meas_rows(ms->type), NAN, NULL, NULL);
     return GF_OK;
 }
 

@@ -351,6 +351,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cosim)
 
+    from gfins_fmi.estimation import cli as estimation_cli
+    estimation_cli.add_parser(sub)
+
     p = sub.add_parser("validate", help="run fmpy's validation on every shipped FMU")
     p.set_defaults(func=_validate)
     p = sub.add_parser("info", help="version and paths of the shipped FMUs")

@@ -629,21 +629,25 @@ static gf_status propagate_ekf(gf_ins_filter *f, gf_ins_epochs *ep)
     gf_q_to_dcm(f->nav.q_bn, &C);
     double F[NMAX * NMAX], A[NMAX * NMAX], qd[NMAX];
     error_model(f, &C, f->nav.v_n_m_s, f->nav.lat_rad, f->nav.h_m, fb, wb, F, qd);
-    /* A = F T + (F T)^2 / 2 (F^2 skipping the zeros of F); for intervals up to
-     * GF_INS_FIRST_ORDER_MAX_T_S the second-order term is dropped (see the header) */
+    /* A = F T + (F T)^2 / 2 (F^2 from the non-zeros of F, rows of A accumulated as
+     * axpys); for intervals up to GF_INS_FIRST_ORDER_MAX_T_S the second-order term is
+     * dropped (see the header) */
     for (int i = 0; i < n * n; ++i)
         A[i] = F[i] * T;
     if (T > GF_INS_FIRST_ORDER_MAX_T_S) {
         const double h2 = 0.5 * T * T;
-        for (int i = 0; i < n; ++i)
+        for (int i = 0; i < n; ++i) {
+            double *arow = A + i * n;
             for (int k = 0; k < n; ++k) {
                 const double fik = F[i * n + k];
                 if (fik == 0.0)
                     continue;
-                const double s = h2 * fik;
+                const double sk = h2 * fik;
+                const double *frow = F + k * n;
                 for (int j = 0; j < n; ++j)
-                    A[i * n + j] += s * F[k * n + j];
+                    arow[j] += sk * frow[j];
             }
+        }
     }
     double qh[NMAX];
     for (int i = 0; i < n; ++i)

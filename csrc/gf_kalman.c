@@ -207,6 +207,19 @@ static inline void axpy4(size_t m, double a, const double *restrict in, double *
 
 #define PADDED(n) (((n) + 3) & ~(size_t)3)
 
+/* The structured predict is a few thousand vectorisable multiply-adds: on x86-64 with
+ * GCC it is compiled twice, for the baseline (SSE2) and for AVX2, and the loader picks
+ * the one the processor runs (function multi-versioning). Both do the same IEEE
+ * operations in the same order (no FMA: -ffp-contract=off), so their results are equal
+ * bit for bit. */
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__linux__) && \
+    !defined(GF_NO_MULTIVERSION)
+#define GF_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define GF_VECTOR_CLONES
+#endif
+
+GF_VECTOR_CLONES
 gf_status gf_kalman_predict_sparse(gf_kalman *kf, const double *A, const double *q1,
                                    const double *q2)
 {
@@ -231,8 +244,10 @@ gf_status gf_kalman_predict_sparse(gf_kalman *kf, const double *A, const double 
         }
     }
     start[n] = nnz;
-    /* M = P + D1 and W = (I + A) M = M + A M, rows padded with zeros to the stride */
-    double M[NMAX * NMAX], W[NMAX * NMAX], V[NMAX * NMAX];
+    /* (I + A) M (I + A)^T = M + G + G^T + G A^T with M = P + D1 (symmetric), G = A M:
+     * G row by row (vectorised axpys over rows padded to the stride), then the upper
+     * triangle, (G A^T)_ij = sum over the non-zeros A_jl of A_jl G_il */
+    double M[NMAX * NMAX], G[NMAX * NMAX];
     for (size_t i = 0; i < n; ++i) {
         memcpy(M + i * s, kf->P + i * n, n * sizeof *M);
         for (size_t j = n; j < s; ++j)
@@ -240,38 +255,40 @@ gf_status gf_kalman_predict_sparse(gf_kalman *kf, const double *A, const double 
         if (q1)
             M[i * s + i] += q1[i];
     }
-    memcpy(W, M, n * s * sizeof *W);
+    memset(G, 0, n * s * sizeof *G);
     for (size_t i = 0; i < n; ++i)
         for (size_t p = start[i]; p < start[i + 1]; ++p)
-            axpy4(s, val[p], M + (size_t)col[p] * s, W + i * s);
-    /* V = W^T = M (I + A)^T, and P = (I + A) V + D2 = V + A V: the upper triangle of row
-     * i needs columns i.. only (from the aligned column i & ~3 on) */
-    for (size_t i = 0; i < n; ++i) {
-        for (size_t j = 0; j < n; ++j)
-            V[j * s + i] = W[i * s + j];
-    }
-    for (size_t j = 0; j < n; ++j)
+            axpy4(s, val[p], M + (size_t)col[p] * s, G + i * s);
+    /* the transpose of G, so that column j of P, (G A^T)_.j = sum_p A_jl G_.l, is a sum of
+     * rows of G^T: axpys again, over i = 0..j (rounded up to the padding) */
+    double Gt[NMAX * NMAX], Pc[NMAX * NMAX];
+    for (size_t i = 0; i < n; ++i)
+        for (size_t l = 0; l < n; ++l)
+            Gt[l * s + i] = G[i * s + l];
+    for (size_t l = 0; l < n; ++l)
         for (size_t i = n; i < s; ++i)
-            V[j * s + i] = 0.0;
-    double Pn[NMAX * NMAX];
-    memcpy(Pn, V, n * s * sizeof *Pn);
-    for (size_t i = 0; i < n; ++i) {
-        const size_t j0 = i & ~(size_t)3;
-        for (size_t p = start[i]; p < start[i + 1]; ++p)
-            axpy4(s - j0, val[p], V + (size_t)col[p] * s + j0, Pn + i * s + j0);
+            Gt[l * s + i] = 0.0;
+    /* Pc row j = column j of the new P (entries 0..j used) */
+    for (size_t j = 0; j < n; ++j) {
+        double *pc = Pc + j * s;
+        const size_t len = PADDED(j + 1);
+        for (size_t i = 0; i < len; ++i)
+            pc[i] = M[j * s + i] + Gt[j * s + i] + G[j * s + i];   /* M_ij + G_ij + G_ji (M sym) */
+        for (size_t p = start[j]; p < start[j + 1]; ++p)
+            axpy4(len, val[p], Gt + (size_t)col[p] * s, pc);
     }
     /* a non-finite A or q reaches the diagonal (Inf * 0 = NaN): refuse, P unchanged */
     int finite = 1;
-    for (size_t i = 0; i < n; ++i) {
+    for (size_t j = 0; j < n; ++j) {
         if (q2)
-            Pn[i * s + i] += q2[i];
-        finite &= isfinite(Pn[i * s + i]) != 0;
+            Pc[j * s + j] += q2[j];
+        finite &= isfinite(Pc[j * s + j]) != 0;
     }
     if (!finite)
         return GF_ERR_NONFINITE_INPUT;
-    for (size_t i = 0; i < n; ++i)
-        for (size_t j = i; j < n; ++j)
-            kf->P[i * n + j] = kf->P[j * n + i] = Pn[i * s + j];
+    for (size_t j = 0; j < n; ++j)
+        for (size_t i = 0; i <= j; ++i)
+            kf->P[i * n + j] = kf->P[j * n + i] = Pc[j * s + i];
     return GF_OK;
 }
 

@@ -30,11 +30,14 @@ HERE = pathlib.Path(__file__).resolve().parent
 
 
 def default_data_dir() -> pathlib.Path:
-    """$GFINS_RTK_WALK_DIR, else shared/data/rtk_walk beside a parent of this checkout."""
+    """$GFINS_RTK_WALK_DIR, else the repository's copy (tests/data/rtk_walk), else
+    shared/data/rtk_walk beside a parent of this checkout."""
     import os
     env = os.environ.get("GFINS_RTK_WALK_DIR")
     if env:
         return pathlib.Path(env)
+    if (HERE.parent / "tests" / "data" / "rtk_walk").is_dir():
+        return HERE.parent / "tests" / "data" / "rtk_walk"
     for parent in HERE.parents:
         cand = parent / "shared" / "data" / "rtk_walk"
         if cand.is_dir():

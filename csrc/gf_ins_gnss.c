@@ -1227,7 +1227,7 @@ static gf_status mech_part(gf_ins_filter *f, const double g_raw[3], const double
 {
     double g[3], a[3];
     compensate(f, g_raw, a_raw, dt, g, a);
-    const gf_status st = gf_sins_step(&f->nav, g, a, dt, NAN);
+    const gf_status st = gf_sins_step_trusted(&f->nav, g, a, dt);
     if (st != GF_OK)
         return st;
     if (f->cfg.input == GF_SINS_INPUT_INCREMENTS) {

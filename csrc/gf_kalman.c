@@ -219,7 +219,6 @@ static inline void axpy4(size_t m, double a, const double *restrict in, double *
 #define GF_VECTOR_CLONES
 #endif
 
-GF_VECTOR_CLONES
 gf_status gf_kalman_predict_sparse(gf_kalman *kf, const double *A, const double *q1,
                                    const double *q2)
 {
@@ -228,7 +227,6 @@ gf_status gf_kalman_predict_sparse(gf_kalman *kf, const double *A, const double 
     const size_t n = kf->n;
     if (n == 0 || n > NMAX)
         return GF_ERR_BAD_SIZE;
-    const size_t s = PADDED(n);   /* row stride of the work matrices */
     /* the non-zeros of A, row by row (compressed sparse rows) */
     unsigned char col[NMAX * NMAX];
     double val[NMAX * NMAX];
@@ -244,6 +242,25 @@ gf_status gf_kalman_predict_sparse(gf_kalman *kf, const double *A, const double 
         }
     }
     start[n] = nnz;
+    return gf_kalman_predict_csr(kf, start, col, val, q1, q2);
+}
+
+GF_VECTOR_CLONES
+gf_status gf_kalman_predict_csr(gf_kalman *kf, const size_t *start, const unsigned char *col,
+                                const double *val, const double *q1, const double *q2)
+{
+    if (!kf || !start || !col || !val)
+        return GF_ERR_NULL_POINTER;
+    const size_t n = kf->n;
+    if (n == 0 || n > NMAX || start[0] != 0)
+        return GF_ERR_BAD_SIZE;
+    for (size_t i = 0; i < n; ++i)
+        if (start[i + 1] < start[i] || start[i + 1] > NMAX * NMAX)
+            return GF_ERR_BAD_SIZE;
+    for (size_t p = 0; p < start[n]; ++p)
+        if (col[p] >= n)
+            return GF_ERR_BAD_SIZE;
+    const size_t s = PADDED(n);   /* row stride of the work matrices */
     /* (I + A) M (I + A)^T = M + G + G^T + G A^T with M = P + D1 (symmetric), G = A M:
      * G row by row (vectorised axpys over rows padded to the stride), then the upper
      * triangle, (G A^T)_ij = sum over the non-zeros A_jl of A_jl G_il */

@@ -74,6 +74,12 @@ gf_status gf_kalman_update_gated(gf_kalman *kf, size_t m, const double *residual
 gf_status gf_kalman_predict_sparse(gf_kalman *kf, const double *A, const double *q1,
                                    const double *q2);
 
+/* The same with A given by its non-zeros, row by row (compressed sparse rows):
+ * row_start (n + 1), col and val (row_start[n] entries; columns < n). Errors as above,
+ * and GF_ERR_BAD_SIZE for a bad row_start or column. */
+gf_status gf_kalman_predict_csr(gf_kalman *kf, const size_t *row_start, const unsigned char *col,
+                                const double *val, const double *q1, const double *q2);
+
 /* Scaled unscented transform (seed 004 eq. 25-28): sigma-point spread and weights. */
 typedef struct gf_ukf_weights {
     size_t n;          /* state dimension N */

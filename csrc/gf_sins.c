@@ -553,3 +553,10 @@ gf_status gf_sins_run(gf_sins_state *state, size_t n, const double *gyro, const 
         *n_done = done;
     return status;
 }
+
+gf_status gf_sins_step_trusted(gf_sins_state *state, const double *gyro, const double *accel,
+                               double dt_s)
+{
+    /* forward navigation only (the filters); the caller keeps *state valid */
+    return sins_update(state, gyro, accel, dt_s, NAN);
+}

@@ -165,6 +165,12 @@ gf_status gf_sins_run(gf_sins_state *state, size_t n, const double *gyro, const 
                       size_t *n_done);
 /* CDEF END */
 
+/* Internal to the core: gf_sins_step forward in time without the check of *state, for
+ * callers that keep the state valid themselves (the integrated-navigation filter sets it
+ * only through gf_sins_init and gf_sins_set_navigation, which check). */
+gf_status gf_sins_step_trusted(gf_sins_state *state, const double *gyro, const double *accel,
+                               double dt_s);
+
 #ifdef __cplusplus
 }
 #endif

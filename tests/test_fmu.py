@@ -160,7 +160,7 @@ def test_fmu_rejects_nonfinite_input_keeps_outputs(record, version):
 @pytest.mark.parametrize("version", [2, 3])
 @pytest.mark.parametrize("l", [0.0, -0.1, float("nan")])
 def test_fmu_rejects_bad_lever_arm(record, version, l):
-    with pytest.raises(gf.FmuRunError, match=r"ExitInitializationMode.*parameter l = .* > 0"):
+    with pytest.raises(gf.FmuRunError, match=r"ExitInitializationMode.*parameter l = .* >= 1e-6 m"):
         gf.run_accel9_fmu(record[:5], DT, l, W0, fmi_version=version)
 
 
@@ -306,7 +306,7 @@ def test_gfnav_fmu_errors(circle, version):
     tr = circle
     x0 = gf.NavState.from_trajectory(tr, 0)
     A = tr.array_outputs(gf.layout("cube6", 0.1))[:20]
-    with pytest.raises(gf.FmuRunError, match="strategy = 1 needs products"):
+    with pytest.raises(gf.FmuRunError, match="strategy = 1 needs the squared rates"):
         run_gfnav_fmu("cube6", A, 0.01, x0, strategy="sqrt", fmi_version=version)
     A[7, 2] = np.nan
     with pytest.raises(gf.FmuRunError, match="A\\[i\\] is not finite"):
@@ -356,3 +356,46 @@ def test_sins_fmu_refuses_bad_error_parameters(circle, version):
         run_fmu("sins", {"dtheta": np.zeros((3, 3))}, ["q"], 0.01,
                 parameters={"lowpass_sections": 1, "lowpass_sos": [1, 0, 0, 1, -2.5, 1.5] + [0] * 42},
                 fmi_version=version)
+
+
+# ---- issue 15: parameter messages -----------------------------------------------------
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_accel9_fmu_blames_the_lever_arm_below_its_minimum(record, version):
+    """l = 1e-7 m is positive but below the 1e-6 m minimum (before: the FMU logged
+    'omega_init must be finite')."""
+    with pytest.raises(gf.FmuRunError, match=r"parameter l = 1e-07 m: the lever arm must be "
+                                             r"finite and >= 1e-6 m") as exc:
+        gf.run_accel9_fmu(record[:5], DT, 1e-7, W0, fmi_version=version)
+    assert "omega_init" not in str(exc.value)
+    with pytest.raises(gf.FmuRunError, match=r"parameter omega_init = \[nan"):
+        run_fmu("accel9", {"A": record[:5]}, ["omega"], DT,
+                parameters={"l": L, "omega_init": [np.nan, 0, 0]}, fmi_version=version)
+
+
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("parameters, message", [
+    ({"lat0": 2.0}, "parameter lat0 = 2 rad is outside (-pi/2, pi/2)"),
+    ({"accel_noise": 0.0}, "parameter accel_noise = 0 m/s2 must be finite and > 0"),
+    ({"omega_init": [np.inf, 0.0, 0.0]}, "parameter omega_init = [inf, 0, 0] rad/s must be finite"),
+    ({"v0": [0.0, np.nan, 0.0]}, "parameter v0 = [0, nan, 0] m/s must be finite"),
+    ({"q0": [0.0, 0.0, 0.0, 0.0]}, "parameter q0 = [0, 0, 0, 0] must be a finite, non-zero quaternion"),
+    ({"h0": -4e6}, "parameter h0 = -4e+06 m must be finite and above -a/2"),
+    ({"baro_tau": 0.0}, "parameter baro_tau = 0 s must be finite and > 0"),
+    ({"vertical_mode": 5}, "parameter vertical_mode = 5 must be 0, 1 or 2"),
+    ({"earth": 2}, "parameter earth = 2 must be 0 (WGS-84) or 1 (fixed frame)"),
+    ({"strategy": 2}, "parameter strategy = 2 needs all products w w^T"),
+], ids=["lat0", "accel_noise", "omega_init", "v0", "q0", "h0", "baro_tau", "vertical_mode",
+        "earth", "strategy"])
+def test_gfnav_fmu_blames_the_parameter_at_fault(version, parameters, message):
+    """Before: lat0 = 2 rad and accel_noise = 0 were reported as 'strategy = 1 needs
+    products this layout does not measure' on the qin9 navigator (strategy 1 = sqrt,
+    which qin9 does measure); only the eigen strategy (2) is refused by this layout."""
+    with pytest.raises(gf.FmuRunError) as exc:
+        run_fmu("gfnav_qin9", {"A": np.zeros((3, 9))}, ["q"], 0.01,
+                parameters={"strategy": 1, "q0": [1.0, 0, 0, 0], "lat0": 0.5, **parameters},
+                fmi_version=version)
+    text = str(exc.value)
+    assert message in text, text
+    if "strategy" not in parameters:
+        assert "needs" not in text

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from gfins_fmi._lib import GfinsError, check_status, ffi, lib
+from gfins_fmi._lib import GfinsError, as_scalar, check_status, ffi, lib, ptr
 from gfins_fmi.trajectory import Trajectory, deg
 
 __all__ = ["Segment", "VehicleProfile", "VehicleRecord", "simulate_vehicle", "MAX_SEGMENTS"]
@@ -158,12 +158,13 @@ def simulate_vehicle(profile: VehicleProfile, duration_s: float, dt_s: float,
         raise GfinsError("gf_vehicle_sample layout changed; update vehicle._FIELDS")
     if not (dt_s > 0 and np.isfinite(dt_s)) or not (duration_s >= 0 and np.isfinite(duration_s)):
         raise ValueError(f"dt_s must be > 0 and duration_s >= 0 (s); got {dt_s}, {duration_s}")
+    start_time_s = as_scalar("start_time_s", start_time_s, "s")
     n = int(round(duration_s / dt_s)) + 1
     state = ffi.new("gf_vehicle_state *")
     buf = np.zeros((n, _SAMPLE_DOUBLES))
-    samples = ffi.cast("gf_vehicle_sample *", ffi.from_buffer(buf))
+    samples = ffi.cast("gf_vehicle_sample *", ptr(buf, n * _SAMPLE_DOUBLES))
     bad = ffi.new("int *")
-    st = lib.gf_vehicle_init(state, profile.to_c(), float(start_time_s), samples, bad)
+    st = lib.gf_vehicle_init(state, profile.to_c(), start_time_s, samples, bad)
     if st == lib.GF_ERR_BAD_PARAMETER:
         raise ValueError(f"vehicle profile rejected: {_describe_bad(bad[0])}")
     check_status(st, "gf_vehicle_init")

@@ -231,8 +231,11 @@ def test_sins_fmu_bad_parameters_and_input(circle, version):
     tr = circle
     x0 = gf.NavState.from_trajectory(tr, 0)
     x0.lat_rad = 1.6
-    with pytest.raises(gf.FmuRunError, match="parameter lat0 = 1.6 rad is outside"):
+    with pytest.raises(ValueError, match=r"initial\.lat_rad = 1.6 rad .* is outside"):
         run_sins_fmu(tr.dtheta_rad[:5], tr.dv_m_s[:5], 0.01, x0, fmi_version=version)
+    with pytest.raises(gf.FmuRunError, match="parameter lat0 = 1.6 rad is outside"):   # the FMU's own
+        run_fmu("sins", {"dtheta": np.zeros((3, 3))}, ["q"], 0.01,
+                parameters={"lat0": 1.6, "q0": [1.0, 0, 0, 0]}, fmi_version=version)
     with pytest.raises(gf.FmuRunError, match="input_mode = 7 must be 0"):
         run_fmu("sins", {"dtheta": np.zeros((3, 3))}, ["q"], 0.01,
                 parameters={"input_mode": 7}, fmi_version=version)
@@ -399,3 +402,18 @@ def test_gfnav_fmu_blames_the_parameter_at_fault(version, parameters, message):
     assert message in text, text
     if "strategy" not in parameters:
         assert "needs" not in text
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_accel9_fmu_refuses_samples_beyond_the_physical_limits(record, version):
+    """The FMU runs gf9_step, which applies the solver's physical limits (|f| <= 1000
+    m/s^2, |omega| <= 50 rad/s) as gf9_solve does: same refusal, same partial."""
+    A = record[:10].copy()
+    A[6] = 1e300
+    with pytest.raises(gf.FmuRunError, match=r"t = 0.06 s failed: a sample is beyond the stated "
+                                             r"physical limit") as exc:
+        gf.run_accel9_fmu(A, DT, L, W0, fmi_version=version)
+    with pytest.raises(gf.SampleError) as ref:
+        gf.solve_accel9(A, DT, L, W0)
+    assert len(exc.value.partial) == ref.value.index == 6
+    assert np.array_equal(exc.value.partial.omega_rad_s, ref.value.partial.omega_rad_s)

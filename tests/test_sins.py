@@ -255,7 +255,7 @@ def test_absurd_rate_and_bad_times(sine_1h):
     ("lat_rad", np.radians(90.0), "outside"),
     ("lat_rad", np.radians(-91.0), "outside"),
     ("q_bn", np.zeros(4), "cannot be normalised"),
-    ("q_bn", np.array([np.nan, 0, 0, 1.0]), "cannot be normalised"),
+    ("q_bn", np.array([np.nan, 0, 0, 1.0]), r"initial\.q_bn must be finite"),
 ])
 def test_bad_initial_state(field, value, match):
     x0 = gf.NavState.from_euler([0, 0, 0], [0, 0, 0], 0.5, 1.0, 0.0)
@@ -448,3 +448,25 @@ def test_bad_initial_fields_are_named(field, value, match):
     setattr(x0, field, value)
     with pytest.raises(ValueError, match=match):
         gf.Strapdown(x0)
+
+
+# ---- issue 15: held height ---------------------------------------------------------
+
+def test_held_height_defaults_to_the_initial_state():
+    """SinsConfig(vertical="hold") holds the initial state's height unless told another
+    (before: 0 m, discarding the initial height; the CLI held --h0)."""
+    tr = tj.sample(tj.Circle(), 5.0, 0.01)
+    x0 = gf.NavState.from_trajectory(tr, 0)
+    assert x0.h_m == 100.0
+    sol = gf.Strapdown(x0, gf.SinsConfig(vertical="hold")).run(tr.dtheta_rad, tr.dv_m_s, dt_s=0.01)
+    assert np.all(sol.h_m == x0.h_m)
+    sol = gf.Strapdown(x0, gf.SinsConfig(vertical="hold", hold_height_m=42.0)).run(
+        tr.dtheta_rad, tr.dv_m_s, dt_s=0.01)
+    assert np.all(sol.h_m == 42.0)
+    g = gf.layout("qin9", 0.1)
+    sol, _ = gf.GyroFreeNavigator(g, x0, "sqrt", tr.gyro_rad_s[0],
+                                  sins=gf.SinsConfig(vertical="hold")).run(tr.array_outputs(g), 0.01)
+    assert np.all(sol.h_m == x0.h_m)
+    from gfins_fmi.fmu import run_sins_fmu
+    fmu = run_sins_fmu(tr.dtheta_rad[:20], tr.dv_m_s[:20], 0.01, x0, config=gf.SinsConfig(vertical="hold"))
+    assert np.all(fmu.h_m == x0.h_m)

@@ -209,3 +209,22 @@ def test_misspelled_keywords_are_refused():
         gf.GyroFreeNavigator(g, x0, "fused", init_bias_std_rad_s2=-1.0)
     with pytest.raises(ValueError, match="bias_walk_rad_s2_sqrt_s must be finite and >= 0"):
         gf.RateSolver(g, "fused", bias_walk_rad_s2_sqrt_s=np.nan)
+
+
+def test_commands_python_entry_points_check_their_parameters_first(tmp_path):
+    """The functions behind ``gfins demo / reproduce / cosim`` refuse bad parameters
+    before doing any work (before: tracebacks after part of the run, NaN tables)."""
+    from gfins_fmi import cosim, demo, reproduce
+    from gfins_fmi.vehicle import VehicleProfile
+    out = tmp_path / "out"
+    for kwargs, match in ((dict(duration_s=0.0), "duration_s must be finite and > 0 s"),
+                          (dict(dt_s=-0.01), "dt_s must be finite and > 0 s"),
+                          (dict(noise_m_s2=-1.0), "noise_m_s2 must be finite and >= 0"),
+                          (dict(duration_s=0.01, dt_s=0.01), "fewer than 2 samples")):
+        with pytest.raises(ValueError, match=match):
+            demo.run(out_dir=out, **kwargs)
+    with pytest.raises(ValueError, match="runs must be an integer >= 1"):
+        reproduce.run_qin(runs=0, progress=False)
+    with pytest.raises(ValueError, match="stop_s must be finite and >= 0.01 s"):
+        cosim.compare_runners("gfnav_qin9", VehicleProfile.seed001(align_s=1.0), 0.0, out)
+    assert not out.exists()

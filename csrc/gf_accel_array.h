@@ -70,8 +70,9 @@ gf_status gf_array_forward(const gf_array_geometry *geometry, size_t n_samples,
 /* Physical limits of the 9-accelerometer solver: the navigators' defaults
  * (gf_sins_config_default). A sample whose specific force exceeds
  * GF9_MAX_SPECIFIC_FORCE_M_S2, or whose rate (|omega|^2 = sum |omega_k^2| as measured,
- * or the reference rate omega_ref) exceeds GF9_MAX_RATE_RAD_S, is refused as absurd
- * (GF_ERR_OUT_OF_RANGE), as gf_sins refuses it. Integers so that cffi exports them. */
+ * or the rate output, which is the integrated reference where omega_k^2 < 0) exceeds
+ * GF9_MAX_RATE_RAD_S, is refused as absurd (GF_ERR_OUT_OF_RANGE), as gf_sins refuses
+ * it. Integers so that cffi exports them. */
 #define GF9_MAX_RATE_RAD_S 50
 #define GF9_MAX_SPECIFIC_FORCE_M_S2 1000
 

@@ -234,7 +234,8 @@ class Accel9Solver:
 
     Samples are refused (:class:`~gfins_fmi.SampleError`) beyond the physical limits
     the navigators apply (:data:`MAX_RATE_RAD_S`, :data:`MAX_SPECIFIC_FORCE_M_S2`):
-    specific force, measured |omega|^2 or the rate integrated for the signs.
+    specific force, measured |omega|^2, or the rate output (the integrated reference
+    where omega_k^2 < 0).
     """
 
     def __init__(self, l_m: float, omega_init_rad_s=(0.0, 0.0, 0.0)):

@@ -229,8 +229,10 @@ def test_samples_beyond_the_physical_limits_are_refused():
         solve(w0=(0.0, 0.0, 50.5))
     with pytest.raises(gf.SampleError, match="sample 0"):
         gf.solve_accel9(np.full((3, 9), 1e300), 0.01, 0.1)
-    # dt = 1e300: the integral of w_dot = 0.1 rad/s^2 leaves the limit at sample 1
-    w, wd = np.tile([1.0, 0.0, 0.0], (3, 1)), np.tile([0.1, 0.0, 0.0], (3, 1))
+    # dt = 1e300 where noise makes omega_x^2 < 0 (-5e-3 rad^2/s^2): the rate is then the
+    # integral of w_dot = 0.1 rad/s^2, 1e299 rad/s at sample 1 (before: accepted)
+    A = numpy_outputs(u, th, np.zeros((3, 3)), np.zeros((3, 3)), np.tile([0.1, 0.0, 0.0], (3, 1)))
+    A[:, [0, 3]] -= 1e-3
     with pytest.raises(gf.SampleError, match="sample 1 .*dt_s = 1e\\+300 s") as exc:
-        solve(w=w, wd=wd, dt=1e300, w0=(1.0, 0, 0))
+        gf.solve_accel9(A, 1e300, 0.1)
     assert len(exc.value.partial) == 1

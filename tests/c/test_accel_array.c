@@ -313,15 +313,28 @@ static void test_physical_limits(void)
     gf9_init(&st, 0.1, NULL);
     CHECK(gf9_solve(&st, 1, A, 0.01, f, w, wd, wsq, fl, &done) == GF_ERR_OUT_OF_RANGE && done == 0,
           "1e300 samples refused");
-    /* dt = 1e300 with omega_dot = 0.1 rad/s^2: the integrated rate leaves the limit at
-     * the second sample, which is refused; the first is solved */
-    const double w1[3] = {1.0, 0, 0}, wd1[3] = {0.1, 0, 0};
+    /* dt = 1e300 with omega_dot = 0.1 rad/s^2 and omega_x^2 < 0 (noise near omega_x = 0):
+     * the rate output is the integrated reference, 1e299 rad/s at the second sample,
+     * which is refused; the first is solved */
+    const double wd1[3] = {0.1, 0, 0};
+    outputs_of(zero, zero, wd1, A2);
+    outputs_of(zero, zero, wd1, A2 + 9);
+    for (int k = 0; k < 2; ++k) {   /* omega_x^2 = (A1 + A4 - ...) / (4 l) = -5e-3 rad^2/s^2 */
+        A2[9 * k + 0] -= 1e-3;
+        A2[9 * k + 3] -= 1e-3;
+    }
+    gf9_init(&st, 0.1, NULL);
+    CHECK(gf9_solve(&st, 2, A2, 1e300, f, w, wd, wsq, fl, &done) == GF_ERR_OUT_OF_RANGE && done == 1,
+          "dt = 1e300: second sample refused (done %zu)", done);
+    CHECK(st.n_samples == 1 && st.omega_ref_rad_s[0] == 0.0, "state after the first sample");
+    /* the same with omega_x^2 > 0: the reference only gives the sign, the output stays
+     * the measured magnitude, so the sample is solved */
+    const double w1[3] = {1.0, 0, 0};
     outputs_of(zero, w1, wd1, A2);
     outputs_of(zero, w1, wd1, A2 + 9);
     gf9_init(&st, 0.1, w1);
-    CHECK(gf9_solve(&st, 2, A2, 1e300, f, w, wd, wsq, fl, &done) == GF_ERR_OUT_OF_RANGE && done == 1,
-          "dt = 1e300: second sample refused (done %zu)", done);
-    CHECK(st.n_samples == 1 && st.omega_ref_rad_s[0] == 1.0, "state after the first sample");
+    CHECK(gf9_solve(&st, 2, A2, 1e300, f, w, wd, wsq, fl, &done) == GF_OK && fabs(w[3] - 1.0) < 1e-12,
+          "dt = 1e300, omega_x^2 > 0: solved, omega_x = %g", w[3]);
 }
 
 static void test_two_instances_independent(void)

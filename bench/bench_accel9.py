@@ -62,7 +62,7 @@ def main() -> None:
     flags.fill(0)
     state = ffi.new("gf9_state *")
     done = ffi.new("size_t *")
-    pA, po, pf = ptr(A), [ptr(o) for o in outs], ptr(flags, "uint8_t")
+    pA, po, pf = ptr(A), [ptr(o) for o in outs], ptr(flags, ctype="uint8_t")
 
     def c_batch():
         lib.gf9_init(state, 0.1, ffi.NULL)

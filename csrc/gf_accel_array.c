@@ -129,7 +129,9 @@ gf_status gf9_init(gf9_state *state, double lever_arm_m, const double *omega_ini
         return GF_ERR_NULL_POINTER;
     if (!(lever_arm_m >= GF_MIN_LEVER_ARM_M) || !isfinite(lever_arm_m))
         return GF_ERR_BAD_PARAMETER;
-    if (omega_init_rad_s && !gf_all_finite(omega_init_rad_s, 3))
+    if (omega_init_rad_s && (!gf_all_finite(omega_init_rad_s, 3) ||
+                             !(gf_v3_dot(omega_init_rad_s, omega_init_rad_s) <=
+                               (double)GF9_MAX_RATE_RAD_S * GF9_MAX_RATE_RAD_S)))
         return GF_ERR_BAD_PARAMETER;
     memset(state, 0, sizeof *state);
     state->lever_arm_m = lever_arm_m;
@@ -144,6 +146,23 @@ static int state_is_valid(const gf9_state *s)
 {
     return s->lever_arm_m >= GF_MIN_LEVER_ARM_M && isfinite(s->lever_arm_m) &&
            gf_all_finite(s->omega_ref_rad_s, 3) && gf_all_finite(s->omega_dot_rad_s2, 3);
+}
+
+/* Whether one solved sample lies within the physical limits (gf_accel_array.h): finite,
+ * |f| <= GF9_MAX_SPECIFIC_FORCE_M_S2, sum |omega_k^2| <= GF9_MAX_RATE_RAD_S^2 (the
+ * measured |omega|^2, either sign: a negative omega_k^2 beyond it is no noise), and the
+ * rate output within GF9_MAX_RATE_RAD_S (it is the reference rate where omega_k^2 < 0).
+ * The reference rate alone is not limited: it only gives signs, and on a long record
+ * its integral may drift (gf9_state) without making the solution absurd. Finite samples
+ * whose solution overflows fail the same test. */
+static int within_limits(const double f[3], const double omega[3], const double omega_dot[3],
+                         const double omega_sq[3])
+{
+    const double w2_max = (double)GF9_MAX_RATE_RAD_S * GF9_MAX_RATE_RAD_S;
+    const double f2_max = (double)GF9_MAX_SPECIFIC_FORCE_M_S2 * GF9_MAX_SPECIFIC_FORCE_M_S2;
+    return gf_all_finite(omega_dot, 3) && gf_v3_dot(f, f) <= f2_max &&
+           fabs(omega_sq[0]) + fabs(omega_sq[1]) + fabs(omega_sq[2]) <= w2_max &&
+           gf_v3_dot(omega, omega) <= w2_max;
 }
 
 /* The solver for one sample; used by gf9_step and inlined in the gf9_solve loop.
@@ -213,9 +232,8 @@ gf_status gf9_step(gf9_state *state, const double *A_m_s2, double dt_s, gf9_outp
     gf9_solve_sample(A_m_s2, 0.25 / l, -0.5 / l, first, first ? 0.0 : 0.5 * dt_s, ref,
                      state->omega_dot_rad_s2, o.f_m_s2, o.omega_rad_s, o.omega_dot_rad_s2,
                      o.omega_sq_rad2_s2, &o.flags);
-    if (!gf_all_finite(o.f_m_s2, 3) || !gf_all_finite(o.omega_rad_s, 3) ||
-        !gf_all_finite(o.omega_dot_rad_s2, 3) || !gf_all_finite(o.omega_sq_rad2_s2, 3))
-        return GF_ERR_OUT_OF_RANGE; /* finite samples too large for a double; state kept */
+    if (!within_limits(o.f_m_s2, o.omega_rad_s, o.omega_dot_rad_s2, o.omega_sq_rad2_s2))
+        return GF_ERR_OUT_OF_RANGE; /* absurd or overflowing sample; state kept */
     *out = o;
     gf_v3_copy(ref, state->omega_ref_rad_s);
     gf_v3_copy(o.omega_dot_rad_s2, state->omega_dot_rad_s2);
@@ -258,9 +276,8 @@ gf_status gf9_solve(gf9_state *state, size_t n_samples, const double *A_m_s2, do
         gf_v3_copy(omega_ref, ref_before);
         gf9_solve_sample(A, inv_4l, minus_inv_2l, first, half_dt_s, omega_ref, omega_dot_prev,
                          f_m_s2 + 3 * k, omega_rad_s + 3 * k, wd, omega_sq_rad2_s2 + 3 * k, &fl);
-        if (!gf_all_finite(f_m_s2 + 3 * k, 3) || !gf_all_finite(omega_rad_s + 3 * k, 3) ||
-            !gf_all_finite(wd, 3) || !gf_all_finite(omega_sq_rad2_s2 + 3 * k, 3)) {
-            gf_v3_copy(ref_before, omega_ref); /* finite samples too large for a double */
+        if (!within_limits(f_m_s2 + 3 * k, omega_rad_s + 3 * k, wd, omega_sq_rad2_s2 + 3 * k)) {
+            gf_v3_copy(ref_before, omega_ref); /* absurd or overflowing sample */
             status = GF_ERR_OUT_OF_RANGE;
             break;
         }

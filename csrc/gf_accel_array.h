@@ -67,6 +67,15 @@ gf_status gf_array_forward(const gf_array_geometry *geometry, size_t n_samples,
 #define GF9_FLAG_SIGN_UNKNOWN_Y 16
 #define GF9_FLAG_SIGN_UNKNOWN_Z 32
 
+/* Physical limits of the 9-accelerometer solver: the navigators' defaults
+ * (gf_sins_config_default). A sample whose specific force exceeds
+ * GF9_MAX_SPECIFIC_FORCE_M_S2, or whose rate (|omega|^2 = sum |omega_k^2| as measured,
+ * or the rate output, which is the integrated reference where omega_k^2 < 0) exceeds
+ * GF9_MAX_RATE_RAD_S, is refused as absurd (GF_ERR_OUT_OF_RANGE), as gf_sins refuses
+ * it. Integers so that cffi exports them. */
+#define GF9_MAX_RATE_RAD_S 50
+#define GF9_MAX_SPECIFIC_FORCE_M_S2 1000
+
 /* State of one 9-accelerometer solver instance. Pointer-free: copying the struct
  * copies the solver (used by FMU get/set/serialize state).
  *
@@ -99,14 +108,14 @@ typedef struct gf9_output {
 /* Initialises *state. omega_init_rad_s (may be NULL = zero) is the rate at the first
  * sample: its signs are the first signs and the integration of omega_dot starts from
  * it. Error: GF_ERR_BAD_PARAMETER unless 1e-6 m <= lever_arm_m < inf and omega_init is
- * finite. */
+ * finite with |omega_init| <= GF9_MAX_RATE_RAD_S. */
 gf_status gf9_init(gf9_state *state, double lever_arm_m, const double *omega_init_rad_s);
 
 /* Solves one sample A_m_s2[9] taken dt_s after the previous one (dt_s is ignored on
  * the first sample). The state is updated only on GF_OK.
  * Errors: GF_ERR_NONFINITE_INPUT, GF_ERR_BAD_PARAMETER (dt_s <= 0 or not finite after
- * the first sample), GF_ERR_OUT_OF_RANGE (finite samples whose solution overflows),
- * GF_ERR_NULL_POINTER. */
+ * the first sample), GF_ERR_OUT_OF_RANGE (a sample beyond the physical limits
+ * GF9_MAX_*, or finite samples whose solution overflows), GF_ERR_NULL_POINTER. */
 gf_status gf9_step(gf9_state *state, const double *A_m_s2, double dt_s, gf9_output *out);
 
 /* Batch solve of n_samples rows of A_m_s2 (n x 9) at a fixed interval dt_s, in one

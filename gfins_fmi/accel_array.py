@@ -20,15 +20,21 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from gfins_fmi._lib import (GfinsError, NonFiniteInputError, as_positive_scalar, as_rows,
+from gfins_fmi._lib import (NonFiniteInputError, SampleError, as_positive_scalar, as_rows,
                             as_vector3, check_status, ffi, first_nonfinite, lib, ptr,
                             status_text)
 
 __all__ = ["ArrayGeometry", "accel9_geometry", "forward_model", "Accel9Solution",
            "Accel9Solver", "solve_accel9", "FLAG_NEG_OMEGA_SQ", "FLAG_SIGN_UNKNOWN",
-           "MAX_SENSORS"]
+           "MAX_SENSORS", "MAX_RATE_RAD_S", "MAX_SPECIFIC_FORCE_M_S2"]
 
 MAX_SENSORS: int = int(lib.GF_ARRAY_MAX_SENSORS)
+#: smallest lever arm the solvers accept (m): below it 1/l turns round-off into rates
+MIN_LEVER_ARM_M: float = 1e-6
+#: physical limits of the 9-accelerometer solver (the navigators' defaults, SinsConfig):
+#: samples whose rate or specific force go beyond them are refused as absurd
+MAX_RATE_RAD_S: float = float(lib.GF9_MAX_RATE_RAD_S)
+MAX_SPECIFIC_FORCE_M_S2: float = float(lib.GF9_MAX_SPECIFIC_FORCE_M_S2)
 #: flags bits 0..2: omega_k^2 < 0 (noise); the rate component was propagated from omega_dot
 FLAG_NEG_OMEGA_SQ: tuple[int, int, int] = (int(lib.GF9_FLAG_NEG_OMEGA_SQ_X),
                                            int(lib.GF9_FLAG_NEG_OMEGA_SQ_Y),
@@ -68,7 +74,8 @@ class ArrayGeometry:
             raise ValueError(f"u_m has {u.shape[0]} sensors but theta has {t.shape[0]}")
         c = ffi.new("gf_array_geometry *")
         bad = ffi.new("size_t *")
-        status = lib.gf_array_geometry_set(c, u.shape[0], ptr(u), ptr(t), bad)
+        n = u.shape[0]
+        status = lib.gf_array_geometry_set(c, n, ptr(u, 3 * n), ptr(t, 3 * n), bad)
         if status != lib.GF_OK:
             i = int(bad[0])
             if status == lib.GF_ERR_BAD_SIZE:
@@ -97,9 +104,9 @@ class ArrayGeometry:
 
 def _lever_arm(l_m) -> float:
     l_m = as_positive_scalar("l_m (lever arm)", l_m, "m")
-    if l_m < 1e-6:
-        raise ValueError(f"l_m (lever arm) = {l_m!r} m is below 1e-6 m: the solution divides "
-                         "by l, so such an array only amplifies round-off")
+    if l_m < MIN_LEVER_ARM_M:
+        raise ValueError(f"l_m (lever arm) = {l_m!r} m is below {MIN_LEVER_ARM_M:g} m: the "
+                         "solution divides by l, so such an array only amplifies round-off")
     return l_m
 
 
@@ -150,7 +157,8 @@ def forward_model(geometry: ArrayGeometry, f_m_s2, omega_rad_s, omega_dot_rad_s2
                          f"got {n}, {w.shape[0]}, {wd.shape[0]}")
     A = np.empty((n, geometry.n_sensors))
     done = ffi.new("size_t *")
-    status = lib.gf_array_forward(geometry._c, n, ptr(f), ptr(w), ptr(wd), ptr(A), done)
+    status = lib.gf_array_forward(geometry._c, n, ptr(f, 3 * n), ptr(w, 3 * n), ptr(wd, 3 * n),
+                                  ptr(A, n * geometry.n_sensors), done)
     if status == lib.GF_ERR_NONFINITE_INPUT:
         k = int(done[0])
         for name, arr in (("f_m_s2", f), ("omega_rad_s", w), ("omega_dot_rad_s2", wd)):
@@ -222,14 +230,22 @@ class Accel9Solver:
         Rate at the first sample (rad/s): its signs are the first signs and the
         integral of omega_dot that gives every later sign starts from it, so give the
         best value known, not just signs. Default zero (first signs positive, flagged
-        where ambiguous).
+        where ambiguous). At most :data:`MAX_RATE_RAD_S` in magnitude.
+
+    Samples are refused (:class:`~gfins_fmi.SampleError`) beyond the physical limits
+    the navigators apply (:data:`MAX_RATE_RAD_S`, :data:`MAX_SPECIFIC_FORCE_M_S2`):
+    specific force, measured |omega|^2, or the rate output (the integrated reference
+    where omega_k^2 < 0).
     """
 
     def __init__(self, l_m: float, omega_init_rad_s=(0.0, 0.0, 0.0)):
         self.l_m = _lever_arm(l_m)
         w0 = as_vector3("omega_init_rad_s", omega_init_rad_s, "rad/s")
+        if not np.linalg.norm(w0) <= MAX_RATE_RAD_S:
+            raise ValueError(f"omega_init_rad_s = {w0.tolist()} exceeds the physical limit "
+                             f"|omega| <= {MAX_RATE_RAD_S:g} rad/s")
         self._state = ffi.new("gf9_state *")
-        check_status(lib.gf9_init(self._state, self.l_m, ptr(w0)), "gf9_init")
+        check_status(lib.gf9_init(self._state, self.l_m, ptr(w0, 3)), "gf9_init")
 
     @property
     def n_samples(self) -> int:
@@ -256,6 +272,9 @@ class Accel9Solver:
             A sample holds NaN/Inf; ``.index``/``.column`` locate it and ``.partial``
             holds the solution of the samples before it (the solver state continues
             from the last good sample).
+        SampleError
+            A sample beyond the physical limits (or whose solution overflows); same
+            ``.index`` and ``.partial``.
         """
         A = as_rows("A_m_s2", A_m_s2, 9, "m/s^2")
         dt_s = as_positive_scalar("dt_s (sampling interval)", dt_s, "s")
@@ -263,9 +282,10 @@ class Accel9Solver:
         out = Accel9Solution(np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)),
                              np.empty((n, 3)), np.empty(n, dtype=np.uint8))
         done = ffi.new("size_t *")
-        status = lib.gf9_solve(self._state, n, ptr(A), dt_s, ptr(out.f_m_s2),
-                               ptr(out.omega_rad_s), ptr(out.omega_dot_rad_s2),
-                               ptr(out.omega_sq_rad2_s2), ptr(out.flags, "uint8_t"), done)
+        status = lib.gf9_solve(self._state, n, ptr(A, 9 * n), dt_s, ptr(out.f_m_s2, 3 * n),
+                               ptr(out.omega_rad_s, 3 * n), ptr(out.omega_dot_rad_s2, 3 * n),
+                               ptr(out.omega_sq_rad2_s2, 3 * n), ptr(out.flags, n, "uint8_t"),
+                               done)
         if status == lib.GF_ERR_NONFINITE_INPUT:
             k = int(done[0])
             col = first_nonfinite(A, k)
@@ -274,9 +294,11 @@ class Accel9Solver:
                 f"samples 0..{k - 1} were solved (see .partial)", k, col, out._head(k))
         if status == lib.GF_ERR_OUT_OF_RANGE:
             k = int(done[0])
-            raise NonFiniteInputError(
-                f"sample {k}: the solution overflows (A_m_s2[{k}] = {A[k].tolist()} too large "
-                f"for a double); samples 0..{k - 1} were solved (see .partial)", k, -1, out._head(k))
+            raise SampleError(
+                f"sample {k} is beyond the physical limits |omega| <= {MAX_RATE_RAD_S:g} rad/s "
+                f"(measured or integrated over dt_s = {dt_s:g} s) and |f| <= "
+                f"{MAX_SPECIFIC_FORCE_M_S2:g} m/s^2 (A_m_s2[{k}] = {A[k].tolist()}); samples "
+                f"0..{k - 1} were solved (see .partial)", int(status), k, out._head(k))
         check_status(status, "gf9_solve")
         return out
 
@@ -300,6 +322,11 @@ def solve_accel9(A_m_s2, dt_s: float, l_m: float,
     Returns
     -------
     Accel9Solution
+
+    Raises
+    ------
+    NonFiniteInputError, SampleError
+        As :meth:`Accel9Solver.solve` (NaN/Inf; beyond the physical limits).
 
     Examples
     --------

@@ -799,6 +799,9 @@ def compare_runners(navigator: str, profile, stop_s: float, out_dir: str | pathl
     None)}; the "master" entry also has "errors" (:func:`navigation_errors`).
     """
     import time
+    from gfins_fmi._lib import as_scalar
+    step_s = as_scalar("step_s", step_s, "s", above=0.0)
+    stop_s = as_scalar("stop_s", stop_s, "s", at_least=step_s)
     out_dir = pathlib.Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     out = {}

@@ -56,7 +56,23 @@ def _rel_diff(a: np.ndarray, b: np.ndarray) -> float:
 def run(out_dir: str | pathlib.Path = "gfins_demo", duration_s: float = 60.0,
         dt_s: float = 0.01, l_m: float = 0.1, noise_m_s2: float = 1e-4,
         seed: int = 1, echo=print) -> dict:
-    """Run the demonstration; returns the figures it printed (for tests and scripts)."""
+    """Run the demonstration; returns the figures it printed (for tests and scripts).
+
+    Raises
+    ------
+    ValueError
+        A parameter out of range (checked before anything runs): ``duration_s`` and
+        ``dt_s`` > 0 giving at least 2 samples, ``l_m`` >= 1e-6 m, ``noise_m_s2`` >= 0.
+    """
+    from gfins_fmi._lib import as_scalar
+    from gfins_fmi.accel_array import MIN_LEVER_ARM_M
+    duration_s = as_scalar("duration_s", duration_s, "s", above=0.0)
+    dt_s = as_scalar("dt_s", dt_s, "s", above=0.0)
+    l_m = as_scalar("l_m", l_m, "m", at_least=MIN_LEVER_ARM_M)
+    noise_m_s2 = as_scalar("noise_m_s2", noise_m_s2, "m/s^2", at_least=0.0)
+    if int(round(duration_s / dt_s)) < 2:
+        raise ValueError(f"duration_s = {duration_s:g} s at dt_s = {dt_s:g} s gives fewer than 2 "
+                         "samples")
     out_dir = pathlib.Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     results: dict = {}

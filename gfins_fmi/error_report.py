@@ -74,7 +74,7 @@ def _sins(runs, seed, executor, progress, times):
     sbg, sba = 0.01 * _DEG_H, 50 * _UG
     arw, vrw = 0.002 * np.pi / 180 / 60, 20 * _UG
     idx = np.round(times / dt).astype(int) - 1
-    cfg = gf.SinsConfig(vertical="hold", hold_height_m=float(tr.h_m[0]))
+    cfg = gf.SinsConfig(vertical="hold")          # held at the initial height
     RM, RN, _, _ = tj.radii(tr.lat_rad[0])
 
     def task(k, rng):

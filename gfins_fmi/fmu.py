@@ -17,7 +17,8 @@ from typing import Callable, Mapping
 
 import numpy as np
 
-from gfins_fmi._lib import GfinsError, as_positive_scalar, as_rows, as_vector3
+from gfins_fmi._lib import (GfinsError, as_array, as_positive_scalar, as_rows, as_scalar,
+                            as_vector3)
 from gfins_fmi.accel_array import Accel9Solution
 
 __all__ = ["MODELS", "fmu_path", "validate", "run_fmu", "run_accel9_fmu", "run_sins_fmu", "run_gfnav_fmu",
@@ -209,6 +210,7 @@ def run_fmu(model: str, inputs: Mapping[str, np.ndarray], outputs: list[str], dt
         An FMU call failed; carries the FMU's log and the rows completed (``partial``).
     """
     dt_s = as_positive_scalar("dt_s (communication step)", dt_s, "s")
+    start_time_s = as_scalar("start_time_s", start_time_s, "s")
     arrays = {k: np.atleast_2d(np.asarray(v, dtype=float).T).T for k, v in inputs.items()}
     n = {a.shape[0] for a in arrays.values()}
     if len(n) != 1:
@@ -306,19 +308,22 @@ def run_sins_fmu(gyro, accel, dt_s: float, initial, *, config=None, h_ext_m=None
     """
     from gfins_fmi.sins import _INPUTS, _VERTICAL, NavSolution, SinsConfig
     cfg = config or SinsConfig()
-    cfg._c()  # validates the configuration with the same messages as Strapdown
     if cfg.earth != "wgs84":
         raise ValueError("the SINS FMU navigates on WGS-84 only (earth='wgs84')")
+    x0 = initial.checked()    # the same checks and messages as Strapdown
+    cfg._c(x0.h_m)
     g = as_rows("gyro", gyro, 3, "rad or rad/s")
     a = as_rows("accel", accel, 3, "m/s or m/s^2")
     n = g.shape[0]
-    t0 = initial.t_s if start_time_s is None else start_time_s
+    if a.shape[0] != n:
+        raise ValueError(f"gyro has {n} samples but accel has {a.shape[0]}")
+    t0 = x0.t_s if start_time_s is None else as_scalar("start_time_s", start_time_s, "s")
     params = {"input_mode": int(_INPUTS[cfg.input]), "coning": int(cfg.coning),
               "vertical_mode": int(_VERTICAL[cfg.vertical]),
-              "hold_height": cfg.hold_height_m, "baro_tau": cfg.baro_tau_s,
+              "hold_height": cfg.held_height_m(x0.h_m), "baro_tau": cfg.baro_tau_s,
               "max_rate": cfg.max_rate_rad_s, "max_specific_force": cfg.max_specific_force_m_s2,
-              "q0": np.asarray(initial.q_bn, float), "v0": np.asarray(initial.v_n_m_s, float),
-              "lat0": initial.lat_rad, "lon0": initial.lon_rad, "h0": initial.h_m}
+              "q0": x0.q_bn, "v0": x0.v_n_m_s, "lat0": x0.lat_rad, "lon0": x0.lon_rad,
+              "h0": x0.h_m}
     if imu_errors is not None:
         params.update(imu_comp=1, **imu_errors.fmu_parameters())
     if lowpass_sos is not None:
@@ -327,7 +332,8 @@ def run_sins_fmu(gyro, accel, dt_s: float, initial, *, config=None, h_ext_m=None
             raise ValueError(f"lowpass_sos must have shape (1..8, 6); got {sos.shape}")
         params.update(lowpass_sections=sos.shape[0],
                       lowpass_sos=np.r_[sos.ravel(), np.zeros(48 - sos.size)])
-    he = np.full(n, np.nan) if h_ext_m is None else np.asarray(h_ext_m, float)
+    he = np.full(n, np.nan) if h_ext_m is None else as_array("h_ext_m", h_ext_m, (n,), "m",
+                                                             finite=False)
     if cfg.input == "increments":
         # sample j of the record covers (t_j, t_(j+1)]: set it at t_(j+1)
         z = np.zeros((1, 3))
@@ -371,22 +377,23 @@ def run_gfnav_fmu(layout_name: str, A_m_s2, dt_s: float, initial, *, l_m: float 
     n_in = {"cube6": 6, "qin9": 9, "12": 12}[layout_name]
     A = as_rows("A_m_s2", A_m_s2, n_in, "m/s^2")
     sc = sins or SinsConfig()
-    sc._c()
+    flat = sc.earth == "flat"
+    x0 = initial.checked(flat)    # the same checks and messages as GyroFreeNavigator
+    sc._c(x0.h_m)
     if strategy not in STRATEGIES:
         raise ValueError(f"strategy must be one of {sorted(STRATEGIES)}; got {strategy!r}")
-    flat = sc.earth == "flat"
+    # l and accel_noise are checked by the FMU itself (that check is part of what runs)
     params = {"l": float(l_m), "strategy": int(STRATEGIES[strategy]),
               "accel_noise": float(accel_noise_m_s2),
               "omega_init": as_vector3("omega_init_rad_s", omega_init_rad_s, "rad/s"),
               "earth": int(_EARTH[sc.earth]), "flat_gravity": sc.flat_gravity_m_s2,
-              "vertical_mode": int(_VERTICAL[sc.vertical]), "hold_height": sc.hold_height_m,
-              "baro_tau": sc.baro_tau_s, "q0": np.asarray(initial.q_bn, float),
-              "v0": np.asarray(initial.v_n_m_s, float), "lat0": initial.lat_rad,
-              "lon0": initial.lon_rad, "h0": initial.h_m,
-              "pos0": np.asarray(initial.pos_m if initial.pos_m is not None else (0, 0, 0), float)}
+              "vertical_mode": int(_VERTICAL[sc.vertical]), "hold_height": sc.held_height_m(x0.h_m),
+              "baro_tau": sc.baro_tau_s, "q0": x0.q_bn, "v0": x0.v_n_m_s, "lat0": x0.lat_rad,
+              "lon0": x0.lon_rad, "h0": x0.h_m,
+              "pos0": x0.pos_m if flat else np.zeros(3)}
     d = run_fmu(model, {"A": A}, ["q", "v", "lat", "lon", "h", "pos", "omega", "f", "flags",
                                   "time_s"], dt_s, parameters=params, fmi_version=fmi_version,
-                start_time_s=initial.t_s, **kwargs)
+                start_time_s=x0.t_s, **kwargs)
     sol = NavSolution._from_pos(d["time_s"][:, 0], d["q"], d["v"],
                                 d["pos"] if flat else np.c_[d["lat"], d["lon"], d["h"]], flat)
     return sol, d["omega"], d["f"], d["flags"][:, 0].astype(np.uint8)

@@ -10,14 +10,16 @@ specific force, angular rate and angular acceleration with a chosen rate strateg
 """
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 
-from gfins_fmi._lib import (NonFiniteInputError, as_positive_scalar, as_rows, as_vector3,
-                            check_status, ffi, first_nonfinite, lib, ptr, status_text)
+from gfins_fmi._lib import (NonFiniteInputError, SampleError, as_array, as_positive_scalar,
+                            as_rows, as_scalar, as_vector3, check_status, ffi, first_nonfinite,
+                            lib, ptr, status_text)
 from gfins_fmi.accel_array import ArrayGeometry, accel9_geometry
-from gfins_fmi.sins import NavSolution, NavState, SampleError, SinsConfig
+from gfins_fmi.sins import NavSolution, NavState, SinsConfig
 
 __all__ = ["UNKNOWNS", "STRATEGIES", "layout", "GeometryReport", "geometry_report",
            "RateSolution", "RateSolver", "GyroFreeNavigator"]
@@ -154,19 +156,29 @@ def _rate_config(strategy, accel_noise_m_s2, bias_walk, init_std, init_bias_std)
     c = ffi.new("gf_rate_config *")
     lib.gf_rate_config_default(c)
     c.strategy = STRATEGIES[strategy]
-    c.accel_noise_m_s2 = as_positive_scalar("accel_noise_m_s2", accel_noise_m_s2, "m/s^2")
-    c.bias_walk_rad_s2_sqrt_s = float(bias_walk)
-    c.init_std_rad_s = as_positive_scalar("init_std_rad_s", init_std, "rad/s")
-    c.init_bias_std_rad_s2 = float(init_bias_std)
+    c.accel_noise_m_s2 = as_scalar("accel_noise_m_s2", accel_noise_m_s2, "m/s^2", above=0.0)
+    c.bias_walk_rad_s2_sqrt_s = as_scalar("bias_walk_rad_s2_sqrt_s", bias_walk, "rad/s^2/sqrt(s)",
+                                          at_least=0.0)
+    c.init_std_rad_s = as_scalar("init_std_rad_s", init_std, "rad/s", above=0.0)
+    c.init_bias_std_rad_s2 = as_scalar("init_bias_std_rad_s2", init_bias_std, "rad/s^2",
+                                       at_least=0.0)
     return c
+
+
+#: what each rate strategy needs the array to estimate, and the named layouts that do
+_NEEDS = {"sqrt": ("the diagonal of w w^T (W_diag)", {"W_diag"}),
+          "fused": ("the diagonal of w w^T (W_diag)", {"W_diag"}),
+          "eigen": ("all of w w^T (W_diag and W_offdiag)", {"W_diag", "W_offdiag"})}
 
 
 def _strategy_error(strategy: str, geometry: ArrayGeometry) -> str:
     rep = geometry_report(geometry)
-    need = {"sqrt": "the diagonal of w w^T (W_diag)", "fused": "the diagonal of w w^T (W_diag)",
-            "eigen": "all of w w^T (W_diag and W_offdiag)"}.get(strategy, "")
+    need, groups = _NEEDS[strategy]
+    able = [name for name in ("cube6", "qin9", "12")
+            if groups <= set(geometry_report(layout(name, 0.1)).estimated)]
     return (f"strategy {strategy!r} needs an array that measures {need}; this one estimates "
-            f"{', '.join(rep.estimated)} (use 'integrate', or a layout such as 'qin9' / '12')")
+            f"{', '.join(rep.estimated)} (use 'integrate', or a layout such as "
+            + " or ".join(repr(a) for a in able) + ")")
 
 
 class RateSolver:
@@ -195,7 +207,7 @@ class RateSolver:
                            init_bias_std_rad_s2)
         w0 = as_vector3("omega_init_rad_s", omega_init_rad_s, "rad/s")
         self._state = ffi.new("gf_gfins_state *")
-        status = lib.gf_gfins_init(self._state, geometry._c, cfg, ptr(w0), ffi.NULL)
+        status = lib.gf_gfins_init(self._state, geometry._c, cfg, ptr(w0, 3), ffi.NULL)
         if status == lib.GF_ERR_BAD_PARAMETER:
             raise ValueError(_strategy_error(strategy, geometry))
         check_status(status, "gf_gfins_init")
@@ -209,9 +221,9 @@ class RateSolver:
         out = RateSolution(np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)),
                            np.empty((n, 6)), np.empty(n, dtype=np.uint8))
         done = ffi.new("size_t *")
-        status = lib.gf_gfins_run(self._state, n, ptr(A), dt_s, ptr(out.f_m_s2),
-                                  ptr(out.omega_rad_s), ptr(out.omega_dot_rad_s2), ptr(out.W),
-                                  ptr(out.flags, "uint8_t"), done)
+        status = lib.gf_gfins_run(self._state, n, ptr(A, n * ns), dt_s, ptr(out.f_m_s2, 3 * n),
+                                  ptr(out.omega_rad_s, 3 * n), ptr(out.omega_dot_rad_s2, 3 * n),
+                                  ptr(out.W, 6 * n), ptr(out.flags, n, "uint8_t"), done)
         k = int(done[0])
         if status == lib.GF_ERR_NONFINITE_INPUT:
             col = first_nonfinite(A, k)
@@ -233,40 +245,38 @@ class GyroFreeNavigator:
     geometry : ArrayGeometry
     initial : NavState
         State at the first array sample.
-    strategy, accel_noise_m_s2, ... : as :class:`RateSolver`
+    strategy, accel_noise_m_s2 : as :class:`RateSolver`
     omega_init_rad_s : (3,), optional
         Rate at the first sample (default: the Earth rate seen by the initial attitude
         would be a good prior; zero is used unless given).
     sins : SinsConfig, optional
         Mechanization options; ``input`` is forced to ``"rates"``.
+    bias_walk_rad_s2_sqrt_s, init_std_rad_s, init_bias_std_rad_s2 : float
+        Fused filter tuning, as :class:`RateSolver`.
     """
 
     def __init__(self, geometry: ArrayGeometry, initial: NavState, strategy: str = "integrate",
                  omega_init_rad_s=(0.0, 0.0, 0.0), accel_noise_m_s2: float = 1e-4,
-                 sins: SinsConfig | None = None, **fused):
+                 sins: SinsConfig | None = None, *, bias_walk_rad_s2_sqrt_s: float = 1e-6,
+                 init_std_rad_s: float = 1e-2, init_bias_std_rad_s2: float = 1e-3):
         _solver_c(geometry)
         self.geometry = geometry
-        cfg = _rate_config(strategy, accel_noise_m_s2, fused.get("bias_walk_rad_s2_sqrt_s", 1e-6),
-                           fused.get("init_std_rad_s", 1e-2), fused.get("init_bias_std_rad_s2", 1e-3))
-        sc = SinsConfig(**{**(sins.__dict__ if sins else {}), "input": "rates"})
-        w0 = as_vector3("omega_init_rad_s", omega_init_rad_s, "rad/s")
-        q = np.ascontiguousarray(initial.q_bn, dtype=float)
-        v = np.ascontiguousarray(initial.v_n_m_s, dtype=float)
-        if abs(initial.lat_rad) >= np.pi / 2:
-            raise ValueError("initial latitude outside (-90, 90) deg")
-        self._state = ffi.new("gf_gfnav_state *")
-        status = lib.gf_gfnav_init(self._state, geometry._c, cfg, ptr(w0), sc._c(), ptr(q), ptr(v),
-                                   float(initial.lat_rad), float(initial.lon_rad), float(initial.h_m),
-                                   float(initial.t_s), ffi.NULL)
-        if status == lib.GF_ERR_BAD_PARAMETER:
-            raise ValueError(_strategy_error(strategy, geometry) + " — or a bad initial state")
-        check_status(status, "gf_gfnav_init")
+        cfg = _rate_config(strategy, accel_noise_m_s2, bias_walk_rad_s2_sqrt_s, init_std_rad_s,
+                           init_bias_std_rad_s2)
+        sc = dataclasses.replace(sins or SinsConfig(), input="rates")
         self._flat = sc.earth == "flat"
+        x0 = initial.checked(self._flat)
+        w0 = as_vector3("omega_init_rad_s", omega_init_rad_s, "rad/s")
+        self._state = ffi.new("gf_gfnav_state *")
+        status = lib.gf_gfnav_init(self._state, geometry._c, cfg, ptr(w0, 3), sc._c(x0.h_m),
+                                   ptr(x0.q_bn, 4), ptr(x0.v_n_m_s, 3), x0.lat_rad, x0.lon_rad,
+                                   x0.h_m, x0.t_s, ffi.NULL)
+        if status == lib.GF_ERR_BAD_PARAMETER:   # everything else was checked above
+            raise ValueError(_strategy_error(strategy, geometry))
+        check_status(status, "gf_gfnav_init")
         if self._flat:
-            pm = as_vector3("initial.pos_m", initial.pos_m if initial.pos_m is not None
-                            else (0.0, 0.0, 0.0), "m")
-            check_status(lib.gf_sins_set_flat_position(ffi.addressof(self._state, "nav"), ptr(pm)),
-                         "flat position")
+            check_status(lib.gf_sins_set_flat_position(ffi.addressof(self._state, "nav"),
+                                                       ptr(x0.pos_m, 3)), "flat position")
 
     def run(self, A_m_s2, dt_s: float, h_ext_m=None) -> tuple[NavSolution, RateSolution]:
         """Navigate a record (n, n_sensors); row k = state at sample k (row 0: t0)."""
@@ -274,20 +284,17 @@ class GyroFreeNavigator:
         A = as_rows("A_m_s2", A_m_s2, ns, "m/s^2")
         dt_s = as_positive_scalar("dt_s (sampling interval)", dt_s, "s")
         n = A.shape[0]
-        he = None
-        if h_ext_m is not None:
-            he = np.ascontiguousarray(h_ext_m, dtype=float)
-            if he.shape != (n,):
-                raise ValueError(f"h_ext_m must have shape ({n},)")
+        he = None if h_ext_m is None else as_array("h_ext_m", h_ext_m, (n,), "m", finite=False)
         q, v, pos = np.empty((n, 4)), np.empty((n, 3)), np.empty((n, 3))
         rates = RateSolution(np.empty((n, 3)), np.empty((n, 3)), np.full((n, 3), np.nan),
                              np.full((n, 6), np.nan), np.empty(n, dtype=np.uint8))
         t0 = float(self._state.nav.time_s)
         first = 0 if int(self._state.nav.n_samples) == 0 else 1  # a fresh run starts at t0
         done = ffi.new("size_t *")
-        status = lib.gf_gfnav_run(self._state, n, ptr(A), dt_s, ptr(he) if he is not None else ffi.NULL,
-                                  ptr(q), ptr(v), ptr(pos), ptr(rates.omega_rad_s), ptr(rates.f_m_s2),
-                                  ptr(rates.flags, "uint8_t"), done)
+        status = lib.gf_gfnav_run(self._state, n, ptr(A, n * ns), dt_s,
+                                  ptr(he, n) if he is not None else ffi.NULL, ptr(q, 4 * n),
+                                  ptr(v, 3 * n), ptr(pos, 3 * n), ptr(rates.omega_rad_s, 3 * n),
+                                  ptr(rates.f_m_s2, 3 * n), ptr(rates.flags, n, "uint8_t"), done)
         k = int(done[0])
         t = t0 + (np.arange(n) + first) * dt_s
         sol = NavSolution._from_pos(t, q, v, pos, self._flat)

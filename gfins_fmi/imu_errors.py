@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from gfins_fmi._lib import NonFiniteInputError, as_rows, ffi, lib, ptr
+from gfins_fmi._lib import NonFiniteInputError, as_array, as_rows, ffi, lib, ptr
 from gfins_fmi.noise import first_order_lowpass_noise
 
 __all__ = ["ImuErrors", "ImuNoise", "G0", "DEG_H", "UG", "PPM", "ARCSEC",
@@ -164,11 +164,13 @@ class ImuErrors:
         n = x.shape[0]
         t = None
         if temp_C is not None:
-            t = np.ascontiguousarray(np.broadcast_to(np.asarray(temp_C, float), (n,)))
+            temp = np.asarray(temp_C)
+            t = as_array("temp_C", np.broadcast_to(temp, (n,)) if temp.ndim == 0 else temp, (n,),
+                         "degC", finite=False)
         out_w, out_f = np.empty((n, 3)), np.empty((n, 3))
         done = ffi.new("size_t *")
-        status = fn(self._c, n, ptr(x), ptr(y), ptr(t) if t is not None else ffi.NULL,
-                    ptr(out_w), ptr(out_f), done)
+        status = fn(self._c, n, ptr(x, 3 * n), ptr(y, 3 * n), ptr(t, n) if t is not None else ffi.NULL,
+                    ptr(out_w, 3 * n), ptr(out_f, 3 * n), done)
         if status != lib.GF_OK:
             k = int(done[0])
             what = ("is not finite" if status == lib.GF_ERR_NONFINITE_INPUT else

@@ -111,6 +111,8 @@ def run_qin(runs: int = 100, seed: int = 2008, scenario: QinScenario = QinScenar
     ``drift_signs="random"``, new drift signs (the same for every scheme in a run)."""
     if drift_signs not in ("random", "equal"):
         raise ValueError("drift_signs must be 'random' or 'equal'")
+    if isinstance(runs, bool) or not isinstance(runs, (int, np.integer)) or runs < 1:
+        raise ValueError(f"runs must be an integer >= 1; got {runs!r}")
     tr = qin_truth(scenario)
     n = tr["t"].size
     keep = np.arange(0, n, decimate)

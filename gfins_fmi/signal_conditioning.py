@@ -77,7 +77,7 @@ class BiquadFilter:
         self.n_channels = int(n_channels)
         self._c = ffi.new("gf_biquad *")
         bad = ffi.new("size_t *")
-        status = lib.gf_biquad_init(self._c, s.shape[0], ptr(s), self.n_channels, bad)
+        status = lib.gf_biquad_init(self._c, s.shape[0], ptr(s, s.size), self.n_channels, bad)
         if status != lib.GF_OK:
             i = int(bad[0])
             reason = {lib.GF_ERR_NONFINITE_INPUT: "has a non-finite coefficient",
@@ -92,7 +92,7 @@ class BiquadFilter:
         x0 = np.asarray(x0, float).reshape(self.n_channels)
         zi = sosfilt_zi(self.sos)                              # (n_sections, 2) per unit step
         z = np.ascontiguousarray(zi[:, None, :] * x0[None, :, None])
-        if lib.gf_biquad_set_state(self._c, ptr(z)) != lib.GF_OK:
+        if lib.gf_biquad_set_state(self._c, ptr(z, z.size)) != lib.GF_OK:
             raise ValueError("x0 must be finite")
 
     def filter(self, x) -> np.ndarray:
@@ -106,7 +106,7 @@ class BiquadFilter:
         arr = np.ascontiguousarray(arr)
         y = np.empty_like(arr)
         done = ffi.new("size_t *")
-        status = lib.gf_biquad_run(self._c, arr.shape[0], ptr(arr), ptr(y), done)
+        status = lib.gf_biquad_run(self._c, arr.shape[0], ptr(arr, arr.size), ptr(y, y.size), done)
         if status != lib.GF_OK:
             k = int(done[0])
             col = first_nonfinite(arr, k)

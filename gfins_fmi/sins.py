@@ -15,8 +15,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from gfins_fmi._lib import (GfinsError, NonFiniteInputError, as_rows, check_status, ffi,
-                            first_nonfinite, lib, ptr, status_text)
+from gfins_fmi._lib import (NonFiniteInputError, SampleError, as_array, as_rows, as_scalar,
+                            check_status, ffi, first_nonfinite, lib, ptr, status_text)
 
 __all__ = ["SinsConfig", "NavState", "NavSolution", "Strapdown", "euler_to_quat",
            "quat_to_euler", "SampleError"]
@@ -27,14 +27,8 @@ _VERTICAL = {"free": lib.GF_SINS_VERTICAL_FREE, "hold": lib.GF_SINS_VERTICAL_HOL
 _EARTH = {"wgs84": lib.GF_SINS_EARTH_WGS84, "flat": lib.GF_SINS_EARTH_FLAT}
 
 
-class SampleError(GfinsError, ValueError):
-    """A sample was refused (out of range, bad time step) or the state diverged there.
-    ``index`` is the sample, ``partial`` the solution before it."""
-
-    def __init__(self, message: str, status: int, index: int, partial=None):
-        super().__init__(message, status)
-        self.index = index
-        self.partial = partial
+#: WGS-84 semi-major axis (m): heights below -a/2 are absurd (the C core refuses them)
+_A_M = 6378137.0
 
 
 @dataclass
@@ -52,6 +46,8 @@ class SinsConfig:
         Vertical channel: free (unstable, time constant ~570 s), held at
         ``hold_height_m``, or damped by an external height (``h_ext_m`` in :meth:`run`)
         through a third-order loop with a triple pole at -1/``baro_tau_s``.
+    hold_height_m : float or None
+        Height held with ``vertical="hold"`` (m); None (default): the initial state's.
     max_rate_rad_s, max_specific_force_m_s2 : float
         Samples beyond these are refused as absurd.
     earth : {"wgs84", "flat"}
@@ -66,61 +62,70 @@ class SinsConfig:
     input: str = "increments"
     coning: bool = True
     vertical: str = "free"
-    hold_height_m: float = 0.0
+    hold_height_m: float | None = None
     baro_tau_s: float = 10.0
     max_rate_rad_s: float = 50.0
     max_specific_force_m_s2: float = 1000.0
     earth: str = "wgs84"
     flat_gravity_m_s2: float = 0.0
 
-    def _c(self):
+    def held_height_m(self, initial_h_m: float | None) -> float:
+        """The height held with ``vertical="hold"`` for an initial height (m)."""
+        if self.hold_height_m is not None:
+            return float(self.hold_height_m)
+        if initial_h_m is None:
+            if self.vertical == "hold":
+                raise ValueError("hold_height_m=None holds the initial height, which is not "
+                                 "known here: give hold_height_m")
+            return 0.0                                  # unused outside "hold"
+        return float(initial_h_m)
+
+    def _c(self, initial_h_m: float | None = None):
+        """The C configuration; ``initial_h_m`` resolves ``hold_height_m=None``."""
         if self.input not in _INPUTS:
             raise ValueError(f"input must be one of {sorted(_INPUTS)}; got {self.input!r}")
         if self.earth not in _EARTH:
             raise ValueError(f"earth must be one of {sorted(_EARTH)}; got {self.earth!r}")
         if self.vertical not in _VERTICAL:
             raise ValueError(f"vertical must be one of {sorted(_VERTICAL)}; got {self.vertical!r}")
-        for name in ("baro_tau_s", "max_rate_rad_s", "max_specific_force_m_s2"):
-            v = getattr(self, name)
-            if not (np.isfinite(v) and v > 0):
-                raise ValueError(f"{name} must be finite and > 0; got {v!r}")
-        if not np.isfinite(self.hold_height_m):
-            raise ValueError(f"hold_height_m must be finite; got {self.hold_height_m!r}")
+        for name, unit in (("baro_tau_s", "s"), ("max_rate_rad_s", "rad/s"),
+                           ("max_specific_force_m_s2", "m/s^2")):
+            as_scalar(name, getattr(self, name), unit, above=0.0)
+        hold = self.held_height_m(initial_h_m)
+        if self.hold_height_m is not None:
+            as_scalar("hold_height_m", hold, "m", above=-0.5 * _A_M)
+        as_scalar("flat_gravity_m_s2", self.flat_gravity_m_s2, "m/s^2", at_least=0.0)
         c = ffi.new("gf_sins_config *")
         lib.gf_sins_config_default(c)
         c.input = _INPUTS[self.input]
         c.coning = int(bool(self.coning))
         c.vertical = _VERTICAL[self.vertical]
-        c.hold_height_m = self.hold_height_m
+        c.hold_height_m = hold
         c.baro_tau_s = self.baro_tau_s
         c.max_rate_rad_s = self.max_rate_rad_s
         c.max_specific_force_m_s2 = self.max_specific_force_m_s2
         c.earth = _EARTH[self.earth]
-        if not (np.isfinite(self.flat_gravity_m_s2) and self.flat_gravity_m_s2 >= 0):
-            raise ValueError(f"flat_gravity_m_s2 must be finite and >= 0; got {self.flat_gravity_m_s2!r}")
-        c.flat_gravity_m_s2 = self.flat_gravity_m_s2
+        c.flat_gravity_m_s2 = float(self.flat_gravity_m_s2)
         return c
 
 
 def euler_to_quat(euler_rad) -> np.ndarray:
     """q_b^n (4,) of (heading, pitch, roll) in rad (heading clockwise from north)."""
-    e = np.ascontiguousarray(euler_rad, dtype=float)
-    if e.shape != (3,):
-        raise ValueError(f"euler_rad must be (heading, pitch, roll); got shape {e.shape}")
+    e = as_array("euler_rad", euler_rad, (3,), "rad (heading, pitch, roll)")
     q = np.empty(4)
-    if lib.gf_euler_to_quat(ptr(e), ptr(q)) != lib.GF_OK:
-        raise ValueError(f"euler_rad must be finite; got {e.tolist()}")
+    check_status(lib.gf_euler_to_quat(ptr(e, 3), ptr(q, 4)), "gf_euler_to_quat")
     return q
 
 
 def quat_to_euler(q_bn) -> np.ndarray:
     """(heading, pitch, roll) in rad of quaternions q_b^n, shape (4,) or (n, 4)."""
-    q = np.asarray(q_bn, dtype=float)
+    q = np.asarray(q_bn)
     single = q.ndim == 1
-    q = as_rows("q_bn", q.reshape(1, 4) if single else q, 4, "unit quaternions")
-    out = np.empty((q.shape[0], 3))
+    q = as_rows("q_bn", q.reshape(1, -1) if single else q, 4, "unit quaternions")
+    n = q.shape[0]
+    out = np.empty((n, 3))
     done = ffi.new("size_t *")
-    status = lib.gf_quat_to_euler_batch(q.shape[0], ptr(q), ptr(out), done)
+    status = lib.gf_quat_to_euler_batch(n, ptr(q, 4 * n), ptr(out, 3 * n), done)
     if status != lib.GF_OK:
         k = int(done[0])
         raise ValueError(f"q_bn[{k}] = {q[k].tolist()} is not a unit quaternion (norm "
@@ -160,6 +165,37 @@ class NavState:
     def euler_rad(self) -> np.ndarray:
         """(heading, pitch, roll), rad."""
         return quat_to_euler(self.q_bn)
+
+    def checked(self, flat: bool = False) -> "NavState":
+        """This state with every field checked: C-contiguous float64 arrays of the right
+        shape, finite values, latitude in (-90, 90) deg, height above -a/2, a quaternion
+        that can be normalised; ``pos_m`` (3,) for a fixed frame (``flat``; None: the
+        origin). Every navigator checks its initial state here before C reads it.
+
+        Raises
+        ------
+        ValueError, TypeError
+            The message names the field (``initial.v_n_m_s`` ...) and the fault.
+        """
+        q = as_array("initial.q_bn", self.q_bn, (4,), "(quaternion q_b^n)")
+        if not np.linalg.norm(q) > 0:
+            raise ValueError(f"initial.q_bn = {q.tolist()} cannot be normalised: give a non-zero "
+                             "attitude quaternion")
+        v = as_array("initial.v_n_m_s", self.v_n_m_s, (3,), "m/s (east, north, up)")
+        lat = as_scalar("initial.lat_rad", self.lat_rad, "rad")
+        if not abs(lat) < np.pi / 2:
+            raise ValueError(f"initial.lat_rad = {lat!r} rad ({np.degrees(lat):.6g} deg) is outside "
+                             "(-90, 90) deg: the ENU frame is singular at the poles")
+        lon = as_scalar("initial.lon_rad", self.lon_rad, "rad")
+        h = as_scalar("initial.h_m", self.h_m, "m")
+        if not h > -0.5 * _A_M:
+            raise ValueError(f"initial.h_m = {h!r} m is below -a/2 (-3189 km): absurd height")
+        t = as_scalar("initial.t_s", self.t_s, "s")
+        pos = None
+        if flat:
+            pos = as_array("initial.pos_m", (0.0, 0.0, 0.0) if self.pos_m is None else self.pos_m,
+                           (3,), "m")
+        return NavState(q, v, lat, lon, h, t, pos)
 
 
 @dataclass
@@ -214,34 +250,17 @@ class Strapdown:
 
     def __init__(self, initial: NavState, config: SinsConfig | None = None):
         self.config = config or SinsConfig()
-        q = np.ascontiguousarray(initial.q_bn, dtype=float)
-        v = np.ascontiguousarray(initial.v_n_m_s, dtype=float)
-        if q.shape != (4,) or v.shape != (3,):
-            raise ValueError("initial.q_bn must have 4 elements and initial.v_n_m_s 3")
-        for name in ("lat_rad", "lon_rad", "h_m", "t_s"):
-            if not np.isfinite(getattr(initial, name)):
-                raise ValueError(f"initial.{name} = {getattr(initial, name)!r} must be finite")
-        if not np.all(np.isfinite(v)):
-            raise ValueError(f"initial.v_n_m_s = {v.tolist()} must be finite")
-        if abs(initial.lat_rad) >= np.pi / 2:
-            raise ValueError(f"initial latitude {np.degrees(initial.lat_rad):.6g} deg is outside "
-                             "(-90, 90) deg: the ENU frame is singular at the poles")
-        if initial.h_m <= -0.5 * 6378137.0:
-            raise ValueError(f"initial.h_m = {initial.h_m!r} m is below -a/2: absurd height")
-        if not (np.all(np.isfinite(q)) and np.linalg.norm(q) > 0):
-            raise ValueError(f"initial attitude quaternion {q.tolist()} cannot be normalised")
+        flat = self.config.earth == "flat"
+        x0 = initial.checked(flat)
         self._state = ffi.new("gf_sins_state *")
-        status = lib.gf_sins_init(self._state, self.config._c(), ptr(q), ptr(v),
-                                  float(initial.lat_rad), float(initial.lon_rad),
-                                  float(initial.h_m), float(initial.t_s))
-        check_status(status, "gf_sins_init (check the initial state: finite values, "
-                             "height above -R/2)")
-        if self.config.earth == "flat":
-            pm = as_vector3("initial.pos_m", initial.pos_m if initial.pos_m is not None
-                            else (0.0, 0.0, 0.0), "m")
-            check_status(lib.gf_sins_set_flat_position(self._state, ptr(pm)), "flat position")
+        status = lib.gf_sins_init(self._state, self.config._c(x0.h_m), ptr(x0.q_bn, 4),
+                                  ptr(x0.v_n_m_s, 3), x0.lat_rad, x0.lon_rad, x0.h_m, x0.t_s)
+        check_status(status, "gf_sins_init")
+        if flat:
+            check_status(lib.gf_sins_set_flat_position(self._state, ptr(x0.pos_m, 3)),
+                         "flat position")
         self._backward = False
-        self._origin_t_s = float(initial.t_s)   # where a backward increment record starts
+        self._origin_t_s = x0.t_s   # where a backward increment record starts
 
     @property
     def state(self) -> NavState:
@@ -302,19 +321,10 @@ class Strapdown:
             raise ValueError("give exactly one of dt_s (fixed interval, s) and t_s (sample times, s)")
         dt = 0.0
         if dt_s is not None:
-            dt = float(dt_s)
-            if not (np.isfinite(dt) and dt > 0):
-                raise ValueError(f"dt_s must be finite and > 0 s; got {dt_s!r}")
-        tt = None
-        if t_s is not None:
-            tt = np.ascontiguousarray(t_s, dtype=float)
-            if tt.shape != (n,):
-                raise ValueError(f"t_s must have shape ({n},); got {tt.shape}")
-        he = None
-        if h_ext_m is not None:
-            he = np.ascontiguousarray(h_ext_m, dtype=float)
-            if he.shape != (n,):
-                raise ValueError(f"h_ext_m must have shape ({n},); got {he.shape}")
+            dt = as_scalar("dt_s", dt_s, "s", above=0.0)
+        # NaN is data here (h_ext_m: no height at that sample) or is located by the core
+        tt = None if t_s is None else as_array("t_s", t_s, (n,), "s", finite=False)
+        he = None if h_ext_m is None else as_array("h_ext_m", h_ext_m, (n,), "m", finite=False)
         sol = NavSolution(np.empty(n), np.empty((n, 4)), np.empty((n, 3)), np.empty(n),
                           np.empty(n), np.empty(n))
         pos = np.empty((n, 3))
@@ -334,16 +344,16 @@ class Strapdown:
                 # must include the sample before the chunk for interval lengths
                 tptr, dt_chunk = ffi.NULL, dt
                 if tt is not None:
-                    tptr = ptr(tt[lo:hi])
+                    tptr = ptr(tt[lo:hi], m)
                     if self._backward and self.config.input == "increments":
                         # the C core needs the length of the chunk's first interval; the
                         # record's first interval starts at the navigator's initial time
                         dt_chunk = tt[lo] - tt[lo - 1] if lo > 0 else tt[0] - self._origin_t_s
                 status = lib.gf_sins_run(
-                    self._state, m, ptr(g[lo:hi]), ptr(a[lo:hi]), dt_chunk, tptr,
-                    ptr(he[lo:hi]) if he is not None else ffi.NULL, int(self._backward),
-                    ptr(sol.q_bn[lo:hi]), ptr(sol.v_n_m_s[lo:hi]), ptr(pos[lo:hi]),
-                    ptr(sol.t_s[lo:hi]), done)
+                    self._state, m, ptr(g[lo:hi], 3 * m), ptr(a[lo:hi], 3 * m), dt_chunk, tptr,
+                    ptr(he[lo:hi], m) if he is not None else ffi.NULL, int(self._backward),
+                    ptr(sol.q_bn[lo:hi], 4 * m), ptr(sol.v_n_m_s[lo:hi], 3 * m),
+                    ptr(pos[lo:hi], 3 * m), ptr(sol.t_s[lo:hi], m), done)
                 done_total += int(done[0])
                 if bar:
                     bar.update(int(done[0]))

@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from gfins_fmi._lib import GfinsError, as_vector3, check_status, ffi, lib
+from gfins_fmi._lib import GfinsError, as_scalar, as_vector3, check_status, ffi, lib, ptr
 from gfins_fmi.trajectory import Trajectory, deg
 
 __all__ = ["Segment", "VehicleProfile", "VehicleRecord", "simulate_vehicle", "MAX_SEGMENTS",
@@ -440,7 +440,7 @@ class _AidingRun:
     def run(self, t_end_s: float) -> dict:
         caps = {k: self._capacity(s, t_end_s) for k, s in self.sensors.items()}
         bufs = {k: np.zeros((caps[k], _doubles(f"gf_{k}_epoch"))) for k in caps}
-        ptrs = {k: ffi.cast(f"gf_{k}_epoch *", ffi.from_buffer(b)) if caps[k] else ffi.NULL
+        ptrs = {k: ffi.cast(f"gf_{k}_epoch *", ptr(b, b.size)) if caps[k] else ffi.NULL
                 for k, b in bufs.items()}
         n = {k: ffi.new("size_t *") for k in caps}
         st = lib.gf_aiding_run(self.sim, t_end_s, ptrs["gnss"], caps["gnss"], n["gnss"],
@@ -543,12 +543,13 @@ def simulate_vehicle(profile: VehicleProfile, duration_s: float, dt_s: float,
     """
     if not (dt_s > 0 and np.isfinite(dt_s)) or not (duration_s >= 0 and np.isfinite(duration_s)):
         raise ValueError(f"dt_s must be > 0 and duration_s >= 0 (s); got {dt_s}, {duration_s}")
+    start_time_s = as_scalar("start_time_s", start_time_s, "s")
     n = int(round(duration_s / dt_s)) + 1
     state = ffi.new("gf_vehicle_state *")
     buf = np.zeros((n, _doubles("gf_vehicle_sample")))
-    samples = ffi.cast("gf_vehicle_sample *", ffi.from_buffer(buf))
+    samples = ffi.cast("gf_vehicle_sample *", ptr(buf, buf.size))
     bad = ffi.new("int *")
-    st = lib.gf_vehicle_init(state, profile.to_c(), float(start_time_s), samples, bad)
+    st = lib.gf_vehicle_init(state, profile.to_c(), start_time_s, samples, bad)
     if st == lib.GF_ERR_BAD_PARAMETER:
         raise ValueError(f"vehicle profile rejected: {_describe_bad(bad[0])}")
     check_status(st, "gf_vehicle_init")

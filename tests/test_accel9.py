@@ -189,16 +189,50 @@ def test_forward_model_nonfinite_names_input():
 
 
 def test_overflowing_samples_are_refused_not_inf():
-    with pytest.raises(gf.NonFiniteInputError, match="overflows") as exc:
+    with pytest.raises(gf.SampleError, match="beyond the physical limits") as exc:
         gf.solve_accel9(np.r_[np.zeros((3, 9)), np.full((2, 9), 1e308)], 0.01, 0.1)
     assert exc.value.index == 3 and len(exc.value.partial) == 3
     with pytest.raises(gf.NonFiniteInputError, match="overflow"):
         gf.forward_model(gf.accel9_geometry(0.1), np.zeros((2, 3)), np.full((2, 3), 1e200),
                          np.zeros((2, 3)))
-    with pytest.raises(ValueError, match="below 1e-6 m"):
+    with pytest.raises(ValueError, match="below 1e-06 m"):
         gf.solve_accel9(np.ones((2, 9)), 0.01, 1e-320)
 
 
 def test_empty_geometry_message():
     with pytest.raises(ValueError, match="1..64 sensors; got 0"):
         gf.ArrayGeometry(np.zeros((0, 3)), np.zeros((0, 3)))
+
+
+def test_samples_beyond_the_physical_limits_are_refused():
+    """The navigators' limits (|w| <= 50 rad/s, |f| <= 1000 m/s^2, SinsConfig defaults)
+    apply to the 9-accelerometer solver too (issue 15: 1e300 samples and dt = 1e300,
+    which integrated w_dot into w = 1.6e150 rad/s, were accepted). Outputs from the
+    independent numpy model; the limits are the module's published constants, checked
+    against the navigators' defaults."""
+    assert gf.accel_array.MAX_RATE_RAD_S == gf.SinsConfig().max_rate_rad_s == 50.0
+    assert gf.accel_array.MAX_SPECIFIC_FORCE_M_S2 == gf.SinsConfig().max_specific_force_m_s2 == 1000.0
+    u, th = paper_layout(0.1)
+    z = np.zeros((1, 3))
+
+    def solve(f=z, w=z, wd=z, dt=0.01, w0=(0.0, 0.0, 0.0)):
+        return gf.solve_accel9(numpy_outputs(u, th, np.asarray(f, float), np.asarray(w, float),
+                                             np.asarray(wd, float)), dt, 0.1, w0)
+    assert solve(f=[[0.0, 999.0, 0.0]]).f_m_s2[0, 1] == pytest.approx(999.0, rel=1e-14)
+    with pytest.raises(gf.SampleError, match=r"sample 0 is beyond the physical limits") as exc:
+        solve(f=[[0.0, 0.0, -1001.0]])
+    assert exc.value.index == 0 and len(exc.value.partial) == 0
+    assert solve(w=[[49.9, 0.0, 0.0]], w0=(49.9, 0, 0)).omega_rad_s[0, 0] == pytest.approx(49.9, rel=1e-12)
+    with pytest.raises(gf.SampleError, match="50 rad/s"):
+        solve(w=[[0.0, 30.0, 40.1]], w0=(0, 1.0, 1.0))         # signs only
+    with pytest.raises(ValueError, match="omega_init_rad_s .* exceeds the physical limit"):
+        solve(w0=(0.0, 0.0, 50.5))
+    with pytest.raises(gf.SampleError, match="sample 0"):
+        gf.solve_accel9(np.full((3, 9), 1e300), 0.01, 0.1)
+    # dt = 1e300 where noise makes omega_x^2 < 0 (-5e-3 rad^2/s^2): the rate is then the
+    # integral of w_dot = 0.1 rad/s^2, 1e299 rad/s at sample 1 (before: accepted)
+    A = numpy_outputs(u, th, np.zeros((3, 3)), np.zeros((3, 3)), np.tile([0.1, 0.0, 0.0], (3, 1)))
+    A[:, [0, 3]] -= 1e-3
+    with pytest.raises(gf.SampleError, match="sample 1 .*dt_s = 1e\\+300 s") as exc:
+        gf.solve_accel9(A, 1e300, 0.1)
+    assert len(exc.value.partial) == 1

@@ -63,7 +63,7 @@ def test_solve9_bad_arguments(tmp_path):
     np.savetxt(src, np.zeros((3, 9)), delimiter=",")
     proc = run("solve9", str(src), str(tmp_path / "o.csv"), "--dt", "0", "--lever-arm", "0.1",
                check=False)
-    assert proc.returncode == 2 and "dt_s" in proc.stderr
+    assert proc.returncode == 2 and "argument --dt: must be finite and > 0 s" in proc.stderr
 
 
 @pytest.mark.parametrize("l", [0.05, 0.1, 0.3])

@@ -160,7 +160,7 @@ def test_fmu_rejects_nonfinite_input_keeps_outputs(record, version):
 @pytest.mark.parametrize("version", [2, 3])
 @pytest.mark.parametrize("l", [0.0, -0.1, float("nan")])
 def test_fmu_rejects_bad_lever_arm(record, version, l):
-    with pytest.raises(gf.FmuRunError, match=r"ExitInitializationMode.*parameter l = .* > 0"):
+    with pytest.raises(gf.FmuRunError, match=r"ExitInitializationMode.*parameter l = .* >= 1e-6 m"):
         gf.run_accel9_fmu(record[:5], DT, l, W0, fmi_version=version)
 
 
@@ -231,8 +231,11 @@ def test_sins_fmu_bad_parameters_and_input(circle, version):
     tr = circle
     x0 = gf.NavState.from_trajectory(tr, 0)
     x0.lat_rad = 1.6
-    with pytest.raises(gf.FmuRunError, match="parameter lat0 = 1.6 rad is outside"):
+    with pytest.raises(ValueError, match=r"initial\.lat_rad = 1.6 rad .* is outside"):
         run_sins_fmu(tr.dtheta_rad[:5], tr.dv_m_s[:5], 0.01, x0, fmi_version=version)
+    with pytest.raises(gf.FmuRunError, match="parameter lat0 = 1.6 rad is outside"):   # the FMU's own
+        run_fmu("sins", {"dtheta": np.zeros((3, 3))}, ["q"], 0.01,
+                parameters={"lat0": 1.6, "q0": [1.0, 0, 0, 0]}, fmi_version=version)
     with pytest.raises(gf.FmuRunError, match="input_mode = 7 must be 0"):
         run_fmu("sins", {"dtheta": np.zeros((3, 3))}, ["q"], 0.01,
                 parameters={"input_mode": 7}, fmi_version=version)
@@ -306,7 +309,7 @@ def test_gfnav_fmu_errors(circle, version):
     tr = circle
     x0 = gf.NavState.from_trajectory(tr, 0)
     A = tr.array_outputs(gf.layout("cube6", 0.1))[:20]
-    with pytest.raises(gf.FmuRunError, match="strategy = 1 needs products"):
+    with pytest.raises(gf.FmuRunError, match="strategy = 1 needs the squared rates"):
         run_gfnav_fmu("cube6", A, 0.01, x0, strategy="sqrt", fmi_version=version)
     A[7, 2] = np.nan
     with pytest.raises(gf.FmuRunError, match="A\\[i\\] is not finite"):
@@ -356,3 +359,93 @@ def test_sins_fmu_refuses_bad_error_parameters(circle, version):
         run_fmu("sins", {"dtheta": np.zeros((3, 3))}, ["q"], 0.01,
                 parameters={"lowpass_sections": 1, "lowpass_sos": [1, 0, 0, 1, -2.5, 1.5] + [0] * 42},
                 fmi_version=version)
+
+
+# ---- issue 15: the Euler output, parameter messages -----------------------------------
+
+def _wrap_pi(x):
+    return (np.asarray(x) + np.pi) % (2 * np.pi) - np.pi
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_navigator_fmus_euler_output_follows_the_attitude(circle, version):
+    """The "euler" output (heading, pitch, roll) of the SINS and gyro-free navigator FMUs
+    against the circle's closed-form Euler angles (trajectory.Circle.euler: heading -w t,
+    pitch 3 deg sin 2wt, roll -5 deg), along 2 s in which the heading turns 11.5 deg.
+    Measured: 6.8e-9 rad for both (the navigation error of these exact rate inputs);
+    bound 2x. (Before, no test read this output: freezing it at the initial attitude
+    went unnoticed.)"""
+    tr = circle
+    n = 200
+    x0 = gf.NavState.from_trajectory(tr, 0)
+    (psi, th, ga), _ = tr.motion.euler(tr.t_s[:n])
+    start = {"q0": x0.q_bn, "v0": x0.v_n_m_s, "lat0": x0.lat_rad, "lon0": x0.lon_rad,
+             "h0": x0.h_m}
+    # rates: the outputs after the step at t_k describe t_k
+    sins = run_fmu("sins", {"gyro_rate": tr.gyro_rad_s[:n], "specific_force": tr.accel_m_s2[:n]},
+                   ["euler"], tr.dt_s, parameters={"input_mode": 1, **start},
+                   fmi_version=version)["euler"]
+    g = gf.layout("qin9", 0.1)
+    gfnav = run_fmu("gfnav_qin9", {"A": tr.array_outputs(g)[:n]}, ["euler"], tr.dt_s,
+                    parameters={"strategy": 1, "omega_init": tr.gyro_rad_s[0], **start},
+                    fmi_version=version)["euler"]
+    for name, e in (("sins", sins), ("gfnav_qin9", gfnav)):
+        err = np.c_[_wrap_pi(e[:, 0] - psi), e[:, 1] - th, e[:, 2] - ga]
+        assert np.abs(err).max() < 1.4e-8, name
+        assert abs(_wrap_pi(e[-1, 0] - e[0, 0])) > np.radians(11), name     # it did turn
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_accel9_fmu_blames_the_lever_arm_below_its_minimum(record, version):
+    """l = 1e-7 m is positive but below the 1e-6 m minimum (before: the FMU logged
+    'omega_init must be finite')."""
+    with pytest.raises(gf.FmuRunError, match=r"parameter l = 1e-07 m: the lever arm must be "
+                                             r"finite and >= 1e-6 m") as exc:
+        gf.run_accel9_fmu(record[:5], DT, 1e-7, W0, fmi_version=version)
+    assert "omega_init" not in str(exc.value)
+    with pytest.raises(gf.FmuRunError, match=r"parameter omega_init = \[nan"):
+        run_fmu("accel9", {"A": record[:5]}, ["omega"], DT,
+                parameters={"l": L, "omega_init": [np.nan, 0, 0]}, fmi_version=version)
+
+
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("parameters, message", [
+    ({"lat0": 2.0}, "parameter lat0 = 2 rad is outside (-pi/2, pi/2)"),
+    ({"accel_noise": 0.0}, "parameter accel_noise = 0 m/s2 must be finite and > 0"),
+    ({"omega_init": [np.inf, 0.0, 0.0]}, "parameter omega_init = [inf, 0, 0] rad/s must be finite"),
+    ({"v0": [0.0, np.nan, 0.0]}, "parameter v0 = [0, nan, 0] m/s must be finite"),
+    ({"q0": [0.0, 0.0, 0.0, 0.0]}, "parameter q0 = [0, 0, 0, 0] must be a finite, non-zero quaternion"),
+    ({"h0": -4e6}, "parameter h0 = -4e+06 m must be finite and above -a/2"),
+    ({"baro_tau": 0.0}, "parameter baro_tau = 0 s must be finite and > 0"),
+    ({"vertical_mode": 5}, "parameter vertical_mode = 5 must be 0, 1 or 2"),
+    ({"earth": 2}, "parameter earth = 2 must be 0 (WGS-84) or 1 (fixed frame)"),
+    ({"strategy": 2}, "parameter strategy = 2 needs all products w w^T"),
+], ids=["lat0", "accel_noise", "omega_init", "v0", "q0", "h0", "baro_tau", "vertical_mode",
+        "earth", "strategy"])
+def test_gfnav_fmu_blames_the_parameter_at_fault(version, parameters, message):
+    """Before: lat0 = 2 rad and accel_noise = 0 were reported as 'strategy = 1 needs
+    products this layout does not measure' on the qin9 navigator (strategy 1 = sqrt,
+    which qin9 does measure); only the eigen strategy (2) is refused by this layout."""
+    with pytest.raises(gf.FmuRunError) as exc:
+        run_fmu("gfnav_qin9", {"A": np.zeros((3, 9))}, ["q"], 0.01,
+                parameters={"strategy": 1, "q0": [1.0, 0, 0, 0], "lat0": 0.5, **parameters},
+                fmi_version=version)
+    text = str(exc.value)
+    assert message in text, text
+    if "strategy" not in parameters:
+        assert "needs" not in text
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_accel9_fmu_refuses_samples_beyond_the_physical_limits(record, version):
+    """The FMU runs gf9_step, which applies the solver's physical limits (|f| <= 1000
+    m/s^2, |omega| <= 50 rad/s) as gf9_solve does: same refusal, same partial."""
+    A = record[:10].copy()
+    A[6] = 1e300
+    with pytest.raises(gf.FmuRunError, match=r"t = 0.06 s failed: a sample is beyond the stated "
+                                             r"physical limit") as exc:
+        gf.run_accel9_fmu(A, DT, L, W0, fmi_version=version)
+    with pytest.raises(gf.SampleError) as ref:
+        gf.solve_accel9(A, DT, L, W0)
+    assert len(exc.value.partial) == ref.value.index == 6
+    assert np.array_equal(exc.value.partial.omega_rad_s, ref.value.partial.omega_rad_s)

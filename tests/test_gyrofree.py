@@ -256,3 +256,17 @@ def test_sensor_error_validation(kwargs, match):
                 position_error_m=np.zeros((2, 3)))
     with pytest.raises(ValueError, match=match):
         gf.ArraySensorErrors(**{**base, **kwargs})
+
+
+def test_strategy_message_suggests_only_layouts_that_measure_what_it_needs():
+    """Before: GyroFreeNavigator(layout('qin9'), x0, 'eigen') suggested 'qin9' itself, and
+    added '— or a bad initial state' (the initial state is now checked on its own)."""
+    x0 = gf.NavState.from_euler([0, 0, 0], [0, 0, 0], 0.5, 1.0, 0.0)
+    with pytest.raises(ValueError) as exc:
+        gf.GyroFreeNavigator(gf.layout("qin9", L), x0, "eigen")
+    text = str(exc.value)
+    assert "'eigen' needs an array that measures all of w w^T" in text
+    assert "such as '12'" in text and "'qin9'" not in text and "initial state" not in text
+    with pytest.raises(ValueError) as exc:
+        gf.GyroFreeNavigator(gf.layout("cube6", L), x0, "sqrt")
+    assert "such as 'qin9' or '12'" in str(exc.value)

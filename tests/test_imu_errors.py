@@ -6,7 +6,15 @@ import numpy as np
 import pytest
 
 import gfins_fmi as gf
-from gfins_fmi.imu_errors import ARCSEC, DEG_H, G0, PPM, UG
+
+# Units of the datasheet, from their definitions (not from gfins_fmi.imu_errors, the
+# module under test): 1 arcsec = pi/648000 rad, 1 deg/h = pi/648000 rad/s, standard
+# gravity 9.80665 m/s^2 (CGPM 1901), 1 ug = 1e-6 of it, 1 ppm = 1e-6.
+ARCSEC = np.pi / 648000.0
+DEG_H = np.pi / 648000.0
+G0 = 9.80665
+UG = 1e-6 * G0
+PPM = 1e-6
 
 DATASHEET = dict(gyro_bias_deg_h=10.0, gyro_scale_ppm=1000.0, gyro_misalignment_arcsec=100.0,
                  accel_bias_ug=1000.0, accel_scale_ppm=1000.0, accel_misalignment_arcsec=100.0,
@@ -161,3 +169,17 @@ def test_band_limited_imu_noise():
     assert a.std() == pytest.approx(30.0 * 9.80665e-6, rel=0.03)
     r1 = np.mean(a[1:, 0] * a[:-1, 0]) / np.mean(a[:, 0] ** 2)
     assert r1 == pytest.approx(np.exp(-2 * np.pi * 5.0 * 0.01), rel=0.03)
+
+
+def test_unit_constants_equal_their_definitions():
+    """The datasheet units of gfins_fmi.imu_errors against their definitions, typed in
+    here (the reference of the other tests of this file must not come from the module
+    under test: with ARCSEC set to an arcminute every test above still passed).
+    1 arcsec = pi / 648000 rad = 4.8481368110953599e-06 rad; 1 deg/h = the same number in
+    rad/s; g0 = 9.80665 m/s^2 (CGPM 1901); 1 ug = 1e-6 g0; 1 ppm = 1e-6."""
+    from gfins_fmi import imu_errors as ie
+    assert ie.ARCSEC == pytest.approx(4.8481368110953599e-06, rel=1e-15)
+    assert ie.DEG_H == pytest.approx(4.8481368110953599e-06, rel=1e-15)
+    assert ie.G0 == 9.80665
+    assert ie.UG == pytest.approx(9.80665e-6, rel=1e-15)
+    assert ie.PPM == 1e-6

@@ -93,28 +93,35 @@ def test_generator_body_rate_is_the_attitude_derivative():
 # ---- acceptance figures ------------------------------------------------------------
 
 def test_stationary_one_hour(stationary_1h):
-    """Issue 3: 1 h at 100 Hz, horizontal position error < 1 mm, attitude < 1e-8 deg."""
+    """Issue 3: 1 h at 100 Hz, horizontal position error < 1 mm, attitude < 1e-8 deg.
+    Measured: horizontal 0 m (at rest every horizontal term cancels to the bit),
+    attitude 2.4e-9 deg. Bounds: 1e-6 m (a round-off allowance, as the measured error
+    is exactly zero) and 2x the measured attitude error."""
     tr = stationary_1h
     _, sol = _nav(tr)
     horiz = horizontal_error_m(sol.lat_rad, sol.lon_rad, tr.lat_rad[1:], tr.lon_rad[1:])
     att = np.degrees(np.linalg.norm(attitude_error_rad(sol.q_bn, tr.q_bn[1:]), axis=1))
     print(f"stationary 1 h: max horizontal error {horiz.max():.3g} m, attitude {att.max():.3g} deg, "
           f"height {np.abs(sol.h_m - tr.h_m[1:]).max():.3g} m (free vertical channel)")
-    assert horiz.max() < 1e-3
-    assert att.max() < 1e-8
+    assert horiz.max() < 1e-6
+    assert att.max() < 5e-9
 
 
 def test_sine_velocity_one_hour_increments(sine_1h):
     """Issue 3: 1 h at 100 Hz from increments: horizontal < 0.1 m, attitude < 1e-5 deg;
-    the vertical channel is reported."""
+    the vertical channel is reported. Measured: 10.5 mm, 1.1e-7 deg, horizontal velocity
+    1.85e-5 m/s. Over the hour the free vertical channel (time constant ~570 s) amplifies
+    its seed ~500 times and couples into the horizontal channels, so the bounds are 3x the
+    measured errors (2x elsewhere)."""
     tr = sine_1h
     _, sol = _nav(tr)
     horiz = horizontal_error_m(sol.lat_rad, sol.lon_rad, tr.lat_rad[1:], tr.lon_rad[1:])
     att = np.degrees(np.linalg.norm(attitude_error_rad(sol.q_bn, tr.q_bn[1:]), axis=1))
     print(f"sine velocity 1 h: max horizontal error {horiz.max():.3g} m, attitude {att.max():.3g} deg, "
           f"height {np.abs(sol.h_m - tr.h_m[1:]).max():.3g} m (free vertical channel)")
-    assert horiz.max() < 0.1
-    assert att.max() < 1e-5
+    assert horiz.max() < 0.032
+    assert att.max() < 3.3e-7
+    assert np.abs(sol.v_n_m_s[:, :2] - tr.v_n_m_s[1:, :2]).max() < 5.6e-5
 
 
 def test_coning_two_sample_beats_one_sample_by_theory():
@@ -168,7 +175,8 @@ def test_schuler_period():
 def test_forward_then_reverse_returns_to_start():
     """10-minute dynamic record (circle), forward then reverse: the residual is the
     mechanization's truncation asymmetry (mid-point extrapolation), not round-off;
-    measured ~1e-5 m, 3e-8 m/s, 1e-11 rad. Bounds: 1e-4 m, 1e-6 m/s, 1e-9 rad."""
+    measured 1.0e-5 m horizontal, 6.4e-8 m height, 2.3e-8 m/s, 1.3e-11 rad. Bounds: 2x
+    those."""
     tr = tj.sample(tj.Circle(), 600.0, 0.01)
     x0 = gf.NavState.from_trajectory(tr, 0)
     nav = gf.Strapdown(x0)
@@ -182,8 +190,8 @@ def test_forward_then_reverse_returns_to_start():
     datt = np.linalg.norm(attitude_error_rad(s.q_bn, x0.q_bn))
     print(f"round trip 600 s: position {dpos:.3g} m, height {abs(s.h_m - x0.h_m):.3g} m, "
           f"velocity {dv:.3g} m/s, attitude {datt:.3g} rad, time {s.t_s:.3g} s")
-    assert dpos < 1e-4 and abs(s.h_m - x0.h_m) < 1e-4
-    assert dv < 1e-6 and datt < 1e-9
+    assert dpos < 2e-5 and abs(s.h_m - x0.h_m) < 1.3e-7
+    assert dv < 4.6e-8 and datt < 2.7e-11
     assert abs(s.t_s - x0.t_s) < 1e-9
     # backward rows are the states at the start of each interval, in true-time velocity
     np.testing.assert_allclose(back.t_s[1:], fwd.t_s[:-1], atol=1e-9)
@@ -192,7 +200,8 @@ def test_forward_then_reverse_returns_to_start():
 
 def test_rates_input_and_time_stamps_agree():
     """Rate input reproduces the truth to the accuracy of linear interpolation, and a
-    t_s array equal to the fixed grid gives the same solution as dt_s."""
+    t_s array equal to the fixed grid gives the same solution as dt_s. Measured
+    horizontal error 0.79 mm over 300 s; bound 2x."""
     tr = tj.sample(tj.SineVelocity(), 300.0, 0.01)
     x0 = gf.NavState.from_trajectory(tr, 0)
     cfg = gf.SinsConfig(input="rates")
@@ -200,7 +209,7 @@ def test_rates_input_and_time_stamps_agree():
     b = gf.Strapdown(x0, cfg).run(tr.gyro_rad_s, tr.accel_m_s2, t_s=tr.t_s)
     np.testing.assert_allclose(b.lat_rad, a.lat_rad, rtol=0, atol=1e-13)
     horiz = horizontal_error_m(a.lat_rad, a.lon_rad, tr.lat_rad, tr.lon_rad)
-    assert horiz.max() < 0.05
+    assert horiz.max() < 1.6e-3
     assert a.t_s[0] == 0.0 and a.t_s[-1] == pytest.approx(300.0)
 
 
@@ -255,7 +264,7 @@ def test_absurd_rate_and_bad_times(sine_1h):
     ("lat_rad", np.radians(90.0), "outside"),
     ("lat_rad", np.radians(-91.0), "outside"),
     ("q_bn", np.zeros(4), "cannot be normalised"),
-    ("q_bn", np.array([np.nan, 0, 0, 1.0]), "cannot be normalised"),
+    ("q_bn", np.array([np.nan, 0, 0, 1.0]), r"initial\.q_bn must be finite"),
 ])
 def test_bad_initial_state(field, value, match):
     x0 = gf.NavState.from_euler([0, 0, 0], [0, 0, 0], 0.5, 1.0, 0.0)
@@ -279,23 +288,28 @@ def test_bad_config_and_arguments():
 
 # ---- the other motions of the generator ---------------------------------------------
 
-@pytest.mark.parametrize("motion, duration, bound_m", [
-    (tj.Airdrop(), 200.0, 0.02),
-    (tj.VehicleRun(), 1320.0, 0.02),
-    (tj.ConstantVelocity(), 600.0, 0.01),
+@pytest.mark.parametrize("motion, duration, bound_m, bound_deg, bound_m_s", [
+    (tj.Airdrop(), 200.0, 0.011, 3.8e-7, 5.2e-5),
+    (tj.VehicleRun(), 1320.0, 0.0081, 7.5e-8, 3.4e-5),
+    (tj.ConstantVelocity(), 600.0, 4.2e-5, 8.6e-10, 3.1e-10),
 ], ids=["airdrop", "vehicle-run-seed-001", "constant-velocity"])
-def test_motions_navigate_to_truth(motion, duration, bound_m):
+def test_motions_navigate_to_truth(motion, duration, bound_m, bound_deg, bound_m_s):
     """Each motion's sensor outputs, navigated, give back its own trajectory: a check of
     the generator's consistency (velocity, acceleration, attitude and rates derived by
-    hand) as much as of the mechanization. Measured: 5.4 mm (airdrop), 4.0 mm (vehicle
-    run, 22 min), attitude below 2e-7 deg."""
+    hand) as much as of the mechanization. Measured (horizontal position, attitude,
+    horizontal velocity): airdrop 5.4 mm, 1.9e-7 deg, 2.6e-5 m/s; vehicle run (22 min)
+    4.0 mm, 3.7e-8 deg, 1.7e-5 m/s; constant velocity 2.1e-5 m, 4.3e-10 deg, 1.6e-10 m/s.
+    Bounds: 2x those."""
     tr = tj.sample(motion, duration, 0.01)
     _, sol = _nav(tr)
     horiz = horizontal_error_m(sol.lat_rad, sol.lon_rad, tr.lat_rad[1:], tr.lon_rad[1:])
     att = np.degrees(np.linalg.norm(attitude_error_rad(sol.q_bn, tr.q_bn[1:]), axis=1))
-    print(f"{type(motion).__name__}: horizontal {horiz.max():.3g} m, attitude {att.max():.3g} deg")
+    dv = np.abs(sol.v_n_m_s[:, :2] - tr.v_n_m_s[1:, :2]).max()
+    print(f"{type(motion).__name__}: horizontal {horiz.max():.3g} m, attitude {att.max():.3g} deg, "
+          f"horizontal velocity {dv:.3g} m/s")
     assert horiz.max() < bound_m
-    assert att.max() < 1e-6
+    assert att.max() < bound_deg
+    assert dv < bound_m_s
 
 
 def test_vehicle_run_profile():
@@ -413,14 +427,14 @@ def test_rate_input_reverse_round_trip():
 def test_baro_loop_follows_a_climbing_height():
     """A 10 m/s climb with exact increments and an exact external height: the loop
     compares heights at the same instant, so it adds no lag (the free channel over
-    this minute is itself accurate to millimetres)."""
+    this minute is itself accurate to millimetres). Measured 8.0e-7 m; bound 2x."""
     tr = tj.sample(tj.SineVelocity(amplitude_m_s=(2.0, 3.0, 10.0)), 300.0, 0.01)
     x0 = gf.NavState.from_trajectory(tr, 0)
     sol = gf.Strapdown(x0, gf.SinsConfig(vertical="baro", baro_tau_s=10.0)).run(
         tr.dtheta_rad, tr.dv_m_s, dt_s=0.01, h_ext_m=tr.h_m[1:])
     err = np.abs(sol.h_m - tr.h_m[1:])
     print(f"baro, 10 m/s vertical amplitude: max height error {err.max():.3g} m")
-    assert err.max() < 1e-3
+    assert err.max() < 1.6e-6
 
 
 def test_baro_without_external_height_is_refused():
@@ -448,3 +462,60 @@ def test_bad_initial_fields_are_named(field, value, match):
     setattr(x0, field, value)
     with pytest.raises(ValueError, match=match):
         gf.Strapdown(x0)
+
+
+# ---- issue 15: sculling by theory, held height --------------------------------------
+
+def test_sculling_two_sample_correction_by_theory():
+    """Classic sculling in a fixed frame without gravity (SinsConfig(earth="flat")): the
+    body rolls as theta(t) = a sin(W t) about x while its specific force along body y is
+    A sin(W t). The rotated force rectifies into a mean vertical acceleration A J1(a)
+    (Bessel), which an exact navigator integrates. Per update of h, with l = W h and the
+    phases W t_k equally spaced over whole periods (l = 2 pi / 10), the one-sample
+    algorithm (dv + 1/2 dtheta x dv) misses on average a A (l - sin l) / (2 l) per second
+    (1/2 dtheta x dv averages to zero, the exact rotation term does not); the two-sample
+    correction (dtheta_(k-1) x dv_k + dv_(k-1) x dtheta_k) / 12 recovers
+    a A (2 sin l - sin 2l) / (12 l) of it (both worked by hand in the averages of the
+    products of sines; the residual ~ a A l^4 / 60). Rotation about one axis has no
+    coning, so coning=False/True switch exactly the sculling term here.
+    Neglected: O(a^2) relative (1e-4) and the bounded oscillating velocity in the line
+    fit over 20 s. Measured agreement: 7e-5 (one-sample) and 6.4e-4 (two-sample)
+    relative; bound 5e-3 (8x the larger). Dropping the sculling term from gf_sins makes
+    the two-sample drift 13x its theory (checked by planting it)."""
+    from scipy.special import j1
+    a, A, f_hz, dt, dur = 0.01, 10.0, 10.0, 0.01, 20.0
+    W = 2 * np.pi * f_hz
+    lam = W * dt
+    t = np.arange(int(round(dur / dt)) + 1) * dt
+    dth = np.zeros((t.size - 1, 3))
+    dth[:, 0] = np.diff(a * np.sin(W * t))                              # exact increments
+    dv = np.zeros((t.size - 1, 3))
+    dv[:, 1] = A / W * (np.cos(W * t[:-1]) - np.cos(W * t[1:]))
+    x0 = gf.NavState(np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3), 0.0, 0.0, 0.0, 0.0, np.zeros(3))
+    theory = {False: a * A * (lam - np.sin(lam)) / (2 * lam),
+              True: a * A * ((lam - np.sin(lam)) / 2 - (2 * np.sin(lam) - np.sin(2 * lam)) / 12) / lam}
+    for coning, expected in theory.items():
+        sol = gf.Strapdown(x0, gf.SinsConfig(coning=coning, earth="flat")).run(dth, dv, dt_s=dt)
+        drift = A * j1(a) - np.polyfit(sol.t_s, sol.v_n_m_s[:, 2], 1)[0]   # m/s^2 missed
+        print(f"sculling, coning={coning}: velocity drift error {drift:.6g} m/s^2, theory {expected:.6g}")
+        assert drift == pytest.approx(expected, rel=5e-3)
+
+
+def test_held_height_defaults_to_the_initial_state():
+    """SinsConfig(vertical="hold") holds the initial state's height unless told another
+    (before: 0 m, discarding the initial height; the CLI held --h0)."""
+    tr = tj.sample(tj.Circle(), 5.0, 0.01)
+    x0 = gf.NavState.from_trajectory(tr, 0)
+    assert x0.h_m == 100.0
+    sol = gf.Strapdown(x0, gf.SinsConfig(vertical="hold")).run(tr.dtheta_rad, tr.dv_m_s, dt_s=0.01)
+    assert np.all(sol.h_m == x0.h_m)
+    sol = gf.Strapdown(x0, gf.SinsConfig(vertical="hold", hold_height_m=42.0)).run(
+        tr.dtheta_rad, tr.dv_m_s, dt_s=0.01)
+    assert np.all(sol.h_m == 42.0)
+    g = gf.layout("qin9", 0.1)
+    sol, _ = gf.GyroFreeNavigator(g, x0, "sqrt", tr.gyro_rad_s[0],
+                                  sins=gf.SinsConfig(vertical="hold")).run(tr.array_outputs(g), 0.01)
+    assert np.all(sol.h_m == x0.h_m)
+    from gfins_fmi.fmu import run_sins_fmu
+    fmu = run_sins_fmu(tr.dtheta_rad[:20], tr.dv_m_s[:20], 0.01, x0, config=gf.SinsConfig(vertical="hold"))
+    assert np.all(fmu.h_m == x0.h_m)

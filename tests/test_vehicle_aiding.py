@@ -239,7 +239,7 @@ def test_bad_sensor_parameters_say_what_to_change():
              (dict(gnss=GnssReceiver(outages_s=[(1.0, 2.0)] * 9)), "at most 8"),
              (dict(gnss=GnssReceiver(outage_duration_s=2.0, outage_period_s=1.0)), "outage_period_s"),
              (dict(gnss=GnssReceiver(quality=7)), "GnssReceiver.quality must be 0 .. 6"),
-             (dict(gnss=GnssReceiver(lever_arm_m=(0, 1))), "lever_arm_m must be 3"),
+             (dict(gnss=GnssReceiver(lever_arm_m=(0, 1))), "lever_arm_m must have shape \\(3,\\)"),
              (dict(baro=Barometer(bias_gm_std_m=1.0, bias_gm_tau_s=0.0)), "Barometer.bias_gm_tau_s"),
              (dict(odometer=Odometer(scale_error=0.5)), "Odometer.scale_error"),
              (dict(odometer=Odometer(), seed=-1), "seed")]

@@ -95,6 +95,7 @@ def add_parser(sub) -> None:
     p.add_argument("--plot", type=pathlib.Path, default=None, help="folder for figures")
     p.add_argument("--progress", action="store_true", help="progress bar")
     p.set_defaults(func=run)
+    return p
 
 
 def _read(args):

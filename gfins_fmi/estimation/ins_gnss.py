@@ -469,7 +469,7 @@ class _Epochs:
         self.c.capacity = capacity
         self.c.count = 0
         for k in widths:
-            setattr(self.c, k, ptr(self.arrays[k]))
+            setattr(self.c, k, ptr(self.arrays[k], self.arrays[k].size))
 
     @property
     def count(self) -> int:
@@ -519,8 +519,8 @@ class IntegratedNavigator:
         self._cfg = config._c()
         self._f = ffi.new("gf_ins_filter *")
         bad = ffi.new("int32_t *")
-        st = lib.gf_ins_init(self._f, self._cfg, float(nav.t_s), ptr(q), ptr(v), float(nav.lat_rad),
-                             float(nav.lon_rad), float(nav.h_m), ptr(sens), ptr(P0), bad)
+        st = lib.gf_ins_init(self._f, self._cfg, float(nav.t_s), ptr(q, 4), ptr(v, 3), float(nav.lat_rad),
+                             float(nav.lon_rad), float(nav.h_m), ptr(sens, N_SENSORS), ptr(P0, P0.size), bad)
         if st != lib.GF_OK:
             hint = f" (field {_BAD_FIELD.get(int(bad[0]), bad[0])})" if bad[0] else ""
             raise ValueError(f"gf_ins_init: {status_text(st)}{hint}")
@@ -550,7 +550,8 @@ class IntegratedNavigator:
         fb = _vec3("f_b_m_s2", f_b_m_s2, "m/s^2")
         wb = _vec3("w_ib_b_rad_s", w_ib_b_rad_s, "rad/s")
         F, G, q = np.empty((n, n)), np.empty((n, n - 3)), np.empty(n - 3)
-        check_status(lib.gf_ins_error_model(self._f, ptr(fb), ptr(wb), ptr(F), ptr(G), ptr(q)),
+        check_status(lib.gf_ins_error_model(self._f, ptr(fb, 3), ptr(wb, 3), ptr(F, n * n), ptr(G, n * (n - 3)),
+                                             ptr(q, n - 3)),
                      "gf_ins_error_model")
         return F, G, q
 
@@ -614,7 +615,7 @@ class IntegratedNavigator:
         log_arr = np.zeros(len(meas) + internal + 16, _INNOV_DTYPE)
         log = ffi.new("gf_ins_log *")
         log.capacity = len(log_arr)
-        log.entries = ffi.cast("gf_ins_innovation *", ffi.from_buffer(log_arr))
+        log.entries = ptr(log_arr, len(log_arr), "gf_ins_innovation")
         out = {"t_s": np.empty(n), "q_bn": np.empty((n, 4)), "v_n_m_s": np.empty((n, 3)),
                "pos": np.empty((n, 3)), "std": np.empty((n, 9)), "sensors": np.empty((n, N_SENSORS)),
                "standstill": np.zeros(n, np.int8)}
@@ -632,15 +633,16 @@ class IntegratedNavigator:
                 # the measurements valid up to the chunk's last sample
                 j_hi = int(np.searchsorted(meas["t_s"], t[hi - 1] + 1e-9, side="right"))
                 sub = meas[j:j_hi]
-                c_out.t_s = ptr(out["t_s"][lo:hi])
-                c_out.q_bn = ptr(out["q_bn"][lo:hi])
-                c_out.v_n_m_s = ptr(out["v_n_m_s"][lo:hi])
-                c_out.pos = ptr(out["pos"][lo:hi])
-                c_out.std = ptr(out["std"][lo:hi])
-                c_out.sensors = ptr(out["sensors"][lo:hi])
-                c_out.standstill = ffi.cast("int8_t *", ffi.from_buffer(out["standstill"][lo:hi]))
-                mptr = ffi.cast("gf_ins_meas *", ffi.from_buffer(sub)) if len(sub) else ffi.NULL
-                status = lib.gf_ins_run(self._f, hi - lo, ptr(t[lo:hi]), ptr(g[lo:hi]), ptr(a[lo:hi]),
+                c_out.t_s = ptr(out["t_s"][lo:hi], hi - lo)
+                c_out.q_bn = ptr(out["q_bn"][lo:hi], 4 * (hi - lo))
+                c_out.v_n_m_s = ptr(out["v_n_m_s"][lo:hi], 3 * (hi - lo))
+                c_out.pos = ptr(out["pos"][lo:hi], 3 * (hi - lo))
+                c_out.std = ptr(out["std"][lo:hi], 9 * (hi - lo))
+                c_out.sensors = ptr(out["sensors"][lo:hi], N_SENSORS * (hi - lo))
+                c_out.standstill = ptr(out["standstill"][lo:hi], hi - lo, "int8_t")
+                mptr = ptr(sub, len(sub), "gf_ins_meas") if len(sub) else ffi.NULL
+                status = lib.gf_ins_run(self._f, hi - lo, ptr(t[lo:hi], hi - lo), ptr(g[lo:hi], 3 * (hi - lo)),
+                                        ptr(a[lo:hi], 3 * (hi - lo)),
                                         len(sub), mptr, c_out, epochs.c if epochs else ffi.NULL, log,
                                         n_done, m_done)
                 j += int(m_done[0])
@@ -686,10 +688,10 @@ def _smooth(sol: IntegratedSolution, progress: bool) -> SmoothedSolution:
     c = ffi.new("gf_ins_epochs *")
     c.capacity = c.count = E
     for k in ("t_s", "nav", "sensors", "dx", "P_prior", "P_post", "Phi"):
-        setattr(c, k, ptr(keep.arrays[k]))
+        setattr(c, k, ptr(keep.arrays[k], keep.arrays[k].size))
     xs = np.empty((E, n))
     Ps = np.empty_like(ep["P_post"])
-    check_status(lib.gf_ins_smooth(n, c, ptr(xs), ptr(Ps)), "gf_ins_smooth (a prior covariance "
+    check_status(lib.gf_ins_smooth(n, c, ptr(xs, xs.size), ptr(Ps, Ps.size)), "gf_ins_smooth (a prior covariance "
                  "is not positive definite)")
     # apply to the rows
     q, v = sol.q_bn.copy(), sol.v_n_m_s.copy()
@@ -709,9 +711,13 @@ def _smooth(sol: IntegratedSolution, progress: bool) -> SmoothedSolution:
     if cfg.odometer_scale:
         f.idx_odo = nxt
     et = np.ascontiguousarray(ep["t_s"])
-    check_status(lib.gf_ins_smooth_apply(f, E, ptr(et), ptr(xs), ptr(np.ascontiguousarray(ep["dx"])),
-                                         len(sol), ptr(np.ascontiguousarray(sol.t_s)), ptr(q), ptr(v),
-                                         ptr(pos), ptr(sens)), "gf_ins_smooth_apply")
+    dx = np.ascontiguousarray(ep["dx"])
+    t_rows = np.ascontiguousarray(sol.t_s)
+    nr = len(sol)
+    check_status(lib.gf_ins_smooth_apply(f, E, ptr(et, E), ptr(xs, E * n), ptr(dx, E * n), nr,
+                                         ptr(t_rows, nr), ptr(q, 4 * nr), ptr(v, 3 * nr),
+                                         ptr(pos, 3 * nr), ptr(sens, N_SENSORS * nr)),
+                 "gf_ins_smooth_apply")
     # smoothed std at the epochs, interpolated to the rows
     tri_idx = np.triu_indices(n)
     diag_pos = np.flatnonzero(tri_idx[0] == tri_idx[1])

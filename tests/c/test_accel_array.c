@@ -275,6 +275,68 @@ static void test_solver_errors(void)
     CHECK(gf9_step(&bad, A, 0.01, &o) == GF_ERR_BAD_PARAMETER, "corrupt state refused");
 }
 
+/* Physical limits (gf_accel_array.h): |f| <= 1000 m/s^2 and |omega| <= 50 rad/s, as the
+ * navigators' defaults; outputs built with independent_output for one sensor set. */
+static void outputs_of(const double f[3], const double w[3], const double wd[3], double A[9])
+{
+    gf_array_geometry g;
+    gf9_geometry(0.1, &g);
+    for (int i = 0; i < 9; ++i)
+        independent_output(g.u_m[i], g.theta[i], f, w, wd, &A[i]);
+}
+
+static void test_physical_limits(void)
+{
+    const double zero[3] = {0, 0, 0};
+    double A[9], A2[18], f[6], w[6], wd[6], wsq[6];
+    uint8_t fl[2];
+    size_t done = 99;
+    gf9_state st;
+    gf9_output o;
+    const double f_in[3] = {999.0, 0, 0}, f_out[3] = {0, 0, -1001.0};
+    const double w_in[3] = {0, 49.9, 0}, w_out[3] = {30.0, 0, -40.1}; /* |w_out| = 50.08 */
+    outputs_of(f_in, zero, zero, A);
+    CHECK(gf9_init(&st, 0.1, NULL) == GF_OK && gf9_step(&st, A, 0.01, &o) == GF_OK, "|f| 999 accepted");
+    outputs_of(f_out, zero, zero, A);
+    gf9_state before = st;
+    CHECK(gf9_step(&st, A, 0.01, &o) == GF_ERR_OUT_OF_RANGE, "|f| 1001 refused");
+    CHECK(memcmp(&before, &st, sizeof st) == 0, "state kept on a refused sample");
+    outputs_of(zero, w_in, zero, A);
+    CHECK(gf9_init(&st, 0.1, w_in) == GF_OK && gf9_step(&st, A, 0.01, &o) == GF_OK, "|w| 49.9 accepted");
+    outputs_of(zero, w_out, zero, A);
+    CHECK(gf9_step(&st, A, 0.01, &o) == GF_ERR_OUT_OF_RANGE, "|w| 50.08 refused");
+    const double w_big[3] = {0, 0, 50.5};
+    CHECK(gf9_init(&st, 0.1, w_big) == GF_ERR_BAD_PARAMETER, "|omega_init| 50.5 refused");
+    /* 1e300 outputs: |omega^2| ~ 1e301 */
+    for (int i = 0; i < 9; ++i)
+        A[i] = 1e300;
+    gf9_init(&st, 0.1, NULL);
+    CHECK(gf9_solve(&st, 1, A, 0.01, f, w, wd, wsq, fl, &done) == GF_ERR_OUT_OF_RANGE && done == 0,
+          "1e300 samples refused");
+    /* dt = 1e300 with omega_dot = 0.1 rad/s^2 and omega_x^2 < 0 (noise near omega_x = 0):
+     * the rate output is the integrated reference, 1e299 rad/s at the second sample,
+     * which is refused; the first is solved */
+    const double wd1[3] = {0.1, 0, 0};
+    outputs_of(zero, zero, wd1, A2);
+    outputs_of(zero, zero, wd1, A2 + 9);
+    for (int k = 0; k < 2; ++k) {   /* omega_x^2 = (A1 + A4 - ...) / (4 l) = -5e-3 rad^2/s^2 */
+        A2[9 * k + 0] -= 1e-3;
+        A2[9 * k + 3] -= 1e-3;
+    }
+    gf9_init(&st, 0.1, NULL);
+    CHECK(gf9_solve(&st, 2, A2, 1e300, f, w, wd, wsq, fl, &done) == GF_ERR_OUT_OF_RANGE && done == 1,
+          "dt = 1e300: second sample refused (done %zu)", done);
+    CHECK(st.n_samples == 1 && st.omega_ref_rad_s[0] == 0.0, "state after the first sample");
+    /* the same with omega_x^2 > 0: the reference only gives the sign, the output stays
+     * the measured magnitude, so the sample is solved */
+    const double w1[3] = {1.0, 0, 0};
+    outputs_of(zero, w1, wd1, A2);
+    outputs_of(zero, w1, wd1, A2 + 9);
+    gf9_init(&st, 0.1, w1);
+    CHECK(gf9_solve(&st, 2, A2, 1e300, f, w, wd, wsq, fl, &done) == GF_OK && fabs(w[3] - 1.0) < 1e-12,
+          "dt = 1e300, omega_x^2 > 0: solved, omega_x = %g", w[3]);
+}
+
 static void test_two_instances_independent(void)
 {
     const double l1 = 0.1, l2 = 0.05, dt = 0.01;
@@ -322,6 +384,7 @@ int main(void)
     test_solver_recovers_truth();
     test_negative_omega_sq_policy();
     test_solver_errors();
+    test_physical_limits();
     test_two_instances_independent();
     TEST_MAIN_END();
 }

@@ -16,13 +16,14 @@ FmuStatus model_exit_initialization(FmuInstance *instance, ModelData *d, double 
     (void)start_time_s;
     const gf_status status = gf9_init(&d->solver, d->lever_arm_m, d->omega_init_rad_s);
     if (status != GF_OK) {
-        if (!(d->lever_arm_m > 0.0) || !isfinite(d->lever_arm_m))
-            fmu_log_error(instance, "parameter l = %g m: the lever arm must be finite and > 0",
-                          d->lever_arm_m);
+        /* which parameter: the lever arm alone (no omega_init) decides */
+        if (gf9_init(&d->solver, d->lever_arm_m, NULL) != GF_OK)
+            fmu_log_error(instance, "parameter l = %g m: the lever arm must be finite and "
+                          ">= 1e-6 m", d->lever_arm_m);
         else
-            fmu_log_error(instance, "parameter omega_init = [%g, %g, %g] rad/s must be finite",
-                          d->omega_init_rad_s[0], d->omega_init_rad_s[1],
-                          d->omega_init_rad_s[2]);
+            fmu_log_error(instance, "parameter omega_init = [%g, %g, %g] rad/s must be finite "
+                          "with |omega_init| <= %d rad/s", d->omega_init_rad_s[0],
+                          d->omega_init_rad_s[1], d->omega_init_rad_s[2], GF9_MAX_RATE_RAD_S);
         return FMU_ERROR;
     }
     memset(d->f_m_s2, 0, sizeof d->f_m_s2);

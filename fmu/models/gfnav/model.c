@@ -39,6 +39,59 @@ static void publish(ModelData *d)
     d->nav_time_s = s->time_s;
 }
 
+/* Logs the parameter at fault when the initialisation is refused: the parameters are
+ * checked one by one in the order the core checks them (rate configuration, mechanization
+ * configuration, initial state), so the message names the one to change; only when all
+ * are valid is the strategy blamed for needing products the layout does not measure. */
+static void log_refusal(FmuInstance *instance, const ModelData *d, gf_status st)
+{
+    const double *w = d->omega_init_rad_s, *q = d->q0, *v = d->v0_m_s, *p = d->pos0_m;
+    const double min_h_m = -0.5 * GF_WGS84_A_M;
+    if (d->strategy < 0 || d->strategy > 3)
+        fmu_log_error(instance, "parameter strategy = %d must be 0..3", (int)d->strategy);
+    else if (!(d->accel_noise_m_s2 > 0.0) || !isfinite(d->accel_noise_m_s2))
+        fmu_log_error(instance, "parameter accel_noise = %g m/s2 must be finite and > 0",
+                      d->accel_noise_m_s2);
+    else if (!gf_all_finite(w, 3))
+        fmu_log_error(instance, "parameter omega_init = [%g, %g, %g] rad/s must be finite",
+                      w[0], w[1], w[2]);
+    else if (d->earth != GF_SINS_EARTH_WGS84 && d->earth != GF_SINS_EARTH_FLAT)
+        fmu_log_error(instance, "parameter earth = %d must be 0 (WGS-84) or 1 (fixed frame)",
+                      (int)d->earth);
+    else if (!(d->flat_gravity_m_s2 >= 0.0) || !isfinite(d->flat_gravity_m_s2))
+        fmu_log_error(instance, "parameter flat_gravity = %g m/s2 must be finite and >= 0",
+                      d->flat_gravity_m_s2);
+    else if (d->vertical_mode < 0 || d->vertical_mode > 2)
+        fmu_log_error(instance, "parameter vertical_mode = %d must be 0, 1 or 2",
+                      (int)d->vertical_mode);
+    else if (!(d->baro_tau_s > 0.0) || !isfinite(d->baro_tau_s))
+        fmu_log_error(instance, "parameter baro_tau = %g s must be finite and > 0", d->baro_tau_s);
+    else if (!(d->hold_height_m > min_h_m) || !isfinite(d->hold_height_m))
+        fmu_log_error(instance, "parameter hold_height = %g m must be finite and above -a/2",
+                      d->hold_height_m);
+    else if (!gf_all_finite(q, 4) || !(gf_q_norm(q) > 0.0))
+        fmu_log_error(instance, "parameter q0 = [%g, %g, %g, %g] must be a finite, non-zero "
+                      "quaternion", q[0], q[1], q[2], q[3]);
+    else if (!gf_all_finite(v, 3))
+        fmu_log_error(instance, "parameter v0 = [%g, %g, %g] m/s must be finite", v[0], v[1], v[2]);
+    else if (!(fabs(d->lat0_rad) < GF_HALF_PI))
+        fmu_log_error(instance, "parameter lat0 = %g rad is outside (-pi/2, pi/2)", d->lat0_rad);
+    else if (!isfinite(d->lon0_rad))
+        fmu_log_error(instance, "parameter lon0 = %g rad must be finite", d->lon0_rad);
+    else if (!(d->h0_m > min_h_m) || !isfinite(d->h0_m))
+        fmu_log_error(instance, "parameter h0 = %g m must be finite and above -a/2", d->h0_m);
+    else if (d->earth == GF_SINS_EARTH_FLAT && !gf_all_finite(p, 3))
+        fmu_log_error(instance, "parameter pos0 = [%g, %g, %g] m must be finite", p[0], p[1], p[2]);
+    else if (st == GF_ERR_BAD_PARAMETER && d->strategy == GF_RATE_EIGEN)
+        fmu_log_error(instance, "parameter strategy = %d needs all products w w^T (diagonal and "
+                      "off-diagonal), which this layout does not measure", (int)d->strategy);
+    else if (st == GF_ERR_BAD_PARAMETER && d->strategy != GF_RATE_INTEGRATE)
+        fmu_log_error(instance, "parameter strategy = %d needs the squared rates (the diagonal of "
+                      "w w^T), which this layout does not measure", (int)d->strategy);
+    else
+        fmu_log_error(instance, "initialisation refused: %s", gf_status_string(st));
+}
+
 /* Validates the parameters and starts the navigation at start_time_s (also used to
  * restart it after skip_steps ignored doSteps). */
 static FmuStatus start_navigation(FmuInstance *instance, ModelData *d, double start_time_s)
@@ -67,18 +120,7 @@ static FmuStatus start_navigation(FmuInstance *instance, ModelData *d, double st
     if (st == GF_OK && d->earth == GF_SINS_EARTH_FLAT)
         st = gf_sins_set_flat_position(&d->nav.nav, d->pos0_m);
     if (st != GF_OK) {
-        if (d->strategy < 0 || d->strategy > 3)
-            fmu_log_error(instance, "parameter strategy = %d must be 0..3", (int)d->strategy);
-        else if (st == GF_ERR_BAD_PARAMETER && (d->strategy == GF_RATE_SQRT || d->strategy == GF_RATE_FUSED ||
-                                                 d->strategy == GF_RATE_EIGEN))
-            fmu_log_error(instance, "parameter strategy = %d needs products w w^T that this layout "
-                          "does not measure (or a bad parameter: accel_noise > 0, earth 0/1, "
-                          "vertical_mode 0..2, lat0 in (-pi/2, pi/2), finite q0/v0)", (int)d->strategy);
-        else
-            fmu_log_error(instance, "initialisation refused (%s): check accel_noise > 0, earth 0/1, "
-                          "flat_gravity >= 0, vertical_mode 0..2, baro_tau > 0, lat0 in "
-                          "(-pi/2, pi/2), a finite non-zero q0 and finite v0, omega_init",
-                          gf_status_string(st));
+        log_refusal(instance, d, st);
         return FMU_ERROR;
     }
     memset(d->omega_rad_s, 0, sizeof d->omega_rad_s);

@@ -603,6 +603,7 @@ class _InsGnssDriver:
         self.out_f = np.full((self.n_steps, self.g_out_f[1]), np.nan)
         self.out_i = np.zeros((self.n_steps, self.g_out_i[1]), np.int64)
         self._flags = None
+        self.failed_step = None
 
     def _columns(self, names) -> dict:
         cols, c = {}, 0

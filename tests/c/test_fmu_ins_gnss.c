@@ -2,7 +2,7 @@
  * the FMI 2.0 glue, linked into this executable so that it runs under
  * ASan/UBSan/LeakSanitizer (tests/test_fmu_ins_gnss.py covers the shipped FMUs through
  * fmpy, FMI 2.0 and 3.0, against the Python batch API). Sensor data: the vehicle truth
- * (gf_vehicle, 15 s: rest, start, a 180 deg turn) with GNSS at 1 Hz on samples, a GNSS
+ * of turn_drive.h (15 s: rest, start, a 180 deg turn) with GNSS at 1 Hz on samples, a GNSS
  * epoch delivered 0.2 s late every 100 samples (stale), barometer and odometer at 10 Hz
  * valid inside the sample intervals; barometer bias, odometer scale and NHC on.
  *   1. EKF and UKF: the FMU equals gf_ins_init + gf_ins_step called directly with the
@@ -25,30 +25,12 @@
 #include "gf_math.h"
 #include "gf_test.h"
 #include "gf_vehicle.h"
+#include "turn_drive.h"
 
 #define H_S 0.01
 enum { N = 1500 };
 
 static gf_vehicle_sample g_truth[N];
-
-static void make_data(void)
-{
-    gf_vehicle_profile p;
-    memset(&p, 0, sizeof p);
-    p.lat0_rad = 0.5235987755982988;
-    p.lon0_rad = 1.9896753472735356;
-    p.h0_m = 100.0;
-    p.n_segments = 4;
-    const double seg[4][4] = {{2, 0, 0, 0}, {3, 15, 0, 0}, {1, 0, 0, 0}, {6, 0, 0, GF_PI}};
-    for (int i = 0; i < 4; ++i) {
-        p.segment[i].duration_s = seg[i][0];
-        p.segment[i].dspeed_m_s = seg[i][1];
-        p.segment[i].dheading_rad = seg[i][3];
-    }
-    gf_vehicle_state s;
-    CHECK(gf_vehicle_init(&s, &p, 0.0, &g_truth[0], NULL) == GF_OK, "vehicle");
-    CHECK(gf_vehicle_run(&s, N - 1, H_S, &g_truth[1], NULL) == GF_OK, "vehicle run");
-}
 
 /* ---- the measurements delivered with sample k (the same for the FMU and the core) ---- */
 
@@ -424,7 +406,7 @@ static void test_refusals(void)
 
 int main(void)
 {
-    make_data();
+    turn_drive(g_truth, N, H_S);
     test_equals_core(GF_INS_EKF, 0);
     test_equals_core(GF_INS_UKF, 0);
     test_equals_core(GF_INS_EKF, 2);

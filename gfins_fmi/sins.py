@@ -223,9 +223,13 @@ class Strapdown:
                 raise ValueError(f"initial.{name} = {getattr(initial, name)!r} must be finite")
         if not np.all(np.isfinite(v)):
             raise ValueError(f"initial.v_n_m_s = {v.tolist()} must be finite")
-        if abs(initial.lat_rad) >= np.pi / 2:
+        flat = self.config.earth == "flat"
+        lim = 90.0 if flat else lib.GF_SINS_LAT_LIMIT_MDEG / 1000.0
+        if not abs(np.degrees(initial.lat_rad)) < lim:
             raise ValueError(f"initial latitude {np.degrees(initial.lat_rad):.6g} deg is outside "
-                             "(-90, 90) deg: the ENU frame is singular at the poles")
+                             f"(-{lim:g}, {lim:g}) deg" + ("" if flat else
+                             ": the latitude limit of the ENU mechanization (its frame is "
+                             "singular at the poles)"))
         if initial.h_m <= -0.5 * 6378137.0:
             raise ValueError(f"initial.h_m = {initial.h_m!r} m is below -a/2: absurd height")
         if not (np.all(np.isfinite(q)) and np.linalg.norm(q) > 0):

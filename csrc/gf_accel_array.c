@@ -146,6 +146,13 @@ static int state_is_valid(const gf9_state *s)
            gf_all_finite(s->omega_ref_rad_s, 3) && gf_all_finite(s->omega_dot_rad_s2, 3);
 }
 
+gf_status gf9_state_check(const gf9_state *state)
+{
+    if (!state)
+        return GF_ERR_NULL_POINTER;
+    return state_is_valid(state) ? GF_OK : GF_ERR_BAD_PARAMETER;
+}
+
 /* The solver for one sample; used by gf9_step and inlined in the gf9_solve loop.
  * Reads A (already checked finite); advances the reference rate omega_ref (in/out) by
  * the trapezoid of omega_dot over half_dt_s * 2 unless `first`; writes the solution. */

@@ -26,6 +26,9 @@ static gf_status make_geometry(double l, gf_array_geometry *g)
 #endif
 }
 
+/* Number of accelerometers of the layout (the A input holds up to 12). */
+#define GFNAV_N_SENSORS (GFNAV_LAYOUT == 0 ? 6 : GFNAV_LAYOUT == 1 ? 9 : 12)
+
 static void publish(ModelData *d)
 {
     const gf_sins_state *s = &d->nav.nav;
@@ -73,11 +76,11 @@ static FmuStatus start_navigation(FmuInstance *instance, ModelData *d, double st
                                                  d->strategy == GF_RATE_EIGEN))
             fmu_log_error(instance, "parameter strategy = %d needs products w w^T that this layout "
                           "does not measure (or a bad parameter: accel_noise > 0, earth 0/1, "
-                          "vertical_mode 0..2, lat0 in (-pi/2, pi/2), finite q0/v0)", (int)d->strategy);
+                          "vertical_mode 0..2, |lat0| < 89.9 deg, finite q0/v0)", (int)d->strategy);
         else
             fmu_log_error(instance, "initialisation refused (%s): check accel_noise > 0, earth 0/1, "
-                          "flat_gravity >= 0, vertical_mode 0..2, baro_tau > 0, lat0 in "
-                          "(-pi/2, pi/2), a finite non-zero q0 and finite v0, omega_init",
+                          "flat_gravity >= 0, vertical_mode 0..2, baro_tau > 0, |lat0| < 89.9 deg "
+                          "(earth 0), a finite non-zero q0 and finite v0, omega_init",
                           gf_status_string(st));
         return FMU_ERROR;
     }
@@ -125,4 +128,19 @@ FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double 
     d->started = 1;
     publish(d);
     return FMU_OK;
+}
+
+const char *model_validate_state(const ModelData *d)
+{
+    const char *why = fmu_nav_counters_invalid(d->skip_steps, d->skipped, d->started,
+                                               d->previous_step_s);
+    if (why)
+        return why;
+    if (gf_gfins_state_check(&d->nav.rate) != GF_OK)
+        return "the rate solver state (array solver, strategy, filter) is invalid";
+    if (d->nav.rate.solver.n_sensors != GFNAV_N_SENSORS)
+        return "the rate solver's sensor count is not the layout's";
+    if (gf_sins_state_check(&d->nav.nav) != GF_OK || d->nav.nav.cfg.input != GF_SINS_INPUT_RATES)
+        return "the navigation state (configuration, attitude, position) is invalid";
+    return NULL;
 }

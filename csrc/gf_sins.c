@@ -71,17 +71,19 @@ gf_status gf_quat_to_euler(const double *q_bn, double *euler_rad)
         return GF_ERR_NULL_POINTER;
     if (!gf_all_finite(q_bn, 4))
         return GF_ERR_NONFINITE_INPUT;
-    if (!(fabs(gf_q_norm(q_bn) - 1.0) <= GF_QUAT_UNIT_TOL))
+    /* |q| within the tolerance of 1, tested on |q|^2 (no square root) */
+    const double n2 = q_bn[0] * q_bn[0] + q_bn[1] * q_bn[1] + q_bn[2] * q_bn[2] + q_bn[3] * q_bn[3];
+    if (!(n2 >= (1.0 - GF_QUAT_UNIT_TOL) * (1.0 - GF_QUAT_UNIT_TOL) &&
+          n2 <= (1.0 + GF_QUAT_UNIT_TOL) * (1.0 + GF_QUAT_UNIT_TOL)))
         return GF_ERR_BAD_PARAMETER;
-    double q[4]; /* the angles of the rotation q stands for: |q| = 1 exactly enough */
-    const double inv_norm = 1.0 / gf_q_norm(q_bn);
-    for (int i = 0; i < 4; ++i)
-        q[i] = q_bn[i] * inv_norm;
+    /* The angles of the rotation q stands for: gf_q_to_dcm of a quaternion of norm |q|
+     * gives |q|^2 times that rotation's matrix. The atan2 pairs are ratios of two entries
+     * (the factor cancels); the asin argument is divided by |q|^2. */
     gf_mat3 C;
-    gf_q_to_dcm(q, &C);
+    gf_q_to_dcm(q_bn, &C);
     /* C[2][1] = sin(theta); C[2][0] = -cos(theta) sin(gamma), C[2][2] = cos(theta) cos(gamma);
      * C[0][1] = sin(psi) cos(theta), C[1][1] = cos(psi) cos(theta) */
-    const double s = fmax(-1.0, fmin(1.0, C.m[2][1]));
+    const double s = fmax(-1.0, fmin(1.0, C.m[2][1] / n2));
     double psi, gamma;
     const double theta = asin(s);
     if (fabs(s) < 1.0 - 1e-12) {

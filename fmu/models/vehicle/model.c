@@ -343,5 +343,8 @@ const char *model_validate_state(const ModelData *d)
             return "the array geometry is not finite";
     if (gf_vehicle_state_check(&d->vehicle) != GF_OK)
         return "the vehicle state (profile indices, motion) is invalid";
+    if ((d->aiding.gnss.enabled || d->aiding.baro.enabled || d->aiding.odo.enabled) &&
+        gf_aiding_sim_check(&d->aiding_sim) != GF_OK)
+        return "the aiding sensors' state (GNSS queue, outages, parameters) is invalid";
     return NULL;
 }

@@ -165,6 +165,13 @@ static int within_limits(const double f[3], const double omega[3], const double 
            gf_v3_dot(omega, omega) <= w2_max;
 }
 
+gf_status gf9_state_check(const gf9_state *state)
+{
+    if (!state)
+        return GF_ERR_NULL_POINTER;
+    return state_is_valid(state) ? GF_OK : GF_ERR_BAD_PARAMETER;
+}
+
 /* The solver for one sample; used by gf9_step and inlined in the gf9_solve loop.
  * Reads A (already checked finite); advances the reference rate omega_ref (in/out) by
  * the trapezoid of omega_dot over half_dt_s * 2 unless `first`; writes the solution. */

@@ -127,6 +127,11 @@ gf_status gf9_solve(gf9_state *state, size_t n_samples, const double *A_m_s2, do
                     double *omega_sq_rad2_s2, uint8_t *flags, size_t *n_done);
 /* CDEF END */
 
+/* Checks a state handed in by a caller (e.g. restored from saved bytes); gf9_step and
+ * gf9_solve do it before using one: lever arm finite and >= 1e-6 m, reference rate and
+ * angular acceleration finite. Error: GF_ERR_BAD_PARAMETER. */
+gf_status gf9_state_check(const gf9_state *state);
+
 #ifdef __cplusplus
 }
 #endif

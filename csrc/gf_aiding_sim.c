@@ -544,10 +544,34 @@ gf_status gf_aiding_init(gf_aiding_sim *sim, const gf_aiding_params *params,
     return GF_OK;
 }
 
+/* What a step uses to index the queue or size its loops (integer compares: every step). */
+static int indices_valid(const gf_aiding_sim *s)
+{
+    return s->queue_head >= 0 && s->queue_head < GF_GNSS_QUEUE && s->queue_n >= 0 &&
+           s->queue_n <= GF_GNSS_QUEUE && s->p.gnss.n_outages >= 0 &&
+           s->p.gnss.n_outages <= GF_AIDING_MAX_OUTAGES;
+}
+
+gf_status gf_aiding_sim_check(const gf_aiding_sim *sim)
+{
+    if (!sim)
+        return GF_ERR_NULL_POINTER;
+    if (!indices_valid(sim))
+        return GF_ERR_BAD_SIZE;
+    if (check_gnss(&sim->p.gnss) || check_baro(&sim->p.baro) || check_odo(&sim->p.odo))
+        return GF_ERR_BAD_PARAMETER;
+    if (!isfinite(sim->t0_s) || !isfinite(sim->t_s) || !gf_all_finite(sim->gnss_gm_m, 3) ||
+        !isfinite(sim->baro_rw_m) || !isfinite(sim->baro_gm_m))
+        return GF_ERR_NONFINITE_INPUT;
+    return gf_vehicle_state_check(&sim->vehicle);
+}
+
 gf_status gf_aiding_step(gf_aiding_sim *sim, double t_end_s, gf_aiding_output *out)
 {
     if (!sim || !out)
         return GF_ERR_NULL_POINTER;
+    if (!indices_valid(sim))
+        return GF_ERR_BAD_SIZE;
     if (!time_ok(sim, t_end_s))
         return GF_ERR_BAD_TIME;
     const double lim = reach(t_end_s);
@@ -594,6 +618,8 @@ gf_status gf_aiding_run(gf_aiding_sim *sim, double t_end_s, gf_gnss_epoch *gnss,
     if (!sim || (sim->p.gnss.enabled && (!gnss || !n_gnss)) ||
         (sim->p.baro.enabled && (!baro || !n_baro)) || (sim->p.odo.enabled && (!odo || !n_odo)))
         return GF_ERR_NULL_POINTER;
+    if (!indices_valid(sim))
+        return GF_ERR_BAD_SIZE;
     if (!time_ok(sim, t_end_s))
         return GF_ERR_BAD_TIME;
     gf_aiding_sim s = *sim;

@@ -190,6 +190,11 @@ gf_status gf_aiding_init(gf_aiding_sim *sim, const gf_aiding_params *params,
                          const gf_vehicle_state *vehicle, uint64_t seed, gf_aiding_output *out,
                          int *bad);
 
+/* Checks a whole simulator struct handed in by a caller (an FMU state): queue indices,
+ * outage count, parameters, finite state, the vehicle copy (gf_vehicle_state_check).
+ * Errors: GF_ERR_BAD_SIZE, GF_ERR_BAD_PARAMETER, GF_ERR_NONFINITE_INPUT. */
+gf_status gf_aiding_sim_check(const gf_aiding_sim *sim);
+
 /* What a refused parameter (bad: GF_AIDING_BAD_*) must satisfy, as a static phrase
  * without the parameter's name ("must be finite and >= 0"): callers prefix their own
  * name of it (FMU parameter, Python attribute). Never NULL. */

@@ -6,16 +6,16 @@
 
 #include "gf_math.h"
 
-gf_status gf_biquad_init(gf_biquad *f, size_t n_sections, const double *sos, size_t n_channels,
-                         size_t *bad_section)
+/* Sizes within the fixed arrays: the only thing the hot loop needs to trust. */
+static inline int sizes_valid(size_t n_sections, size_t n_channels)
 {
-    if (bad_section)
-        *bad_section = 0;
-    if (!f || !sos)
-        return GF_ERR_NULL_POINTER;
-    if (n_sections == 0 || n_sections > GF_BIQUAD_MAX_SECTIONS || n_channels == 0 ||
-        n_channels > GF_BIQUAD_MAX_CHANNELS)
-        return GF_ERR_BAD_SIZE;
+    return n_sections >= 1 && n_sections <= GF_BIQUAD_MAX_SECTIONS && n_channels >= 1 &&
+           n_channels <= GF_BIQUAD_MAX_CHANNELS;
+}
+
+/* Coefficients of n_sections sections: finite, a0 = 1, poles inside the unit circle. */
+static gf_status check_sections(size_t n_sections, const double *sos, size_t *bad_section)
+{
     for (size_t s = 0; s < n_sections; ++s) {
         const double *c = sos + 6 * s;
         gf_status st = GF_OK;
@@ -31,6 +31,21 @@ gf_status gf_biquad_init(gf_biquad *f, size_t n_sections, const double *sos, siz
             return st;
         }
     }
+    return GF_OK;
+}
+
+gf_status gf_biquad_init(gf_biquad *f, size_t n_sections, const double *sos, size_t n_channels,
+                         size_t *bad_section)
+{
+    if (bad_section)
+        *bad_section = 0;
+    if (!f || !sos)
+        return GF_ERR_NULL_POINTER;
+    if (!sizes_valid(n_sections, n_channels))
+        return GF_ERR_BAD_SIZE;
+    const gf_status st = check_sections(n_sections, sos, bad_section);
+    if (st != GF_OK)
+        return st;
     memset(f, 0, sizeof *f);
     f->n_sections = n_sections;
     f->n_channels = n_channels;
@@ -38,11 +53,27 @@ gf_status gf_biquad_init(gf_biquad *f, size_t n_sections, const double *sos, siz
     return GF_OK;
 }
 
-gf_status gf_biquad_set_state(gf_biquad *f, const double *z)
+gf_status gf_biquad_check(const gf_biquad *f)
+{
+    if (!f)
+        return GF_ERR_NULL_POINTER;
+    if (!sizes_valid(f->n_sections, f->n_channels))
+        return GF_ERR_BAD_SIZE;
+    const gf_status st = check_sections(f->n_sections, f->sos, NULL);
+    if (st != GF_OK)
+        return st;
+    return gf_all_finite(f->z, f->n_sections * f->n_channels * 2) ? GF_OK : GF_ERR_NONFINITE_INPUT;
+}
+
+gf_status gf_biquad_set_state(gf_biquad *f, const double *z, size_t n_z)
 {
     if (!f || !z)
         return GF_ERR_NULL_POINTER;
+    if (!sizes_valid(f->n_sections, f->n_channels))
+        return GF_ERR_BAD_SIZE;
     const size_t n = f->n_sections * f->n_channels * 2;
+    if (n_z != n)
+        return GF_ERR_BAD_SIZE;
     if (!gf_all_finite(z, n))
         return GF_ERR_NONFINITE_INPUT;
     memcpy(f->z, z, n * sizeof *z);
@@ -55,6 +86,8 @@ gf_status gf_biquad_run(gf_biquad *f, size_t n, const double *x, double *y, size
         *n_done = 0;
     if (!f || !x || !y)
         return GF_ERR_NULL_POINTER;
+    if (!sizes_valid(f->n_sections, f->n_channels))
+        return GF_ERR_BAD_SIZE;
     const size_t nc = f->n_channels, ns = f->n_sections;
     for (size_t k = 0; k < n; ++k) {
         const double *xk = x + nc * k;

@@ -143,13 +143,23 @@ gf_status gf_array_solver_init(gf_array_solver *s, const gf_array_geometry *g,
     return GF_ERR_SINGULAR_GEOMETRY;
 }
 
-gf_status gf_array_solve(const gf_array_solver *s, const double *A, const double *w_pred,
-                         double *x)
+/* The solver fields that size a loop or index an array: n_sensors rows of H and of
+ * the outputs, n_est rows of pinv, est[] indices into x. Integer compares only: runs
+ * before every use of a solver handed in by a caller. */
+static int solver_valid(const gf_array_solver *s)
 {
-    if (!s || !A || !x)
-        return GF_ERR_NULL_POINTER;
-    if (s->from_rate && !w_pred)
-        return GF_ERR_NULL_POINTER;
+    if (s->n_sensors == 0 || s->n_sensors > NS || s->n_est > GF_X_N)
+        return 0;
+    for (size_t r = 0; r < s->n_est; ++r)
+        if (s->est[r] < 0 || s->est[r] >= GF_X_N)
+            return 0;
+    return 1;
+}
+
+/* gf_array_solve on a solver already checked (solver_valid) with w_pred given. */
+static void array_solve(const gf_array_solver *s, const double *A, const double *w_pred,
+                        double *x)
+{
     const size_t m = s->n_sensors;
     double p[6] = {0, 0, 0, 0, 0, 0};
     if (w_pred)
@@ -175,6 +185,18 @@ gf_status gf_array_solve(const gf_array_solver *s, const double *A, const double
             acc += row[i] * y[i];
         x[s->est[r]] = acc;
     }
+}
+
+gf_status gf_array_solve(const gf_array_solver *s, const double *A, const double *w_pred,
+                         double *x)
+{
+    if (!s || !A || !x)
+        return GF_ERR_NULL_POINTER;
+    if (!solver_valid(s))
+        return GF_ERR_BAD_SIZE;
+    if (s->from_rate && !w_pred)
+        return GF_ERR_NULL_POINTER;
+    array_solve(s, A, w_pred, x);
     return GF_OK;
 }
 
@@ -230,6 +252,50 @@ gf_status gf_rate_config_default(gf_rate_config *cfg)
 static int estimates(const gf_array_solver *s, uint32_t groups)
 {
     return (s->estimated & groups) == groups;
+}
+
+/* What a rate step uses to size loops, index arrays or select a branch: the solver's
+ * sizes and indices, the strategy, and for FUSED the measurement count and the filter
+ * dimension. Integer compares only: runs before every step. */
+static int rate_state_valid(const gf_gfins_state *st)
+{
+    if (!solver_valid(&st->solver) || st->cfg.strategy < GF_RATE_INTEGRATE ||
+        st->cfg.strategy > GF_RATE_FUSED)
+        return 0;
+    if (st->cfg.strategy == GF_RATE_FUSED)
+        return (st->n_w_meas == 3 || st->n_w_meas == 6) && st->kf.n == 6;
+    return 1;
+}
+
+gf_status gf_gfins_state_check(const gf_gfins_state *st)
+{
+    if (!st)
+        return GF_ERR_NULL_POINTER;
+    if (!rate_state_valid(st))
+        return GF_ERR_BAD_SIZE;
+    const gf_rate_config *c = &st->cfg;
+    const gf_array_solver *s = &st->solver;
+    if (!(c->accel_noise_m_s2 > 0.0) || !isfinite(c->accel_noise_m_s2) ||
+        !(c->bias_walk_rad_s2_sqrt_s >= 0.0) || !isfinite(c->bias_walk_rad_s2_sqrt_s) ||
+        !(c->init_std_rad_s > 0.0) || !isfinite(c->init_std_rad_s) ||
+        !(c->init_bias_std_rad_s2 >= 0.0) || !isfinite(c->init_bias_std_rad_s2))
+        return GF_ERR_BAD_PARAMETER;
+    if ((s->present | s->estimated | s->from_rate) > 15u || s->rank > GF_X_N ||
+        !estimates(s, GF_GROUP_F | GF_GROUP_OMEGA_DOT))
+        return GF_ERR_BAD_PARAMETER;
+    if (!gf_all_finite(s->H, s->n_sensors * GF_X_N) || !gf_all_finite(s->noise_gain, GF_X_N) ||
+        !isfinite(s->cond))
+        return GF_ERR_NONFINITE_INPUT;
+    for (size_t r = 0; r < s->n_est; ++r)
+        if (!gf_all_finite(s->pinv + r * NS, s->n_sensors))
+            return GF_ERR_NONFINITE_INPUT;
+    if (!gf_all_finite(st->omega_rad_s, 3) || !gf_all_finite(st->omega_ref_rad_s, 3) ||
+        !gf_all_finite(st->omega_dot_rad_s2, 3) || !gf_all_finite(st->R_W, 36) ||
+        !gf_all_finite(st->var_omega_dot, 9))
+        return GF_ERR_NONFINITE_INPUT;
+    if (c->strategy == GF_RATE_FUSED)
+        return gf_kalman_check(&st->kf);
+    return GF_OK;
 }
 
 gf_status gf_gfins_init(gf_gfins_state *st, const gf_array_geometry *g, const gf_rate_config *cfg,
@@ -322,7 +388,7 @@ static gf_status rate_step(const gf_gfins_state *st, const double *A, double dt,
         gf_v3_copy(st->omega_rad_s, pred);
     else
         gf_v3_axpy(st->omega_rad_s, dt, st->omega_dot_rad_s2, pred);
-    gf_array_solve(s, A, pred, x);
+    array_solve(s, A, pred, x);
     gf_v3_copy(x + 3, r->wd);
     gf_v3_copy(st->omega_ref_rad_s, r->ref);
     if (!first)
@@ -454,7 +520,7 @@ static gf_status rate_step(const gf_gfins_state *st, const double *A, double dt,
         return GF_ERR_BAD_PARAMETER;
     }
     if (s->from_rate) /* products from the rate: solve again with the final rate */
-        gf_array_solve(s, A, r->w, x);
+        array_solve(s, A, r->w, x);
     gf_v3_copy(x, r->f);
     memcpy(r->W, x + 6, sizeof r->W);
     if (!gf_all_finite(r->w, 3) || !gf_all_finite(r->f, 3))
@@ -479,6 +545,8 @@ gf_status gf_gfins_step(gf_gfins_state *st, const double *A, double dt, double *
 {
     if (!st || !A)
         return GF_ERR_NULL_POINTER;
+    if (!rate_state_valid(st))
+        return GF_ERR_BAD_SIZE;
     rate_step_result r;
     const gf_status status = rate_step(st, A, dt, &r);
     if (status != GF_OK)
@@ -499,6 +567,8 @@ gf_status gf_gfins_run(gf_gfins_state *st, size_t n, const double *A, double dt,
         *n_done = 0;
     if (!st || !A || !f || !w || !wd || !flags)
         return GF_ERR_NULL_POINTER;
+    if (!rate_state_valid(st))
+        return GF_ERR_BAD_SIZE;
     if (!(dt > 0.0 && isfinite(dt)))
         return GF_ERR_BAD_TIME;
     const size_t ns = st->solver.n_sensors;
@@ -547,6 +617,8 @@ gf_status gf_gfnav_run(gf_gfnav_state *st, size_t n, const double *A, double dt,
         *n_done = 0;
     if (!st || !A || !q_bn || !v_n || !pos)
         return GF_ERR_NULL_POINTER;
+    if (!rate_state_valid(&st->rate))
+        return GF_ERR_BAD_SIZE;
     if (!(dt > 0.0 && isfinite(dt)))
         return GF_ERR_BAD_TIME;
     const size_t ns = st->rate.solver.n_sensors;

@@ -63,7 +63,8 @@ gf_status gf_array_solver_init(gf_array_solver *solver, const gf_array_geometry 
 
 /* One sample: outputs A (n_sensors, m/s^2), predicted rate w_pred (3, rad/s; used for
  * the from_rate products, may be NULL when there are none) -> x (12). Unknowns that
- * are neither estimated nor present are filled from w_pred (or 0 without it). */
+ * are neither estimated nor present are filled from w_pred (or 0 without it).
+ * GF_ERR_BAD_SIZE for a solver whose sizes or indices are out of range. */
 gf_status gf_array_solve(const gf_array_solver *solver, const double *A_m_s2,
                          const double *w_pred_rad_s, double *x);
 
@@ -152,6 +153,17 @@ gf_status gf_gfnav_run(gf_gfnav_state *state, size_t n, const double *A_m_s2, do
                        const double *h_ext_m, double *q_bn, double *v_n_m_s, double *pos,
                        double *omega_rad_s, double *f_m_s2, uint8_t *flags, size_t *n_done);
 /* CDEF END */
+
+/* Checks a rate-solver state handed in by a caller (e.g. restored from saved bytes).
+ * gf_gfins_step, gf_gfins_run, gf_gfnav_run (and gf_array_solve for its solver) check
+ * before every call, with integer compares only, what sizes a loop, indexes an array or
+ * selects a branch: n_sensors in 1..GF_ARRAY_MAX_SENSORS, n_est <= 12 with every est[]
+ * index in 0..11, the strategy, and for FUSED n_w_meas in {3, 6} and a 6-state filter
+ * (GF_ERR_BAD_SIZE). This function also checks the rest: configuration values as
+ * gf_gfins_init does and the group masks (GF_ERR_BAD_PARAMETER), and every number of
+ * the solver, the rates, the covariances and the filter finite
+ * (GF_ERR_NONFINITE_INPUT). */
+gf_status gf_gfins_state_check(const gf_gfins_state *state);
 
 #ifdef __cplusplus
 }

@@ -45,9 +45,11 @@ gf_status gf_imu_errors_check(const gf_imu_errors *e, int *bad)
     return GF_OK;
 }
 
-/* bias and scale of the three axes at temperature dt = T - T0 */
-static void at_temperature(const gf_imu_errors *e, double dt, double gb[3], double gs[3],
-                           double ab[3], double as[3])
+/* Bias and scale of the three axes at temperature dt = T - T0. Returns 0 when the
+ * model is outside its range of validity there (a scale factor not in (-0.5, 0.5), the
+ * limit of gf_imu_errors_check, so that 1 + s >= 0.5; or a bias that overflowed). */
+static int at_temperature(const gf_imu_errors *e, double dt, double gb[3], double gs[3],
+                          double ab[3], double as[3])
 {
     for (int k = 0; k < 3; ++k) {
         gb[k] = e->g_bias_rad_s[k];
@@ -63,6 +65,10 @@ static void at_temperature(const gf_imu_errors *e, double dt, double gb[3], doub
             ab[k] += e->a_bias_tc[3 * j + k] * p;
             as[k] += e->a_scale_tc[3 * j + k] * p;
         }
+    for (int k = 0; k < 3; ++k)
+        if (!(fabs(gs[k]) < 0.5) || !(fabs(as[k]) < 0.5) || !isfinite(gb[k]) || !isfinite(ab[k]))
+            return 0;
+    return 1;
 }
 
 /* (I + N) v */
@@ -117,17 +123,28 @@ gf_status gf_imu_apply(const gf_imu_errors *e, size_t n, const double *w, const 
                 *n_done = k;
             return GF_ERR_NONFINITE_INPUT;
         }
-        double gb[3], gs[3], ab[3], as[3], t[3], u[3], c[3];
-        at_temperature(e, dt, gb, gs, ab, as);
+        double gb[3], gs[3], ab[3], as[3], t[3], u[3], c[3], wo[3], fo[3];
+        if (!at_temperature(e, dt, gb, gs, ab, as)) {
+            if (n_done)
+                *n_done = k;
+            return GF_ERR_OUT_OF_RANGE;
+        }
         one_plus_n(e->g_misalign_rad, wk, t);
         for (int i = 0; i < 3; ++i)
-            w_out[3 * k + i] = (1.0 + gs[i]) * t[i] + gb[i];
+            wo[i] = (1.0 + gs[i]) * t[i] + gb[i];
         one_plus_n(e->a_misalign_rad, fk, u);
         centripetal(wk, c);
         for (int i = 0; i < 3; ++i) {
             const double ui = u[i] - e->a_lever_m[i] * c[i];
-            f_out[3 * k + i] = (1.0 + as[i]) * ui + e->a_k2_s2_m[i] * ui * ui + ab[i];
+            fo[i] = (1.0 + as[i]) * ui + e->a_k2_s2_m[i] * ui * ui + ab[i];
         }
+        if (!gf_all_finite(wo, 3) || !gf_all_finite(fo, 3)) { /* finite inputs, overflow */
+            if (n_done)
+                *n_done = k;
+            return GF_ERR_OUT_OF_RANGE;
+        }
+        gf_v3_copy(wo, w_out + 3 * k);
+        gf_v3_copy(fo, f_out + 3 * k);
     }
     if (n_done)
         *n_done = n;
@@ -153,8 +170,12 @@ gf_status gf_imu_compensate(const gf_imu_errors *e, size_t n, const double *w_ou
                 *n_done = k;
             return GF_ERR_NONFINITE_INPUT;
         }
-        double gb[3], gs[3], ab[3], as[3], t[3], u[3], c[3], wk[3];
-        at_temperature(e, dt, gb, gs, ab, as);
+        double gb[3], gs[3], ab[3], as[3], t[3], u[3], c[3], wk[3], fk[3];
+        if (!at_temperature(e, dt, gb, gs, ab, as)) {
+            if (n_done)
+                *n_done = k;
+            return GF_ERR_OUT_OF_RANGE;
+        }
         for (int i = 0; i < 3; ++i)
             t[i] = (wo[i] - gb[i]) / (1.0 + gs[i]);
         one_plus_n_solve(e->g_misalign_rad, t, wk);
@@ -171,7 +192,13 @@ gf_status gf_imu_compensate(const gf_imu_errors *e, size_t n, const double *w_ou
             }
             u[i] = -2.0 * C / (B + sqrt(disc)) + e->a_lever_m[i] * c[i];
         }
-        one_plus_n_solve(e->a_misalign_rad, u, f + 3 * k);
+        one_plus_n_solve(e->a_misalign_rad, u, fk);
+        if (!gf_all_finite(wk, 3) || !gf_all_finite(fk, 3)) { /* finite inputs, overflow */
+            if (n_done)
+                *n_done = k;
+            return GF_ERR_OUT_OF_RANGE;
+        }
+        gf_v3_copy(fk, f + 3 * k);
         gf_v3_copy(wk, w + 3 * k);
     }
     if (n_done)

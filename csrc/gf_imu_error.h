@@ -12,6 +12,11 @@
  * orthogonalisation angles are the special case of a triangular N.
  * Temperature (seed 004 eq. 10-15): bias and scale of every axis are polynomials in
  * dT = T - T0:  b(T) = b + sum_k c_k dT^(k+1)  (k < order), the same for s.
+ * Range of validity: the model holds where every scale factor at the sample's
+ * temperature stays in (-0.5, 0.5) (the limit gf_imu_errors_check puts on s at T0) and
+ * the biases are finite. Beyond it 1 + s(T) may reach 0 and the compensation would
+ * divide by it: both gf_imu_apply and gf_imu_compensate stop with GF_ERR_OUT_OF_RANGE
+ * at such a sample, as they do when a result would overflow.
  * Units: SI (rad/s, m/s^2, m, K or degC differences); the Python layer converts from
  * datasheet units.
  */
@@ -53,12 +58,15 @@ typedef struct gf_imu_errors {
 gf_status gf_imu_errors_check(const gf_imu_errors *e, int *bad_field);
 
 /* Simulation: true rates w (n x 3, rad/s) and specific force f (n x 3, m/s^2) -> sensor
- * outputs. temp (n, may be NULL = T0). *n_done: rows done (stops on non-finite input). */
+ * outputs. temp (n, may be NULL = T0). *n_done: rows done; the run stops at a
+ * non-finite input (GF_ERR_NONFINITE_INPUT) or at a sample beyond the range of validity
+ * above or whose outputs overflow (GF_ERR_OUT_OF_RANGE). */
 gf_status gf_imu_apply(const gf_imu_errors *e, size_t n, const double *w, const double *f,
                        const double *temp, double *w_out, double *f_out, size_t *n_done);
 
 /* Compensation: sensor outputs -> rates and specific force, the exact inverse of
- * gf_imu_apply (the K2 quadratic by its numerically stable root). */
+ * gf_imu_apply (the K2 quadratic by its numerically stable root). Stops as gf_imu_apply
+ * does, and with GF_ERR_OUT_OF_RANGE where the K2 quadratic has no real root. */
 gf_status gf_imu_compensate(const gf_imu_errors *e, size_t n, const double *w_out,
                             const double *f_out, const double *temp, double *w, double *f,
                             size_t *n_done);

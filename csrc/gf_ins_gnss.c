@@ -1371,7 +1371,42 @@ static int layout_is_valid(const gf_ins_filter *f)
     for (int i = 0; i < 4; ++i)
         if (idx[i] != -1 && (idx[i] < GF_INS_BASE_STATES || idx[i] + len[i] > n))
             return 0;
-    return f->ukf_w.n == (size_t)n;
+    return f->ukf_w.n == (size_t)n && f->hist_head >= 0 && f->hist_head < GF_INS_HISTORY &&
+           f->hist_count >= 0 && f->hist_count <= GF_INS_HISTORY;
+}
+
+gf_status gf_ins_filter_check(const gf_ins_filter *f)
+{
+    if (!f)
+        return GF_ERR_NULL_POINTER;
+    int32_t n = 0;
+    if (config_check(&f->cfg) || gf_ins_state_count(&f->cfg, &n) != GF_OK || f->n_states != n ||
+        !layout_is_valid(f))
+        return GF_ERR_BAD_SIZE;
+    int32_t next = GF_INS_BASE_STATES;
+    const int32_t sg = f->cfg.scale_states ? next : -1;
+    next += f->cfg.scale_states ? 6 : 0;
+    const int32_t baro = f->cfg.baro_state ? next++ : -1;
+    const int32_t odo = f->cfg.odo_state ? next++ : -1;
+    if (f->idx_sg != sg || f->idx_sa != (sg < 0 ? -1 : sg + 3) || f->idx_baro != baro ||
+        f->idx_odo != odo)
+        return GF_ERR_BAD_SIZE;
+    if ((f->have_sample & ~1) || (f->standstill & ~1))
+        return GF_ERR_BAD_PARAMETER;
+    for (int i = 0; i < 8; ++i)
+        if (f->gate_run[i] < 0)
+            return GF_ERR_BAD_PARAMETER;
+    if (gf_sins_state_check(&f->nav) != GF_OK || gf_sins_state_check(&f->nav0) != GF_OK ||
+        f->nav.cfg.vertical != GF_SINS_VERTICAL_FREE || f->nav.cfg.earth != GF_SINS_EARTH_WGS84 ||
+        f->nav.cfg.input != f->cfg.input)
+        return GF_ERR_BAD_PARAMETER;
+    if (!isfinite(f->t_s) || !gf_all_finite(f->sensors, GF_INS_N_SENSORS) ||
+        !gf_all_finite(f->kf.x, (size_t)n))
+        return GF_ERR_NONFINITE_INPUT;
+    for (int i = 0; i < n; ++i)
+        if (!(f->kf.P[i * n + i] > 0.0) || !isfinite(f->kf.P[i * n + i]))
+            return GF_ERR_BAD_PARAMETER;
+    return GF_OK;
 }
 
 gf_status gf_ins_step(gf_ins_filter *f, double t_s, const double *gyro, const double *accel,

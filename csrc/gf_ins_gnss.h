@@ -274,6 +274,14 @@ gf_status gf_ins_init(gf_ins_filter *f, const gf_ins_config *cfg, double t0_s,
                       double lon_rad, double h_m, const double *sensors0, const double *P0,
                       int32_t *bad);
 
+/* Checks a whole filter handed in by a caller (an FMU state restored from bytes): the
+ * configuration, the state layout and every index (idx_*, kf.n, history ring), flags,
+ * the nominal states (gf_sins_state_check) and finite estimates with a positive
+ * covariance diagonal. gf_ins_step checks the sizes and indices (integer compares)
+ * itself every step. Errors: GF_ERR_BAD_SIZE, GF_ERR_BAD_PARAMETER,
+ * GF_ERR_NONFINITE_INPUT. */
+gf_status gf_ins_filter_check(const gf_ins_filter *f);
+
 /* Records the current state as the first epoch of *epochs (call once before a run
  * whose epochs feed the smoother). */
 gf_status gf_ins_epochs_begin(gf_ins_filter *f, gf_ins_epochs *epochs);

@@ -41,6 +41,47 @@ static void mat_mul_bt(size_t r, size_t k, size_t c, const double *A, const doub
         }
 }
 
+/* Symmetric within round-off (see gf_kalman.h): 1 and the symmetrised matrix in out
+ * (n x n, may be A itself), or 0. Non-finite entries fail. */
+#define GF_KF_SYM_TOL 1e-9
+static int symmetrised(size_t n, const double *A, double *out)
+{
+    for (size_t i = 0; i < n; ++i) {
+        if (!isfinite(A[i * n + i]))
+            return 0;
+        for (size_t j = 0; j < i; ++j) {
+            const double a = A[i * n + j], b = A[j * n + i], d = a - b;
+            /* squared form (no sqrt on the filter's path); a NaN fails the comparison */
+            if (a != b && !(d * d <= GF_KF_SYM_TOL * GF_KF_SYM_TOL *
+                                         fabs(A[i * n + i] * A[j * n + j])))
+                return 0;
+        }
+    }
+    for (size_t i = 0; i < n; ++i) {
+        out[i * n + i] = A[i * n + i];
+        for (size_t j = 0; j < i; ++j) {
+            const double a = A[i * n + j], b = A[j * n + i];
+            out[i * n + j] = out[j * n + i] = a == b ? a : 0.5 * a + 0.5 * b;
+        }
+    }
+    return 1;
+}
+
+gf_status gf_kalman_check(const gf_kalman *kf)
+{
+    if (!kf)
+        return GF_ERR_NULL_POINTER;
+    if (kf->n == 0 || kf->n > NMAX)
+        return GF_ERR_BAD_SIZE;
+    for (size_t i = 0; i < kf->n; ++i)
+        if (!isfinite(kf->x[i]))
+            return GF_ERR_NONFINITE_INPUT;
+    for (size_t i = 0; i < kf->n * kf->n; ++i)
+        if (!isfinite(kf->P[i]))
+            return GF_ERR_NONFINITE_INPUT;
+    return GF_OK;
+}
+
 gf_status gf_kalman_init(gf_kalman *kf, size_t n, const double *x0, const double *P0)
 {
     if (!kf || !x0 || !P0)
@@ -53,10 +94,13 @@ gf_status gf_kalman_init(gf_kalman *kf, size_t n, const double *x0, const double
     for (size_t i = 0; i < n * n; ++i)
         if (!isfinite(P0[i]))
             return GF_ERR_NONFINITE_INPUT;
+    double P[NMAX * NMAX];
+    if (!symmetrised(n, P0, P))
+        return GF_ERR_BAD_PARAMETER;
     memset(kf, 0, sizeof *kf);
     kf->n = n;
     memcpy(kf->x, x0, n * sizeof *x0);
-    memcpy(kf->P, P0, n * n * sizeof *P0);
+    memcpy(kf->P, P, n * n * sizeof *P);
     return GF_OK;
 }
 
@@ -67,6 +111,9 @@ gf_status gf_kalman_predict(gf_kalman *kf, const double *F, const double *Q, int
     const size_t n = kf->n;
     if (n == 0 || n > NMAX)
         return GF_ERR_BAD_SIZE;
+    double Qs[NMAX * NMAX];
+    if (Q && !symmetrised(n, Q, Qs))
+        return GF_ERR_BAD_PARAMETER;
     if (F) {
         double FP[NMAX * NMAX];
         mat_mul(n, n, n, F, kf->P, FP);
@@ -85,7 +132,7 @@ gf_status gf_kalman_predict(gf_kalman *kf, const double *F, const double *Q, int
     }
     if (Q)
         for (size_t i = 0; i < n * n; ++i)
-            kf->P[i] += Q[i];
+            kf->P[i] += Qs[i];
     return GF_OK;
 }
 
@@ -109,13 +156,22 @@ gf_status gf_kalman_update_gated(gf_kalman *kf, size_t m, const double *residual
     for (size_t i = 0; i < m; ++i)
         if (!isfinite(residual[i]))
             return GF_ERR_NONFINITE_INPUT;
-    {   /* R must be positive definite itself, not only S = H P H^T + R */
+    /* R symmetric (then symmetrised: the one matrix used below) and positive definite
+     * itself, not only S = H P H^T + R */
+    double R_s[MMAX * MMAX];
+    {
+        for (size_t i = 0; i < m * m; ++i)
+            if (!isfinite(R[i]))
+                return GF_ERR_NONFINITE_INPUT;
+        if (!symmetrised(m, R, R_s))
+            return GF_ERR_BAD_PARAMETER;
         double LR[MMAX * MMAX];
-        memcpy(LR, R, m * m * sizeof *R);
+        memcpy(LR, R_s, m * m * sizeof *R_s);
         const gf_status st_r = gf_cholesky(m, LR);
         if (st_r != GF_OK)
             return st_r;
     }
+    R = R_s;
     /* PHt = P H^T (n x m), S = H P H^T + R (m x m) */
     double PHt[NMAX * MMAX], S[MMAX * MMAX], L[MMAX * MMAX];
     mat_mul_bt(n, n, m, kf->P, H, PHt);

@@ -22,6 +22,14 @@
  *   - one backward step of the Rauch-Tung-Striebel smoother:
  *         A = P_k|k Phi^T P_k+1|k^-1,  x_k|N = x_k|k + A (x_k+1|N - x_k+1|k),
  *         P_k|N = P_k|k + A (P_k+1|N - P_k+1|k) A^T.
+ *
+ * Symmetric inputs. P0, Q and R are covariances: the engine reads all of each, so each
+ * must be symmetric. An entry pair that differs by more than 1e-9 sqrt(|A_ii A_jj|)
+ * (far above the round-off of any symmetric construction, far below a real asymmetry)
+ * is refused with GF_ERR_BAD_PARAMETER; within that, the matrix is symmetrised
+ * explicitly, (A + A^T) / 2, and only the symmetrised matrix is used (so the
+ * positive-definiteness check of R, which reads its lower triangle, and the update,
+ * which uses all of it, see the same matrix).
  */
 #ifndef GF_KALMAN_H
 #define GF_KALMAN_H
@@ -44,17 +52,22 @@ typedef struct gf_kalman {
     double P[GF_KF_MAX_N * GF_KF_MAX_N];     /* covariance, row-major n x n (stride n) */
 } gf_kalman;
 
-/* x0 (n) and P0 (n x n, symmetric positive semi-definite). */
+/* x0 (n) and P0 (n x n, symmetric positive semi-definite; see "Symmetric inputs").
+ * Errors: GF_ERR_BAD_SIZE, GF_ERR_NONFINITE_INPUT, GF_ERR_BAD_PARAMETER (P0 not
+ * symmetric). */
 gf_status gf_kalman_init(gf_kalman *kf, size_t n, const double *x0, const double *P0);
 
-/* F (n x n; NULL = identity) and Q (n x n; NULL = zero). propagate_x = 0 leaves x to
- * the caller (extended filters). */
+/* F (n x n; NULL = identity) and Q (n x n, symmetric; NULL = zero). propagate_x = 0
+ * leaves x to the caller (extended filters). Errors: GF_ERR_BAD_SIZE (n of the struct
+ * out of range), GF_ERR_BAD_PARAMETER (Q not symmetric); the filter is unchanged on
+ * error. */
 gf_status gf_kalman_predict(gf_kalman *kf, const double *F, const double *Q, int propagate_x);
 
-/* Update with m measurements: residual r = z - h(x) (m), H (m x n), R (m x m, positive
- * definite). nis (may be NULL) receives r^T S^-1 r. Errors: GF_ERR_BAD_SIZE,
- * GF_ERR_NONFINITE_INPUT, GF_ERR_SINGULAR_GEOMETRY (R or S not positive definite); the
- * filter is unchanged on error. */
+/* Update with m measurements: residual r = z - h(x) (m), H (m x n), R (m x m, symmetric
+ * positive definite). nis (may be NULL) receives r^T S^-1 r. Errors: GF_ERR_BAD_SIZE,
+ * GF_ERR_NONFINITE_INPUT, GF_ERR_BAD_PARAMETER (R not symmetric),
+ * GF_ERR_SINGULAR_GEOMETRY (R or S not positive definite); the filter is unchanged on
+ * error. */
 gf_status gf_kalman_update(gf_kalman *kf, size_t m, const double *residual, const double *H,
                            const double *R, double *nis);
 
@@ -126,6 +139,11 @@ gf_status gf_kalman_rts_step(size_t n, const double *P_post, const double *x_pos
                              const double *x_prior_next, const double *P_s_next,
                              const double *x_s_next, double *x_s, double *P_s);
 /* CDEF END */
+
+/* Checks a filter struct handed in by a caller (e.g. restored from saved bytes): n in
+ * 1..GF_KF_MAX_N (GF_ERR_BAD_SIZE), x and the used n x n block of P finite
+ * (GF_ERR_NONFINITE_INPUT). */
+gf_status gf_kalman_check(const gf_kalman *kf);
 
 #ifdef __cplusplus
 }

@@ -67,6 +67,27 @@ gf_status gf_rng_normal(gf_rng *rng, size_t n, double *out)
     return GF_OK;
 }
 
+/* The parameter checks of gf_imu_noise_init: -1 if valid, else the offending field. */
+static int params_bad_field(const gf_imu_noise *params)
+{
+    enum { N_FIELDS = sizeof(gf_imu_noise) / sizeof(double) };
+    _Static_assert(sizeof(gf_imu_noise) == N_FIELDS * sizeof(double), "gf_imu_noise: doubles only");
+    double f[N_FIELDS];
+    memcpy(f, params, sizeof f);
+    for (size_t i = 0; i < N_FIELDS; ++i)
+        if (!isfinite(f[i]) || f[i] < 0.0)
+            return (int)i;
+    /* a correlation time or band must be > 0 where its std is used */
+    const struct { double std, scale; int field; } need[] = {
+        {params->gyro_gm_std_rad_s, params->gyro_gm_tau_s, 2},
+        {params->accel_gm_std_m_s2, params->accel_gm_tau_s, 6},
+        {params->gyro_band_std_rad_s + params->accel_band_std_m_s2, params->band_hz, 10}};
+    for (size_t i = 0; i < sizeof need / sizeof need[0]; ++i)
+        if (need[i].std > 0.0 && !(need[i].scale > 0.0))
+            return need[i].field;
+    return -1;
+}
+
 gf_status gf_imu_noise_init(gf_imu_noise_state *state, const gf_imu_noise *params,
                             uint64_t seed, int *bad)
 {
@@ -74,27 +95,12 @@ gf_status gf_imu_noise_init(gf_imu_noise_state *state, const gf_imu_noise *param
         *bad = -1;
     if (!state || !params)
         return GF_ERR_NULL_POINTER;
-    enum { N_FIELDS = sizeof(gf_imu_noise) / sizeof(double) };
-    _Static_assert(sizeof(gf_imu_noise) == N_FIELDS * sizeof(double), "gf_imu_noise: doubles only");
-    double f[N_FIELDS];
-    memcpy(f, params, sizeof f);
-    for (size_t i = 0; i < N_FIELDS; ++i)
-        if (!isfinite(f[i]) || f[i] < 0.0) {
-            if (bad)
-                *bad = (int)i;
-            return GF_ERR_BAD_PARAMETER;
-        }
-    /* a correlation time or band must be > 0 where its std is used */
-    const struct { double std, scale; int field; } need[] = {
-        {params->gyro_gm_std_rad_s, params->gyro_gm_tau_s, 2},
-        {params->accel_gm_std_m_s2, params->accel_gm_tau_s, 6},
-        {params->gyro_band_std_rad_s + params->accel_band_std_m_s2, params->band_hz, 10}};
-    for (size_t i = 0; i < sizeof need / sizeof need[0]; ++i)
-        if (need[i].std > 0.0 && !(need[i].scale > 0.0)) {
-            if (bad)
-                *bad = need[i].field;
-            return GF_ERR_BAD_PARAMETER;
-        }
+    const int field = params_bad_field(params);
+    if (field >= 0) {
+        if (bad)
+            *bad = field;
+        return GF_ERR_BAD_PARAMETER;
+    }
     memset(state, 0, sizeof *state);
     state->p = *params;
     return gf_rng_seed(&state->rng, seed);
@@ -133,6 +139,8 @@ gf_status gf_imu_noise_run(gf_imu_noise_state *state, size_t n, double dt_s, dou
         return GF_ERR_NULL_POINTER;
     if (!(dt_s > 0.0) || !isfinite(dt_s))
         return GF_ERR_BAD_TIME;
+    if (params_bad_field(&state->p) >= 0) /* a state handed in corrupted */
+        return GF_ERR_BAD_PARAMETER;
     const gf_imu_noise *p = &state->p;
     gf_rng *r = &state->rng;
     const double g_white = p->gyro_arw_rad_sqrt_s / sqrt(dt_s);
@@ -159,5 +167,21 @@ gf_status gf_imu_noise_run(gf_imu_noise_state *state, size_t n, double dt_s, dou
             accel_m_s2[3 * k + i] = aw + state->accel_gm[i] + state->accel_rw[i] + state->accel_band[i];
         }
     }
+    return GF_OK;
+}
+
+gf_status gf_imu_noise_state_check(const gf_imu_noise_state *state)
+{
+    if (!state)
+        return GF_ERR_NULL_POINTER;
+    if (params_bad_field(&state->p) >= 0)
+        return GF_ERR_BAD_PARAMETER;
+    const double *x[] = {state->gyro_gm, state->gyro_rw, state->gyro_band, state->accel_gm,
+                         state->accel_rw, state->accel_band};
+    for (size_t i = 0; i < sizeof x / sizeof x[0]; ++i)
+        if (!gf_all_finite(x[i], 3))
+            return GF_ERR_NONFINITE_INPUT;
+    if (!isfinite(state->rng.spare))
+        return GF_ERR_NONFINITE_INPUT;
     return GF_OK;
 }

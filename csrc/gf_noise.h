@@ -68,10 +68,18 @@ gf_status gf_imu_noise_init(gf_imu_noise_state *state, const gf_imu_noise *param
                             uint64_t seed, int *bad);
 
 /* n samples of noise for sampling interval dt_s: gyro (n x 3, rad/s) and accel (n x 3,
- * m/s^2) to add to the sensor rates. Error: GF_ERR_BAD_TIME (dt <= 0). */
+ * m/s^2) to add to the sensor rates. Errors: GF_ERR_BAD_TIME (dt <= 0),
+ * GF_ERR_BAD_PARAMETER (the state's parameters fail gf_imu_noise_init's checks: a
+ * corrupted state). */
 gf_status gf_imu_noise_run(gf_imu_noise_state *state, size_t n, double dt_s, double *gyro_rad_s,
                            double *accel_m_s2);
 /* CDEF END */
+
+/* Checks a state handed in by a caller (e.g. restored from saved bytes): parameters as
+ * gf_imu_noise_init checks them (GF_ERR_BAD_PARAMETER), the coloured-noise states and
+ * the generator's spare deviate finite (GF_ERR_NONFINITE_INPUT). Any generator bits
+ * are a valid xoshiro256** state (all zero only repeats zero). */
+gf_status gf_imu_noise_state_check(const gf_imu_noise_state *state);
 
 #ifdef __cplusplus
 }

@@ -71,13 +71,19 @@ gf_status gf_quat_to_euler(const double *q_bn, double *euler_rad)
         return GF_ERR_NULL_POINTER;
     if (!gf_all_finite(q_bn, 4))
         return GF_ERR_NONFINITE_INPUT;
-    if (!(fabs(gf_q_norm(q_bn) - 1.0) <= GF_QUAT_UNIT_TOL))
+    /* |q| within the tolerance of 1, tested on |q|^2 (no square root) */
+    const double n2 = q_bn[0] * q_bn[0] + q_bn[1] * q_bn[1] + q_bn[2] * q_bn[2] + q_bn[3] * q_bn[3];
+    if (!(n2 >= (1.0 - GF_QUAT_UNIT_TOL) * (1.0 - GF_QUAT_UNIT_TOL) &&
+          n2 <= (1.0 + GF_QUAT_UNIT_TOL) * (1.0 + GF_QUAT_UNIT_TOL)))
         return GF_ERR_BAD_PARAMETER;
+    /* The angles of the rotation q stands for: gf_q_to_dcm of a quaternion of norm |q|
+     * gives |q|^2 times that rotation's matrix. The atan2 pairs are ratios of two entries
+     * (the factor cancels); the asin argument is divided by |q|^2. */
     gf_mat3 C;
     gf_q_to_dcm(q_bn, &C);
     /* C[2][1] = sin(theta); C[2][0] = -cos(theta) sin(gamma), C[2][2] = cos(theta) cos(gamma);
      * C[0][1] = sin(psi) cos(theta), C[1][1] = cos(psi) cos(theta) */
-    const double s = fmax(-1.0, fmin(1.0, C.m[2][1]));
+    const double s = fmax(-1.0, fmin(1.0, C.m[2][1] / n2));
     double psi, gamma;
     const double theta = asin(s);
     if (fabs(s) < 1.0 - 1e-12) {
@@ -130,6 +136,8 @@ gf_status gf_sins_init(gf_sins_state *state, const gf_sins_config *cfg, const do
     if (!gf_v3_isfinite(v_n_m_s) || !isfinite(lat_rad) || !isfinite(lon_rad) ||
         !isfinite(h_m) || !isfinite(t0_s))
         return GF_ERR_NONFINITE_INPUT;
+    if (cfg->earth == GF_SINS_EARTH_WGS84 && !(fabs(lat_rad) < GF_SINS_LAT_LIMIT_RAD))
+        return GF_ERR_BAD_PARAMETER;
     gf_earth e;
     const gf_status st = gf_earth_update(&e, lat_rad, h_m, v_n_m_s, 1.0);
     if (st != GF_OK)
@@ -418,12 +426,18 @@ static gf_status sins_update(gf_sins_state *s, const double gyro[3], const doubl
     const double vN = 0.5 * (s->v_n_m_s[1] + v_new[1]), vE = 0.5 * (s->v_n_m_s[0] + v_new[0]);
     const double lat_new = s->lat_rad + T * vN / (e.R_M_m + h_mid);
     double lon_new = s->lon_rad + T * vE / ((e.R_N_m + h_mid) * e.cos_lat);
-    if (!(fabs(lat_new) < GF_HALF_PI) || !(h_new > -0.5 * GF_WGS84_A_M) || !v3_finite(v_new))
+    if (!(fabs(lat_new) < GF_SINS_LAT_LIMIT_RAD) || !(h_new > -0.5 * GF_WGS84_A_M) ||
+        !v3_finite(v_new) || !isfinite(lon_new))
         return GF_ERR_DIVERGED;
     if (lon_new > GF_PI)
         lon_new -= 2.0 * GF_PI;
     else if (lon_new <= -GF_PI)
         lon_new += 2.0 * GF_PI;
+    if (!(lon_new > -GF_PI && lon_new <= GF_PI)) { /* more than a turn in one step */
+        lon_new = remainder(lon_new, 2.0 * GF_PI);
+        if (lon_new <= -GF_PI)
+            lon_new += 2.0 * GF_PI;
+    }
 
     /* attitude */
     double qn[4], qb[4], q[4], zneg[3];
@@ -469,12 +483,38 @@ static gf_status sins_update(gf_sins_state *s, const double gyro[3], const doubl
     return GF_OK;
 }
 
+/* Runs before every step, so it checks what selects a branch or would be used before
+ * the step's own checks (configuration, direction, attitude, the latitude range);
+ * numbers that are not finite elsewhere in the state make the step's results
+ * non-finite, which it reports as GF_ERR_DIVERGED. */
 static int state_is_valid(const gf_sins_state *s)
 {
+    const int flat = s->cfg.earth == GF_SINS_EARTH_FLAT;
     return config_is_valid(&s->cfg) && (s->earth_rate_sign == 1.0 || s->earth_rate_sign == -1.0) &&
            fabs(gf_q_norm(s->q_bn) - 1.0) < 1e-6 && v3_finite(s->v_n_m_s) &&
-           fabs(s->lat_rad) < GF_HALF_PI && isfinite(s->lon_rad) && isfinite(s->h_m) &&
-           isfinite(s->time_s);
+           fabs(s->lat_rad) < (flat ? GF_HALF_PI : GF_SINS_LAT_LIMIT_RAD) &&
+           (flat || (s->cos_lat > 0.0 && s->R_M_m > 0.0)) && isfinite(s->lon_rad) &&
+           isfinite(s->h_m) && isfinite(s->time_s);
+}
+
+gf_status gf_sins_state_check(const gf_sins_state *s)
+{
+    if (!s)
+        return GF_ERR_NULL_POINTER;
+    if (!state_is_valid(s) || !v3_finite(s->a_n_m_s2) || !v3_finite(s->prev_gyro) ||
+        !v3_finite(s->prev_accel) || !isfinite(s->baro_accel_m_s2))
+        return GF_ERR_BAD_PARAMETER;
+    if (s->cfg.earth == GF_SINS_EARTH_FLAT)
+        return v3_finite(s->flat_pos_m) ? GF_OK : GF_ERR_BAD_PARAMETER;
+    /* the kept sine and cosine are those of the latitude (they follow it by angle-sum
+     * series, refreshed with libm every 64 samples: within a few ulp), the kept meridian
+     * radius that of a point within one step of it (1e-9 relative, gf_sins.c) */
+    gf_earth e;
+    if (gf_earth_update(&e, s->lat_rad, 0.0, NULL, 1.0) != GF_OK ||
+        !(fabs(s->sin_lat - e.sin_lat) <= 1e-12) || !(fabs(s->cos_lat - e.cos_lat) <= 1e-12) ||
+        !(fabs(s->R_M_m - e.R_M_m) <= 1e-6 * e.R_M_m))
+        return GF_ERR_BAD_PARAMETER;
+    return GF_OK;
 }
 
 gf_status gf_sins_step(gf_sins_state *state, const double *gyro, const double *accel,

@@ -25,6 +25,16 @@
  * dtheta = T (w0 + w1)/2, C = T^2 w0 x w1 / 12, S = T^2 (w0 x f1 + f0 x w1) / 12 are
  * exact. With coning off ("one-sample") C = S = 0.
  *
+ * Latitude limit. The ENU frame's north reference turns at w_en,z = v_E tan(L) / (R + h)
+ * and the longitude rate v_E / ((R + h) cos L) grows without bound at the poles: the
+ * mechanization holds for |L| < GF_SINS_LAT_LIMIT_MDEG (89.9 deg, 11 km from a pole).
+ * Measured on eastward circles around the pole at constant latitude (300 m/s, 60 s,
+ * 100 Hz, exact increments): horizontal error 2.4e-4 m and attitude error 1.8e-11 rad
+ * at 89.9 deg, but 3.3e-2 m and 2.3e-5 rad at 89.99 deg and 2.1 m and 1.9e-2 rad at
+ * 89.999 deg. gf_sins_init refuses a start at or beyond the limit (GF_ERR_BAD_PARAMETER)
+ * and a step that would reach it returns GF_ERR_DIVERGED, state unchanged. (A
+ * wander-azimuth mechanization would be needed to navigate across the poles.)
+ *
  * Reverse navigation (seed 003): time reversal of the mechanization equations maps
  * (w_ib, f, v, w_ie) to (-w_ib, f, -v, -w_ie): gf_sins_reverse() negates v and the Earth
  * rate, and gf_sins_run(backward = 1) feeds the samples last to first with dtheta
@@ -44,6 +54,8 @@ extern "C" {
 #endif
 
 /* CDEF BEGIN */
+#define GF_SINS_LAT_LIMIT_MDEG 89900 /* |latitude| limit of the ENU mechanization, millidegrees */
+
 #define GF_SINS_INPUT_INCREMENTS 0   /* dtheta (rad), dv (m/s) per interval */
 #define GF_SINS_INPUT_RATES 1        /* rate (rad/s), specific force (m/s^2) at sample times */
 
@@ -101,7 +113,9 @@ gf_status gf_sins_config_default(gf_sins_config *cfg);
 
 /* Euler angles (heading, pitch, roll; rad) <-> quaternion q_b^n, conventions above.
  * Errors: non-finite input; a quaternion whose norm differs from 1 by more than 1e-6
- * (GF_ERR_BAD_PARAMETER: normalise it first). */
+ * (GF_ERR_BAD_PARAMETER: normalise it first). A quaternion within that tolerance is
+ * normalised before the angles are taken, so they are those of the rotation it
+ * stands for. */
 gf_status gf_euler_to_quat(const double *euler_rad, double *q_bn);
 gf_status gf_quat_to_euler(const double *q_bn, double *euler_rad);
 /* n quaternions (n x 4) to Euler angles (n x 3); *n_done = rows converted. */
@@ -110,8 +124,9 @@ gf_status gf_quat_to_euler_batch(size_t n, const double *q_bn, double *euler_rad
 
 /* Initialises *state at time t0_s with attitude q_bn (normalised here; error if it
  * cannot be), ENU velocity v_n_m_s, latitude/longitude (rad) and height (m).
- * Errors: GF_ERR_BAD_PARAMETER (bad configuration, |lat| >= 90 deg, quaternion not
- * normalisable), GF_ERR_NONFINITE_INPUT. */
+ * Errors: GF_ERR_BAD_PARAMETER (bad configuration, |lat| at or beyond the latitude
+ * limit with EARTH_WGS84 (90 deg with EARTH_FLAT), quaternion not normalisable),
+ * GF_ERR_NONFINITE_INPUT. */
 gf_status gf_sins_init(gf_sins_state *state, const gf_sins_config *cfg, const double *q_bn,
                        const double *v_n_m_s, double lat_rad, double lon_rad, double h_m,
                        double t0_s);
@@ -164,6 +179,20 @@ gf_status gf_sins_run(gf_sins_state *state, size_t n, const double *gyro, const 
                       double *q_bn, double *v_n_m_s, double *pos, double *time_s,
                       size_t *n_done);
 /* CDEF END */
+
+/* The latitude limit in radians (GF_SINS_LAT_LIMIT_MDEG; cffi takes integer constants). */
+#define GF_SINS_LAT_LIMIT_RAD (GF_SINS_LAT_LIMIT_MDEG * (3.14159265358979323846 / 180000.0))
+
+/* Checks a state handed in by a caller (e.g. restored from saved bytes): a valid
+ * configuration (enumerations, limits), direction, a unit attitude quaternion (within
+ * 1e-6), finite velocity, acceleration, previous sample, baro state and time, the
+ * latitude within the limit with the kept sine and cosine of it (1e-12) and meridian
+ * radius (1e-6 relative), a finite longitude and height; with EARTH_FLAT a finite
+ * position. Error: GF_ERR_BAD_PARAMETER. gf_sins_step and gf_sins_run check before every
+ * call, with compares only, what selects a branch or divides (configuration, direction,
+ * attitude norm, latitude range, cos L > 0, R_M > 0); other non-finite numbers make the
+ * step's results non-finite: GF_ERR_DIVERGED. */
+gf_status gf_sins_state_check(const gf_sins_state *state);
 
 /* Internal to the core: gf_sins_step forward in time without the check of *state, for
  * callers that keep the state valid themselves (the integrated-navigation filter sets it

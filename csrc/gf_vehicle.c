@@ -10,6 +10,7 @@
 
 #define PIECE_MAX_S 0.25                 /* longest quadrature piece */
 #define LAT_MAX_RAD (89.0 * GF_PI / 180.0)
+#define STEP_MAX_S 1e5                   /* longest step (4e5 pieces; see gf_vehicle.h) */
 
 /* 8-node Gauss-Legendre rule on [-1, 1] (exact for degree 15). */
 static const double GL_X[8] = {-0.9602898564975363, -0.7966664774136267, -0.5255324099163290,
@@ -267,10 +268,47 @@ gf_status gf_vehicle_init(gf_vehicle_state *state, const gf_vehicle_profile *pro
     return GF_OK;
 }
 
+/* What a step or a command uses to index the profile or size its loops: the segment
+ * counts (n_segments within the array, next_segment not beyond it). Integer compares. */
+static int indices_valid(const gf_vehicle_state *st)
+{
+    return st->profile.n_segments <= GF_VEHICLE_MAX_SEGMENTS &&
+           st->next_segment <= st->profile.n_segments;
+}
+
+gf_status gf_vehicle_state_check(const gf_vehicle_state *st)
+{
+    if (!st)
+        return GF_ERR_NULL_POINTER;
+    if (!indices_valid(st))
+        return GF_ERR_BAD_SIZE;
+    const gf_vehicle_profile *p = &st->profile;
+    const double nums[] = {p->lat0_rad, p->lon0_rad, p->h0_m, p->heading0_rad, p->speed0_m_s,
+                           p->heading_rate0_rad_s, st->time_s, st->active.duration_s,
+                           st->active.dspeed_m_s, st->active.dheading_rate_rad_s,
+                           st->active.dheading_rad, st->active_t0_s, st->speed0_m_s,
+                           st->heading0_rad, st->heading_rate0_rad_s, st->east_m, st->north_m,
+                           st->R_M0_m, st->R_N0_m};
+    if (!gf_all_finite(nums, sizeof nums / sizeof nums[0]))
+        return GF_ERR_NONFINITE_INPUT;
+    for (size_t k = 0; k < p->n_segments; ++k) {
+        const gf_vehicle_segment *g = &p->segment[k];
+        if (!isfinite(g->duration_s) || !isfinite(g->dspeed_m_s) ||
+            !isfinite(g->dheading_rate_rad_s) || !isfinite(g->dheading_rad))
+            return GF_ERR_NONFINITE_INPUT;
+    }
+    if (!(fabs(p->lat0_rad) < LAT_MAX_RAD) || !(p->h0_m >= -1000.0 && p->h0_m <= 1e5) ||
+        !(st->R_M0_m > 0.0) || !(st->R_N0_m > 0.0))
+        return GF_ERR_BAD_PARAMETER;
+    return GF_OK;
+}
+
 gf_status gf_vehicle_truth(const gf_vehicle_state *state, gf_vehicle_sample *sample)
 {
     if (!state || !sample)
         return GF_ERR_NULL_POINTER;
+    if (!indices_valid(state))
+        return GF_ERR_BAD_SIZE;
     gf_vehicle_sample out;
     const gf_status status = evaluate(state, state->time_s, kinematics(state, state->time_s),
                                       state->east_m, state->north_m, &out);
@@ -287,6 +325,8 @@ gf_status gf_vehicle_command(gf_vehicle_state *state, double speed_m_s,
 {
     if (!state)
         return GF_ERR_NULL_POINTER;
+    if (!indices_valid(state))
+        return GF_ERR_BAD_SIZE;
     if (!isfinite(speed_m_s) || !isfinite(heading_rate_rad_s) || !isfinite(duration_s))
         return GF_ERR_NONFINITE_INPUT;
     if (speed_m_s < 0.0 || !(duration_s > 0.0))
@@ -308,7 +348,9 @@ gf_status gf_vehicle_step(gf_vehicle_state *state, double t_end_s, gf_vehicle_sa
 {
     if (!state || !sample)
         return GF_ERR_NULL_POINTER;
-    if (!(t_end_s > state->time_s) || !isfinite(t_end_s))
+    if (!indices_valid(state))
+        return GF_ERR_BAD_SIZE;
+    if (!(t_end_s > state->time_s) || !isfinite(t_end_s) || !(t_end_s - state->time_s <= STEP_MAX_S))
         return GF_ERR_BAD_TIME;
     gf_vehicle_state s = *state;
     const double t_end = t_end_s;

@@ -109,8 +109,10 @@ gf_status gf_vehicle_command(gf_vehicle_state *state, double speed_m_s,
 
 /* Advances to t_end_s (> the state's time) and fills *sample there, increments over the
  * step. Times are absolute so that long runs do not accumulate a time drift.
- * Errors: GF_ERR_BAD_TIME (t_end not after the state's time, or non-finite),
- * GF_ERR_DIVERGED (latitude beyond +-89 deg); the state is unchanged on error. */
+ * Errors: GF_ERR_BAD_TIME (t_end not after the state's time, non-finite, or more than
+ * 1e5 s after it: one step integrates up to 4e5 quadrature pieces), GF_ERR_DIVERGED
+ * (latitude beyond +-89 deg), GF_ERR_BAD_SIZE (segment counts of the state out of
+ * range, see gf_vehicle_state_check); the state is unchanged on error. */
 gf_status gf_vehicle_step(gf_vehicle_state *state, double t_end_s, gf_vehicle_sample *sample);
 
 /* The truth at the state's own time (state->time_s): pose, velocity and sensor rates,
@@ -124,6 +126,13 @@ gf_status gf_vehicle_truth(const gf_vehicle_state *state, gf_vehicle_sample *sam
 gf_status gf_vehicle_run(gf_vehicle_state *state, size_t n, double dt_s,
                          gf_vehicle_sample *samples, size_t *n_done);
 /* CDEF END */
+
+/* Checks a state handed in by a caller (e.g. restored from saved bytes). gf_vehicle_step
+ * and gf_vehicle_command check before every call what indexes the profile (n_segments
+ * <= GF_VEHICLE_MAX_SEGMENTS, next_segment <= n_segments: GF_ERR_BAD_SIZE); this also
+ * checks every number finite (GF_ERR_NONFINITE_INPUT) and the start position and radii
+ * as gf_vehicle_init would (GF_ERR_BAD_PARAMETER). */
+gf_status gf_vehicle_state_check(const gf_vehicle_state *state);
 
 #ifdef __cplusplus
 }

@@ -174,7 +174,9 @@ class ImuErrors:
         if status != lib.GF_OK:
             k = int(done[0])
             what = ("is not finite" if status == lib.GF_ERR_NONFINITE_INPUT else
-                    "is beyond the K2 model (no real specific force gives this output)")
+                    "is outside the error model's range (a scale factor at that temperature "
+                    "not in (-0.5, 0.5), an output overflowing, or in compensate a K2 "
+                    "quadratic without a real root)")
             raise NonFiniteInputError(f"sample {k} ({names[0]}, {names[1]}, temperature) {what}; "
                                       "rows before it are in .partial", k, -1,
                                       (out_w[:k].copy(), out_f[:k].copy()))

@@ -92,7 +92,7 @@ class BiquadFilter:
         x0 = np.asarray(x0, float).reshape(self.n_channels)
         zi = sosfilt_zi(self.sos)                              # (n_sections, 2) per unit step
         z = np.ascontiguousarray(zi[:, None, :] * x0[None, :, None])
-        if lib.gf_biquad_set_state(self._c, ptr(z, z.size)) != lib.GF_OK:
+        if lib.gf_biquad_set_state(self._c, ptr(z, z.size), z.size) != lib.GF_OK:
             raise ValueError("x0 must be finite")
 
     def filter(self, x) -> np.ndarray:

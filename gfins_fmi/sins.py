@@ -168,7 +168,8 @@ class NavState:
 
     def checked(self, flat: bool = False) -> "NavState":
         """This state with every field checked: C-contiguous float64 arrays of the right
-        shape, finite values, latitude in (-90, 90) deg, height above -a/2, a quaternion
+        shape, finite values, latitude inside the mechanization's limit (+-89.9 deg; a
+        fixed frame: +-90 deg), height above -a/2, a quaternion
         that can be normalised; ``pos_m`` (3,) for a fixed frame (``flat``; None: the
         origin). Every navigator checks its initial state here before C reads it.
 
@@ -183,9 +184,12 @@ class NavState:
                              "attitude quaternion")
         v = as_array("initial.v_n_m_s", self.v_n_m_s, (3,), "m/s (east, north, up)")
         lat = as_scalar("initial.lat_rad", self.lat_rad, "rad")
-        if not abs(lat) < np.pi / 2:
+        lim = 90.0 if flat else lib.GF_SINS_LAT_LIMIT_MDEG / 1000.0
+        if not abs(np.degrees(lat)) < lim:
             raise ValueError(f"initial.lat_rad = {lat!r} rad ({np.degrees(lat):.6g} deg) is outside "
-                             "(-90, 90) deg: the ENU frame is singular at the poles")
+                             f"(-{lim:g}, {lim:g}) deg" + ("" if flat else
+                             ": the latitude limit of the ENU mechanization (its frame is "
+                             "singular at the poles)"))
         lon = as_scalar("initial.lon_rad", self.lon_rad, "rad")
         h = as_scalar("initial.h_m", self.h_m, "m")
         if not h > -0.5 * _A_M:

@@ -9,16 +9,41 @@
 
 #define FMU_MESSAGE_MAX 1024
 
-/* Serialized FMU state: this header, then the FmuSnapshot bytes. The token ties a
- * state to the exact interface (and so ModelData layout) that wrote it. */
+/* Serialized FMU state: this header, then the FmuSnapshot bytes (fmu_instance.h). The
+ * token ties a state to the exact interface (and so ModelData layout) that wrote it;
+ * the CRC-32 finds damaged bytes (format 1 had no CRC and is refused). */
 #define FMU_STATE_MAGIC "GFINSFMU"
-#define FMU_STATE_FORMAT 1u
+#define FMU_STATE_FORMAT 2u
 typedef struct FmuStateHeader {
     char magic[8];
     uint32_t format;
     uint32_t snapshot_size;
+    uint32_t crc32;           /* CRC-32 of the snapshot bytes */
+    uint32_t reserved;        /* 0 */
     char token[48];
 } FmuStateHeader;
+_Static_assert(sizeof(FmuStateHeader) == 72, "serialized header layout (docs/fmu.md)");
+
+/* CRC-32 of IEEE 802.3 (reflected polynomial 0xEDB88320, initial value and final xor
+ * 0xFFFFFFFF; zlib's crc32, check value 0xCBF43926 for "123456789"), a byte at a time.
+ * The table is made by the compiler from the polynomial: entry v is the CRC register
+ * after shifting v through it 8 times (CRC_SHIFT is one shift: the polynomial is xored
+ * in when the bit leaving is 1). */
+#define CRC_SHIFT(c) (((c) >> 1) ^ (0xEDB88320u & (0u - ((c) & 1u))))
+#define CRC_ENTRY(v)                                                                          \
+    CRC_SHIFT(CRC_SHIFT(CRC_SHIFT(CRC_SHIFT(CRC_SHIFT(CRC_SHIFT(CRC_SHIFT(CRC_SHIFT((uint32_t)(v)))))))))
+#define CRC_ROW4(v) CRC_ENTRY(v), CRC_ENTRY((v) + 1), CRC_ENTRY((v) + 2), CRC_ENTRY((v) + 3)
+#define CRC_ROW16(v) CRC_ROW4(v), CRC_ROW4((v) + 4), CRC_ROW4((v) + 8), CRC_ROW4((v) + 12)
+#define CRC_ROW64(v) CRC_ROW16(v), CRC_ROW16((v) + 16), CRC_ROW16((v) + 32), CRC_ROW16((v) + 48)
+static const uint32_t kCrcTable[256] = {CRC_ROW64(0), CRC_ROW64(64), CRC_ROW64(128), CRC_ROW64(192)};
+
+static uint32_t crc32_ieee(const uint8_t *p, size_t n)
+{
+    uint32_t crc = 0xFFFFFFFFu;
+    for (size_t i = 0; i < n; ++i)
+        crc = (crc >> 8) ^ kCrcTable[(crc ^ p[i]) & 0xFFu];
+    return crc ^ 0xFFFFFFFFu;
+}
 
 static const char *mode_name(uint32_t mode)
 {
@@ -331,19 +356,57 @@ FmuStatus fmu_set(FmuInstance *instance, const FmuVariable *table, size_t n_tabl
     return FMU_OK;
 }
 
+/* NULL if a snapshot may be used by this instance, else why not. The model data are
+ * checked when the model has been initialized (step mode, terminated): before that they
+ * are parameters, which exitInitializationMode checks and from which it rebuilds every
+ * internal, and only the variable table reads them. */
+static const char *snapshot_invalid(const FmuSnapshot *s)
+{
+    if (s->mode == 0 || (s->mode & ~FMU_MODE_ANY) || (s->mode & (s->mode - 1)))
+        return "its mode is invalid";
+    if (s->stop_time_defined != 0 && s->stop_time_defined != 1)
+        return "its stop-time flag is not 0 or 1";
+    if (!isfinite(s->time_s) || !isfinite(s->start_time_s) ||
+        (s->stop_time_defined && !isfinite(s->stop_time_s)))
+        return "it holds a non-finite time";
+    if (s->mode & (FMU_MODE_STEP | FMU_MODE_TERMINATED))
+        return model_validate_state(&s->data);
+    return NULL;
+}
+
+/* 1 if p is a state object made by this FMU (tag and token). */
+static int is_own_state(const FmuState *p)
+{
+    return memcmp(p->tag, FMU_STATE_TAG, sizeof p->tag) == 0 &&
+           strncmp(p->token, INSTANTIATION_TOKEN, sizeof p->token) == 0;
+}
+
+static void tag_state(FmuState *p)
+{
+    memset(p->tag, 0, sizeof p->tag);
+    memcpy(p->tag, FMU_STATE_TAG, sizeof FMU_STATE_TAG);
+    memset(p->token, 0, sizeof p->token);
+    strncpy(p->token, INSTANTIATION_TOKEN, sizeof p->token - 1);
+}
+
 FmuStatus fmu_state_get(FmuInstance *instance, void **state)
 {
     if (!state) {
         fmu_log_error(instance, "getFMUState: NULL state pointer");
         return FMU_ERROR;
     }
-    FmuSnapshot *snapshot = *state ? (FmuSnapshot *)*state : malloc(sizeof *snapshot);
-    if (!snapshot) {
+    if (*state && !is_own_state((const FmuState *)*state)) {
+        fmu_log_error(instance, "getFMUState: the state to overwrite was not made by this FMU");
+        return FMU_ERROR;
+    }
+    FmuState *p = *state ? (FmuState *)*state : malloc(sizeof *p);
+    if (!p) {
         fmu_log_error(instance, "getFMUState: out of memory");
         return FMU_ERROR;
     }
-    *snapshot = instance->s;
-    *state = snapshot;
+    tag_state(p);
+    p->s = instance->s;
+    *state = p;
     return FMU_OK;
 }
 
@@ -353,15 +416,32 @@ FmuStatus fmu_state_set(FmuInstance *instance, const void *state)
         fmu_log_error(instance, "setFMUState: NULL state");
         return FMU_ERROR;
     }
-    instance->s = *(const FmuSnapshot *)state;
+    const FmuState *p = (const FmuState *)state;
+    if (!is_own_state(p)) {
+        fmu_log_error(instance, "setFMUState: the state is refused: it was not made by this FMU "
+                      "(another FMU's state, a freed state, or not a state)");
+        return FMU_ERROR;
+    }
+    const char *why = snapshot_invalid(&p->s);
+    if (why) {
+        fmu_log_error(instance, "setFMUState: the state is refused: %s; the instance is "
+                      "unchanged", why);
+        return FMU_ERROR;
+    }
+    instance->s = p->s;
     return FMU_OK;
 }
 
 FmuStatus fmu_state_free(FmuInstance *instance, void **state)
 {
-    (void)instance;
-    if (state) {
-        free(*state);
+    if (state && *state) {
+        FmuState *p = (FmuState *)*state;
+        if (!is_own_state(p)) {
+            fmu_log_error(instance, "freeFMUState: the state was not made by this FMU; not freed");
+            return FMU_ERROR;
+        }
+        memset(p->tag, 0, sizeof p->tag);
+        free(p);
         *state = NULL;
     }
     return FMU_OK;
@@ -379,19 +459,26 @@ FmuStatus fmu_state_serialize(FmuInstance *instance, const void *state, uint8_t 
         fmu_log_error(instance, "serializeFMUState: NULL state or buffer");
         return FMU_ERROR;
     }
+    if (!is_own_state((const FmuState *)state)) {
+        fmu_log_error(instance, "serializeFMUState: the state was not made by this FMU");
+        return FMU_ERROR;
+    }
     if (size != fmu_state_serialized_size()) {
         fmu_log_error(instance, "serializeFMUState: buffer of %zu bytes, expected %zu", size,
                       fmu_state_serialized_size());
         return FMU_ERROR;
     }
+    const FmuSnapshot *snapshot = &((const FmuState *)state)->s;
     FmuStateHeader header;
     memset(&header, 0, sizeof header);
     memcpy(header.magic, FMU_STATE_MAGIC, sizeof header.magic);
     header.format = FMU_STATE_FORMAT;
     header.snapshot_size = (uint32_t)sizeof(FmuSnapshot);
     strncpy(header.token, INSTANTIATION_TOKEN, sizeof header.token - 1);
+    memcpy(buffer + sizeof header, snapshot, sizeof *snapshot);
+    /* over the bytes as written, padding included: the reader checks those same bytes */
+    header.crc32 = crc32_ieee(buffer + sizeof header, sizeof *snapshot);
     memcpy(buffer, &header, sizeof header);
-    memcpy(buffer + sizeof header, state, sizeof(FmuSnapshot));
     return FMU_OK;
 }
 
@@ -417,25 +504,27 @@ FmuStatus fmu_state_deserialize(FmuInstance *instance, const uint8_t *buffer, si
                       "(wrong header, format or instantiation token)");
         return FMU_ERROR;
     }
-    FmuSnapshot snapshot;
-    memcpy(&snapshot, buffer + sizeof header, sizeof snapshot);
-    if (snapshot.mode == 0 || (snapshot.mode & ~FMU_MODE_ANY) ||
-        (snapshot.mode & (snapshot.mode - 1))) {
-        fmu_log_error(instance, "deserializeFMUState: the state holds an invalid mode");
+    const uint32_t crc = crc32_ieee(buffer + sizeof header, sizeof(FmuSnapshot));
+    if (crc != header.crc32) {
+        fmu_log_error(instance, "deserializeFMUState: the state is damaged (CRC-32 of its %zu "
+                      "bytes is 0x%08x, the header says 0x%08x); refused",
+                      sizeof(FmuSnapshot), (unsigned)crc, (unsigned)header.crc32);
         return FMU_ERROR;
     }
-    if (!isfinite(snapshot.time_s) || !isfinite(snapshot.start_time_s) ||
-        (snapshot.stop_time_defined && !isfinite(snapshot.stop_time_s))) {
-        fmu_log_error(instance, "deserializeFMUState: the state holds a non-finite time");
-        return FMU_ERROR;
-    }
-    /* always a new state: *state may hold anything (or a state the importer keeps) */
-    FmuSnapshot *copy = malloc(sizeof *copy);
+    FmuState *copy = malloc(sizeof *copy);
     if (!copy) {
         fmu_log_error(instance, "deserializeFMUState: out of memory");
         return FMU_ERROR;
     }
-    *copy = snapshot;
+    memcpy(&copy->s, buffer + sizeof header, sizeof copy->s);
+    const char *why = snapshot_invalid(&copy->s);
+    if (why) {
+        free(copy);
+        fmu_log_error(instance, "deserializeFMUState: the state is refused: %s", why);
+        return FMU_ERROR;
+    }
+    /* always a new state: *state may hold anything (or a state the importer keeps) */
+    tag_state(copy);
     *state = copy;
     return FMU_OK;
 }

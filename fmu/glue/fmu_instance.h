@@ -34,6 +34,16 @@ typedef struct FmuSnapshot {
     ModelData data;
 } FmuSnapshot;
 
+/* An FMU state object (what getFMUState hands out): a tag naming the FMU that made it,
+ * then the snapshot. setFMUState, serializeFMUState and freeFMUState refuse an object
+ * whose tag is not this FMU's (a state of another FMU, or not a state at all). */
+#define FMU_STATE_TAG "GFINSST"
+typedef struct FmuState {
+    char tag[8];              /* FMU_STATE_TAG */
+    char token[48];           /* INSTANTIATION_TOKEN of the FMU that made it */
+    FmuSnapshot s;
+} FmuState;
+
 /* Sends one formatted message to the importer (implemented per FMI version). */
 typedef void (*FmuSendLog)(FmuInstance *instance, FmuStatus status, const char *category,
                            const char *message);
@@ -73,7 +83,14 @@ FmuStatus fmu_set(FmuInstance *instance, const FmuVariable *table, size_t n_tabl
                   FmuType type, const unsigned int *vr, size_t n_vr, const void *values,
                   size_t n_values, const char *function);
 
-/* FMU states (opaque FmuSnapshot copies) and their serialization. */
+/* FMU states (FmuState objects, opaque to the importer) and their serialization.
+ * Serialized form (docs/fmu.md): a 72-byte header — magic "GFINSFMU", format 2, the
+ * snapshot size, the CRC-32 (IEEE 802.3, as zlib.crc32) of the snapshot bytes, 4 zero
+ * bytes, the instantiation token (48 bytes, zero padded) — then the FmuSnapshot bytes.
+ * A state is used only after every check passes: on deserialize the header, the CRC-32
+ * and the contents (mode, times, and for an initialized model model_validate_state); on
+ * setFMUState the tag and the contents again. A refused state changes nothing and the
+ * reason is logged. */
 FmuStatus fmu_state_get(FmuInstance *instance, void **state);
 FmuStatus fmu_state_set(FmuInstance *instance, const void *state);
 FmuStatus fmu_state_free(FmuInstance *instance, void **state);

@@ -67,4 +67,14 @@ FmuStatus model_exit_initialization(FmuInstance *instance, struct ModelData *dat
  * outputs readable). */
 FmuStatus model_do_step(FmuInstance *instance, struct ModelData *data, double t_s, double h_s);
 
+/* Checks model data that did not come from this instance's own steps: a deserialized
+ * FMU state, or a state object handed back to setFMUState. The glue calls it for states
+ * of an initialized model (step mode or terminated; before initialization the data are
+ * parameters that exitInitializationMode checks, and the internals are rebuilt there).
+ * It must check every field that sizes a copy, indexes an array or selects a branch in
+ * model_do_step (and the core structs it hands to the core, with their gf_*_check), so
+ * that no content of data can make a step read or write out of bounds. Returns NULL if
+ * the data may be used, else a static text naming the first bad field. */
+const char *model_validate_state(const struct ModelData *data);
+
 #endif /* FMU_MODEL_H */

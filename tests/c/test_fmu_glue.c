@@ -13,7 +13,10 @@
  *   2. two instances (different l and motion) interleaved call by call = each alone;
  *   3. FMU states: get at mid-run / replay / set back / replay bitwise; serialize ->
  *      free -> deserialize -> set, into the same and into a fresh instance; corrupted
- *      serialized states are rejected without allocating anything;
+ *      serialized states are rejected without allocating anything (a flipped bit by the
+ *      CRC-32, checked against an independent CRC; crafted contents with the CRC-32
+ *      recomputed by the field checks); a corrupted state object, or one not made by
+ *      this FMU, is refused by setFMUState (and not freed by freeFMUState);
  *   4. call-sequence errors return fmiXError and log a message naming the function;
  *   5. bad inputs: NaN in A (error naming A[i], outputs keep the last good sample),
  *      l <= 0 or not finite, wrong token, model exchange / scheduled execution;
@@ -44,6 +47,7 @@
 #include "fmi2Functions.h"
 #include "fmi3Functions.h"
 #include "fmu_instance.h" /* FmuSnapshot (to corrupt states), model_vars.h */
+#include "fmu_state_ref.h"  /* the serialized format and an independent CRC-32 */
 #include "gf_accel_array.h"
 #include "gf_test.h"
 
@@ -859,10 +863,31 @@ static void test_corrupted_states(Fmu *m, const SampleSet *s, const uint8_t *goo
         expect_rejected_state(m, bad, size, "deserialize: state of another build (token)");
     }
 
+    /* the header's CRC-32 is that of the snapshot bytes (an independent bitwise CRC);
+     * a flipped bit anywhere after the header is refused by it */
+    CHECK(snap == REF_STATE_HEADER_SIZE, "%s: header of %zu bytes, docs/fmu.md says %d",
+          api->label, snap, REF_STATE_HEADER_SIZE);
+    CHECK(ref_crc32_check(), "the reference CRC-32 misses the check value");
+    CHECK(ref_state_crc(good) == ref_crc32(good + snap, size - snap),
+          "%s: the header's CRC-32 is not the CRC-32 of the snapshot", api->label);
+    const size_t flips[4] = {snap, snap + offsetof(FmuSnapshot, data), size / 2, size - 1};
+    for (int i = 0; i < 4; ++i) {
+        memcpy(bad, good, size);
+        bad[flips[i]] ^= 0x10;
+        void *state = NULL;
+        const int st = api->deserialize(m->c, bad, size, &state);
+        CHECK(st == api->error && state == NULL && mentions(&m->env, "CRC-32"),
+              "%s: a bit flipped at byte %zu was not refused by the CRC-32: %s", api->label,
+              flips[i], m->env.text);
+        env_clear(&m->env);
+    }
+
+    /* crafted states (the CRC-32 recomputed) are checked field by field */
     const uint32_t bad_modes[3] = {0u, FMU_MODE_STEP | FMU_MODE_ERROR, 1u << 7};
     for (int i = 0; i < 3; ++i) {
         memcpy(bad, good, size);
         memcpy(bad + snap + offsetof(FmuSnapshot, mode), &bad_modes[i], sizeof(uint32_t));
+        ref_state_fix_crc(bad, size);
         expect_rejected_state(m, bad, size, "deserialize: invalid mode");
     }
 
@@ -882,6 +907,7 @@ static void test_corrupted_states(Fmu *m, const SampleSet *s, const uint8_t *goo
     for (int i = 0; i < 2; ++i) {
         memcpy(bad, good, size);
         memcpy(bad + snap + poison[i].offset, &nan_value, sizeof nan_value);
+        ref_state_fix_crc(bad, size);
         void *state = NULL;
         int st = api->deserialize(m->c, bad, size, &state);
         int step_st = api->error;
@@ -894,6 +920,29 @@ static void test_corrupted_states(Fmu *m, const SampleSet *s, const uint8_t *goo
               "%s deserialize: state with the %s accepted, and doStep(%g, %g) then returned %d "
               "instead of an error", api->label, poison[i].what, t_s, H_S, step_st);
         env_clear(&m->env);
+    }
+
+    /* A state object handed back to setFMUState is checked again: its contents, and its
+     * tag (a state of another FMU, or not a state, is neither used nor freed). */
+    void *obj = NULL;
+    CHECK(api->get_state(m->c, &obj) == api->ok && obj != NULL, "%s: getFMUState", api->label);
+    if (obj) {
+        FmuState *p = (FmuState *)obj;
+        const double saved = p->s.data.solver.lever_arm_m;
+        p->s.data.solver.lever_arm_m = nan_value;
+        expect_error(m, api->set_state(m->c, obj), "setFMUState: lever arm NaN in the object",
+                     "setFMUState", "refused");
+        p->s.data.solver.lever_arm_m = saved;
+        p->tag[0] ^= 0x20;
+        expect_error(m, api->set_state(m->c, obj), "setFMUState: not this FMU's state",
+                     "setFMUState", "not made by this FMU");
+        expect_error(m, api->free_state(m->c, &obj), "freeFMUState: not this FMU's state",
+                     "freeFMUState", "not freed");
+        CHECK(obj != NULL, "%s: a foreign state object was freed", api->label);
+        p->tag[0] ^= 0x20;
+        CHECK(api->set_state(m->c, obj) == api->ok, "%s: the repaired state object is refused: %s",
+              api->label, m->env.text);
+        api->free_state(m->c, &obj);
     }
 }
 

@@ -9,7 +9,15 @@
  *      t_2 from the state given equals the core started there;
  *   3. FMU state mid-run: set back and replay, and serialize into a fresh instance: the
  *      same outputs;
- *   4. skip_steps < 0 is refused with a logged reason. */
+ *   4. skip_steps < 0 is refused with a logged reason;
+ *   5. damaged and crafted states (check_damaged_states in fmu2_test.h): one flipped bit
+ *      is refused by the CRC-32; every field that sizes a copy, indexes an array or
+ *      selects a branch, set out of range in a crafted state (CRC recomputed) or in a
+ *      state object handed to setFMUState, is refused with a reason naming it; random
+ *      bytes in the live structs never make a step read or write out of bounds (ASan);
+ *      afterwards the instance continues exactly as before. The SINS model runs with
+ *      IMU compensation and a (pass-through) low-pass on, the gyro-free one with the
+ *      fused strategy, so that those structs are live. */
 #include <string.h>
 
 #include "fmi2Functions.h"
@@ -60,21 +68,39 @@ static fmi2Component open_ready(int skip)
     return c;
 }
 
-static void fmu_steps(fmi2Component c, int k0, int k1, double out[][N_OUT])
+static void output_vrs(fmi2ValueReference r[N_OUT])
 {
-    fmi2ValueReference r[N_OUT];
     vrs("q", 4, r);
     vrs("v", 3, r + 4);
     r[7] = vr("lat");
     r[8] = vr("lon");
-    for (int k = k0; k < k1; ++k) {
+}
+
+/* Sets the inputs of sample k and steps from its time. */
+static fmi2Status nav_step_k(fmi2Component c, int k)
+{
 #ifdef NAV_SINS
-        set_vec(c, "dtheta", g_truth[k].dtheta_rad, 3);
-        set_vec(c, "dv", g_truth[k].dv_m_s, 3);
+    set_vec(c, "dtheta", g_truth[k].dtheta_rad, 3);
+    set_vec(c, "dv", g_truth[k].dv_m_s, 3);
 #else
-        set_vec(c, "A", g_A[k], 9);
+    set_vec(c, "A", g_A[k], 9);
 #endif
-        CHECK(fmi2DoStep(c, k * H_S, H_S, fmi2True) == fmi2OK, "doStep %d: %s", k, g_log);
+    return fmi2DoStep(c, k * H_S, H_S, fmi2True);
+}
+
+/* The same at time t_s (a StateStepFn of fmu2_test.h). */
+static fmi2Status nav_step(fmi2Component c, double t_s)
+{
+    const int k = (int)lround(t_s / H_S);
+    return k >= 0 && k < N ? nav_step_k(c, k) : fmi2Error;
+}
+
+static void fmu_steps(fmi2Component c, int k0, int k1, double out[][N_OUT])
+{
+    fmi2ValueReference r[N_OUT];
+    output_vrs(r);
+    for (int k = k0; k < k1; ++k) {
+        CHECK(nav_step_k(c, k) == fmi2OK, "doStep %d: %s", k, g_log);
         fmi2GetReal(c, r, N_OUT, out[k]);
     }
 }
@@ -182,6 +208,68 @@ static void test_bad_skip(void)
     fmi2FreeInstance(c);
 }
 
+static void test_damaged_states(void)
+{
+    fmi2Component c = open_ready(0);
+#ifdef NAV_SINS
+    const double pass_through[6] = {1, 0, 0, 1, 0, 0};
+    set_int(c, "imu_comp", 1);
+    set_int(c, "lowpass_sections", 1);
+    set_vec(c, "lowpass_sos", pass_through, 6);
+    const StatePatch patches[] = {
+        PATCH('i', lowpass_sections, 1000, "lowpass_sections"),
+        PATCH('i', lowpass_sections, -1, "lowpass_sections"),
+        PATCH('z', lowpass.n_channels, 1e6, "low-pass"),
+        PATCH('z', lowpass.n_sections, 0, "low-pass"),
+        PATCH('d', lowpass.sos[5], 1.5, "low-pass"),
+        PATCH('i', imu_comp, 2, "imu_comp"),
+        PATCH('i', imu.temp_order, 99, "IMU error"),
+        PATCH('i', nav.cfg.input, 7, "navigation state"),
+        PATCH('i', nav.cfg.vertical, -1, "navigation state"),
+        PATCH('d', nav.q_bn[0], 5.0, "navigation state"),
+        PATCH('d', nav.lat_rad, 1.5707963, "navigation state"),
+        PATCH('i', skipped, -3, "skip"),
+        PATCH('i', started, 7, "started"),
+        PATCH('d', previous_step_s, NAN, "previous_step"),
+    };
+    const StateRegion regions[] = {
+        REGION(nav.cfg), REGION(nav), REGION(imu), REGION_HEAD(lowpass, 16 + 6 * 8),
+        REGION(lowpass_sections), REGION(imu_comp), REGION(skip_steps), REGION(skipped),
+        REGION(started), REGION(previous_step_s)};
+#else
+    set_int(c, "strategy", 3);
+    const StatePatch patches[] = {
+        PATCH('z', nav.rate.solver.n_sensors, 1000, "rate solver"),
+        PATCH('z', nav.rate.solver.n_sensors, 12, "sensor count"),
+        PATCH('z', nav.rate.solver.n_est, 13, "rate solver"),
+        PATCH('i', nav.rate.solver.est[0], 12, "rate solver"),
+        PATCH('i', nav.rate.solver.est[5], -1, "rate solver"),
+        PATCH('i', nav.rate.cfg.strategy, 4, "rate solver"),
+        PATCH('i', nav.rate.n_w_meas, 12, "rate solver"),
+        PATCH('z', nav.rate.kf.n, 36, "rate solver"),
+        PATCH('d', nav.rate.kf.P[7], NAN, "rate solver"),
+        PATCH('i', nav.nav.cfg.input, 0, "navigation state"),
+        PATCH('i', nav.nav.cfg.earth, 2, "navigation state"),
+        PATCH('i', skipped, 5, "skip"),
+        PATCH('i', started, -1, "started"),
+    };
+    const StateRegion regions[] = {
+        REGION_HEAD(nav.rate.solver, offsetof(gf_array_solver, noise_gain)),
+        REGION(nav.rate.cfg), REGION(nav.rate.n_w_meas), REGION_HEAD(nav.rate.kf, 64),
+        REGION(nav.nav.cfg), REGION(nav.nav), REGION(skip_steps), REGION(skipped),
+        REGION(started), REGION(previous_step_s)};
+#endif
+    CHECK(fmi2ExitInitializationMode(c) == fmi2OK, "exit: %s", g_log);
+    const int mid = N / 2;
+    fmu_steps(c, 0, mid, g_fmu);
+    fmi2ValueReference r[N_OUT];
+    output_vrs(r);
+    check_damaged_states(c, mid * H_S, H_S, nav_step, N - mid, r, N_OUT, patches,
+                         sizeof patches / sizeof patches[0], regions,
+                         sizeof regions / sizeof regions[0], 1000);
+    fmi2FreeInstance(c);
+}
+
 int main(void)
 {
     make_data();
@@ -189,5 +277,6 @@ int main(void)
     test_equals_core(2);
     test_states();
     test_bad_skip();
+    test_damaged_states();
     TEST_MAIN_END();
 }

@@ -11,7 +11,11 @@
  *   5. commands (drive = 1): a held command is reached after command_time;
  *   6. GNSS, barometer, odometer: every epoch delivered by the FMU equals the epoch of
  *      gf_aiding_run called directly with the same parameters and seed, bit for bit, in
- *      the first step that reaches its delivery time; the FMU state (3.) holds them. */
+ *      the first step that reaches its delivery time; the FMU state (3.) holds them;
+ *   7. damaged and crafted states (check_damaged_states in fmu2_test.h), with IMU errors
+ *      and noise on: refused with a reason (CRC-32, or the field), random bytes in the
+ *      live structs never make a step read or write out of bounds, and the instance
+ *      continues exactly as before. */
 #include <string.h>
 
 #include "fmi2Functions.h"
@@ -115,7 +119,14 @@ static gf_aiding_params aiding_params(void)
 }
 
 /* imu_errors: 0 none, 1 the IMU errors below, 2 the same and the aiding sensors */
+
+static fmi2Component open_ready_noise(const char *name, int imu_errors, int noise, double stop_s);
 static fmi2Component open_ready(const char *name, int imu_errors, double stop_s)
+{
+    return open_ready_noise(name, imu_errors, 0, stop_s);
+}
+
+static fmi2Component open_ready_noise(const char *name, int imu_errors, int noise, double stop_s)
 {
     fmi2Component c = instantiate(name);
     CHECK(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2True, stop_s) == fmi2OK, "setup");
@@ -132,6 +143,13 @@ static fmi2Component open_ready(const char *name, int imu_errors, double stop_s)
         set_vec(c, "accel_k2", k2, 3);
         set_vec(c, "lever_arm", lever, 3);
         set_vec(c, "gyro_misalign", mis, 9);
+    }
+    if (noise) {
+        set_int(c, "noise", 1);
+        set_real(c, "gyro_arw", 1e-4);
+        set_real(c, "accel_vrw", 1e-4);
+        set_real(c, "gyro_bias_instability", 1e-5);
+        set_real(c, "array_noise", 1e-4);
     }
     CHECK(fmi2ExitInitializationMode(c) == fmi2OK, "exit: %s", g_log);
     return c;
@@ -387,6 +405,42 @@ static void test_commands(void)
     fmi2FreeInstance(c);
 }
 
+static fmi2Status vehicle_step(fmi2Component c, double t_s)
+{
+    return fmi2DoStep(c, t_s, H_S, fmi2True);
+}
+
+static void test_damaged_states(void)
+{
+    fmi2Component c = open_ready_noise("damaged", 1, 1, N * H_S);
+    const StatePatch patches[] = {
+        PATCH('z', vehicle.next_segment, 1000, "vehicle state"),
+        PATCH('z', vehicle.profile.n_segments, 1000, "vehicle state"),
+        PATCH('d', vehicle.time_s, NAN, "vehicle state"),
+        PATCH('z', array.n_sensors, 64, "array"),
+        PATCH('i', array_layout, 3, "array"),
+        PATCH('i', drive, 2, "drive"),
+        PATCH('i', noise, 5, "noise"),
+        PATCH('i', imu_errors, -1, "imu_errors"),
+        PATCH('i', imu.temp_order, 99, "IMU error"),
+        PATCH('d', imu_noise.p.gyro_arw_rad_sqrt_s, -1.0, "noise state"),
+        PATCH('d', array_noise_m_s2, NAN, "array_noise"),
+        PATCH('d', command_time_s, 0.0, "command_time"),
+    };
+    const StateRegion regions[] = {
+        REGION_HEAD(vehicle.profile, 64), REGION_HEAD(vehicle.time_s, sizeof(gf_vehicle_state) -
+                                                     offsetof(gf_vehicle_state, time_s)),
+        REGION_HEAD(array, 16), REGION(imu_noise.p), REGION(imu), REGION(n_segments),
+        REGION(drive), REGION(imu_errors), REGION(array_layout), REGION(noise),
+        REGION(array_noise_m_s2), REGION(command_time_s)};
+    const int mid = N / 2;
+    run(c, 0, mid, g_a);
+    check_damaged_states(c, mid * H_S, H_S, vehicle_step, N - mid, g_out, N_OUT, patches,
+                         sizeof patches / sizeof patches[0], regions,
+                         sizeof regions / sizeof regions[0], 600);
+    fmi2FreeInstance(c);
+}
+
 int main(void)
 {
     init_outputs();
@@ -408,5 +462,6 @@ int main(void)
     expect_refused("odo_scale_error", 0.6, "odo_scale_error");
     test_aiding_equals_core();
     test_commands();
+    test_damaged_states();
     TEST_MAIN_END();
 }

@@ -26,6 +26,7 @@
  * Tolerances are justified where they are set; measured figures are printed.
  * Runs in ~0.15 s plain, ~0.8 s under AddressSanitizer + UBSan. */
 #include <float.h>
+#include <stddef.h>
 #include <stdint.h>
 #include <string.h>
 
@@ -956,7 +957,8 @@ static void test_kalman_errors(void)
     CHECK(gf_kalman_predict(NULL, NULL, NULL, 1) == GF_ERR_NULL_POINTER, "predict NULL kf");
     CHECK(kf_same(&kf, &before), "state unchanged by every rejected call");
     CHECK(gf_kalman_update(&kf, 2, r, H, R, NULL) == GF_OK, "then a good update works");
-    gf_kalman bad = kf;
+    gf_kalman bad;
+    bad = kf;
     bad.n = 0;
     CHECK(gf_kalman_predict(&bad, NULL, NULL, 1) == GF_ERR_BAD_SIZE, "predict n = 0");
     CHECK(gf_kalman_update(&bad, 1, r, H, R, NULL) == GF_ERR_BAD_SIZE, "update n = 0");
@@ -974,6 +976,57 @@ static void test_kalman_errors(void)
     const double xn[2] = {0, NAN}, Pn[4] = {1, 0, 0, INFINITY};
     CHECK(gf_kalman_init(&kf, 2, xn, P0) == GF_ERR_NONFINITE_INPUT, "init x0 NaN");
     CHECK(gf_kalman_init(&kf, 2, x0, Pn) == GF_ERR_NONFINITE_INPUT, "init P0 Inf");
+    CHECK(gf_kalman_init(&kf, 2, x0, P0) == GF_OK && gf_kalman_check(&kf) == GF_OK, "check good");
+    bad = kf;
+    bad.n = GF_KF_MAX_N + 1;
+    CHECK(gf_kalman_check(&bad) == GF_ERR_BAD_SIZE, "check n > max");
+    bad = kf;
+    bad.P[3] = NAN;
+    CHECK(gf_kalman_check(&bad) == GF_ERR_NONFINITE_INPUT, "check NaN in P");
+}
+
+/* R, Q and P0 are covariances and the engine reads all of each (gf_kalman.h). Before,
+ * the positive-definiteness check of R read its lower triangle only while S and the
+ * Joseph form used all of it: R = [[1, 5], [0, 1]] passed as the identity and was used
+ * as itself. Now a real asymmetry is refused, and a round-off one is symmetrised: the
+ * result equals the call with (A + A^T) / 2 formed here, bitwise. */
+static void test_kalman_symmetric_inputs(void)
+{
+    const double x0[2] = {0.5, -1.0}, P0[4] = {1.0, 0.2, 0.2, 2.0};
+    const double H[4] = {1.0, 0.5, 0.0, 1.0}, r[2] = {0.1, -0.3};
+    gf_kalman kf, ref, before;
+    CHECK(gf_kalman_init(&kf, 2, x0, P0) == GF_OK, "init");
+    before = kf;
+    const double R_asym[4] = {1.0, 5.0, 0.0, 1.0};
+    CHECK(gf_kalman_update(&kf, 2, r, H, R_asym, NULL) == GF_ERR_BAD_PARAMETER && kf_same(&kf, &before),
+          "R with R_12 = 5, R_21 = 0: BAD_PARAMETER, filter unchanged");
+    const double R_lower[4] = {1.0, 0.0, 5.0, 1.0};
+    CHECK(gf_kalman_update(&kf, 2, r, H, R_lower, NULL) == GF_ERR_BAD_PARAMETER && kf_same(&kf, &before),
+          "R with R_21 = 5, R_12 = 0: BAD_PARAMETER");
+    /* a round-off asymmetry (4 ulp of R_12) */
+    const double R_ro[4] = {2.0, 0.3, 0.3 * (1.0 + 4 * EPS), 1.5};
+    const double R_sym[4] = {2.0, 0.5 * R_ro[1] + 0.5 * R_ro[2], 0.5 * R_ro[1] + 0.5 * R_ro[2], 1.5};
+    ref = kf;
+    double nis1 = 0, nis2 = 0;
+    CHECK(gf_kalman_update(&kf, 2, r, H, R_ro, &nis1) == GF_OK, "round-off asymmetric R accepted");
+    CHECK(gf_kalman_update(&ref, 2, r, H, R_sym, &nis2) == GF_OK, "symmetrised R");
+    CHECK(kf_same(&kf, &ref) && nis1 == nis2, "update with R = update with (R + R^T) / 2, bitwise");
+    /* Q and P0 the same way */
+    const double F[4] = {1.0, 0.1, 0.0, 1.0};
+    const double Q_asym[4] = {0.01, 0.0, 0.02, 0.01};
+    before = kf;
+    CHECK(gf_kalman_predict(&kf, F, Q_asym, 1) == GF_ERR_BAD_PARAMETER && kf_same(&kf, &before),
+          "asymmetric Q: BAD_PARAMETER, filter unchanged");
+    const double Q_ro[4] = {0.01, 1e-3, 1e-3 * (1.0 - 2 * EPS), 0.02};
+    const double Q_sym[4] = {0.01, 0.5 * Q_ro[1] + 0.5 * Q_ro[2], 0.5 * Q_ro[1] + 0.5 * Q_ro[2], 0.02};
+    ref = kf;
+    CHECK(gf_kalman_predict(&kf, F, Q_ro, 1) == GF_OK && gf_kalman_predict(&ref, F, Q_sym, 1) == GF_OK &&
+              kf_same(&kf, &ref),
+          "predict with Q = predict with (Q + Q^T) / 2, bitwise");
+    const double P_asym[4] = {1.0, 0.2, -0.2, 2.0};
+    CHECK(gf_kalman_init(&kf, 2, x0, P_asym) == GF_ERR_BAD_PARAMETER, "asymmetric P0 refused");
+    const double P_ro[4] = {1.0, 0.2, 0.2 * (1.0 + 2 * EPS), 2.0};
+    CHECK(gf_kalman_init(&kf, 2, x0, P_ro) == GF_OK && kf.P[1] == kf.P[2], "round-off P0 symmetrised");
 }
 
 /* ======================================================================================
@@ -2403,6 +2456,91 @@ static void test_gfnav(void)
           "gfnav: NULL output");
 }
 
+/* A rate-solver state whose sizes, indices or strategy were corrupted (as a damaged FMU
+ * state would hold): every entry refuses it with GF_ERR_BAD_SIZE and changes nothing,
+ * instead of reading the outputs, pinv rows or x beyond their arrays. */
+static void test_rate_state_corrupted(void)
+{
+    layout L9;
+    make_layout(1, &L9);
+    gf_array_geometry g9;
+    to_geometry(&L9, &g9);
+    gf_rate_config rc;
+    gf_rate_config_default(&rc);
+    rc.strategy = GF_RATE_FUSED;
+    const double w0[3] = {0.3, -0.6, 0.4}, wd0[3] = {0, 0, 0};
+    gf_gfins_state good;
+    CHECK(gf_gfins_init(&good, &g9, &rc, w0, NULL) == GF_OK, "init fused qin9");
+    static double A[2 * GF_ARRAY_MAX_SENSORS];
+    double f[3];
+    cr_force(0.0, f);
+    outputs(&L9, f, w0, wd0, A);
+    outputs(&L9, f, w0, wd0, A + 9);
+    double fo[6], wo[6], wdo[6], W[12], x[GF_X_N];
+    uint8_t fl[2];
+    CHECK(gf_gfins_step(&good, A, 0.01, fo, wo, wdo, W, fl) == GF_OK, "a good step");
+    CHECK(gf_gfins_state_check(&good) == GF_OK, "check of a good state");
+    gf_sins_config sc;
+    gf_sins_config_default(&sc);
+    sc.input = GF_SINS_INPUT_RATES;
+    const double q0[4] = {1, 0, 0, 0}, v0[3] = {0, 0, 0};
+    gf_gfnav_state nav;
+    CHECK(gf_gfnav_init(&nav, &g9, &rc, w0, &sc, q0, v0, 0.5, 1.0, 0.0, 0.0, NULL) == GF_OK, "gfnav init");
+    const struct { const char *what; size_t off; int is_size; double value; } bad[] = {
+        {"n_sensors 0", offsetof(gf_gfins_state, solver.n_sensors), 1, 0},
+        {"n_sensors 65", offsetof(gf_gfins_state, solver.n_sensors), 1, GF_ARRAY_MAX_SENSORS + 1},
+        {"n_sensors 1e9", offsetof(gf_gfins_state, solver.n_sensors), 1, 1e9},
+        {"n_est 13", offsetof(gf_gfins_state, solver.n_est), 1, 13},
+        {"est[0] 12", offsetof(gf_gfins_state, solver.est[0]), 0, 12},
+        {"est[5] -1", offsetof(gf_gfins_state, solver.est[5]), 0, -1},
+        {"strategy 4", offsetof(gf_gfins_state, cfg.strategy), 0, 4},
+        {"strategy -1", offsetof(gf_gfins_state, cfg.strategy), 0, -1},
+        {"n_w_meas 12", offsetof(gf_gfins_state, n_w_meas), 0, 12},
+        {"kf.n 36", offsetof(gf_gfins_state, kf.n), 1, 36},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
+        gf_gfins_state st = good, before;
+        if (bad[i].is_size) {
+            const size_t v = (size_t)bad[i].value;
+            memcpy((char *)&st + bad[i].off, &v, sizeof v);
+        } else {
+            const int32_t v = (int32_t)bad[i].value;
+            memcpy((char *)&st + bad[i].off, &v, sizeof v);
+        }
+        before = st;
+        size_t done = 99;
+        CHECK(gf_gfins_step(&st, A, 0.01, fo, wo, wdo, W, fl) == GF_ERR_BAD_SIZE &&
+                  memcmp(&st, &before, sizeof st) == 0,
+              "%s: gf_gfins_step BAD_SIZE, state unchanged", bad[i].what);
+        CHECK(gf_gfins_run(&st, 2, A, 0.01, fo, wo, wdo, W, fl, &done) == GF_ERR_BAD_SIZE && done == 0 &&
+                  memcmp(&st, &before, sizeof st) == 0,
+              "%s: gf_gfins_run BAD_SIZE", bad[i].what);
+        CHECK(gf_gfins_state_check(&st) == GF_ERR_BAD_SIZE, "%s: gf_gfins_state_check", bad[i].what);
+        gf_gfnav_state n2 = nav;
+        n2.rate = st;
+        double q[8], v[6], p[6];
+        CHECK(gf_gfnav_run(&n2, 2, A, 0.01, NULL, q, v, p, NULL, NULL, NULL, &done) == GF_ERR_BAD_SIZE &&
+                  done == 0,
+              "%s: gf_gfnav_run BAD_SIZE", bad[i].what);
+        if (i < 6)
+            CHECK(gf_array_solve(&st.solver, A, w0, x) == GF_ERR_BAD_SIZE, "%s: gf_array_solve", bad[i].what);
+    }
+    /* numbers: the full check finds them (a step would report them as DIVERGED or a
+     * skipped update) */
+    gf_gfins_state st = good;
+    st.R_W[4] = NAN;
+    CHECK(gf_gfins_state_check(&st) == GF_ERR_NONFINITE_INPUT, "check: NaN in R_W");
+    st = good;
+    st.solver.pinv[3] = INFINITY;
+    CHECK(gf_gfins_state_check(&st) == GF_ERR_NONFINITE_INPUT, "check: Inf in pinv");
+    st = good;
+    st.cfg.accel_noise_m_s2 = -1.0;
+    CHECK(gf_gfins_state_check(&st) == GF_ERR_BAD_PARAMETER, "check: negative accel noise");
+    st = good;
+    st.solver.estimated = 0;
+    CHECK(gf_gfins_state_check(&st) == GF_ERR_BAD_PARAMETER, "check: f and w_dot not estimated");
+}
+
 int main(void)
 {
     test_svd_random();
@@ -2416,6 +2554,7 @@ int main(void)
     test_kalman_cv();
     test_kalman_random();
     test_kalman_errors();
+    test_kalman_symmetric_inputs();
     test_solver_layouts();
     test_solver_unsolvable();
     test_rate_init();
@@ -2426,6 +2565,7 @@ int main(void)
     test_rate_fused_model();
     test_rate_errors_and_instances();
     test_rate_flags();
+    test_rate_state_corrupted();
     test_gfnav();
     TEST_MAIN_END();
 }

@@ -115,6 +115,23 @@ static void test_bad_input(void)
     double g[3], a[3];
     CHECK(gf_imu_noise_run(&s, 1, 0.0, g, a) == GF_ERR_BAD_TIME, "dt 0");
     CHECK(gf_imu_noise_run(&s, 1, 0.01, g, a) == GF_OK && g[0] == 0.0 && a[2] == 0.0, "zero noise");
+    CHECK(gf_imu_noise_state_check(&s) == GF_OK, "check of a good state");
+    /* a state whose parameters were corrupted (a damaged FMU state): refused by the run
+     * and by the check, nothing drawn */
+    gf_imu_noise_state bad_state = s, before;
+    bad_state.p.gyro_arw_rad_sqrt_s = -1.0;
+    before = bad_state;
+    CHECK(gf_imu_noise_run(&bad_state, 1, 0.01, g, a) == GF_ERR_BAD_PARAMETER &&
+              memcmp(&bad_state, &before, sizeof before) == 0,
+          "run with a negative ARW in the state: BAD_PARAMETER, unchanged");
+    CHECK(gf_imu_noise_state_check(&bad_state) == GF_ERR_BAD_PARAMETER, "check: negative ARW");
+    bad_state = s;
+    bad_state.p.gyro_gm_std_rad_s = 1e-5;
+    bad_state.p.gyro_gm_tau_s = 0.0;
+    CHECK(gf_imu_noise_run(&bad_state, 1, 0.01, g, a) == GF_ERR_BAD_PARAMETER, "GM std without tau");
+    bad_state = s;
+    bad_state.gyro_rw[1] = NAN;
+    CHECK(gf_imu_noise_state_check(&bad_state) == GF_ERR_NONFINITE_INPUT, "check: NaN random walk");
 }
 
 int main(void)

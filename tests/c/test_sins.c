@@ -17,12 +17,19 @@
  *     pole closed form e0 (1 - 2 t/tau + t^2/(2 tau^2)) exp(-t/tau);
  *   - a moving record navigated forward, reversed and navigated backward: it must come
  *     back to where it started;
- *   - a huge northward velocity next to the pole: GF_ERR_DIVERGED.
+ *   - a huge northward velocity next to the latitude limit (89.9 deg): GF_ERR_DIVERGED;
+ *     a start at or beyond the limit (the 90 deg - 2e-9 rad where the unlimited
+ *     mechanization returned a 74.8 rad longitude) is refused; a step covering more than
+ *     a turn of longitude still reports it in (-pi, pi];
+ *   - a quaternion off unit norm within the accepted 1e-6 gives the Euler angles of the
+ *     rotation it stands for (near pitch 90 deg an unnormalised one moved the pitch by
+ *     0.1 deg).
  * Plus bitwise properties (batch = steps, forward and backward; chunks; no hidden
  * state), the rate-input start of record, and every error path (status, state
  * unchanged, n_done). Tolerances are justified where they are set; figures are printed.
  * Runs in ~0.3 s plain, ~2 s under AddressSanitizer + UBSan. */
 #include <float.h>
+#include <stddef.h>
 #include <stdint.h>
 #include <string.h>
 
@@ -1487,13 +1494,13 @@ static void test_run_errors(void)
           "empty run");
 }
 
-/* Over the pole: a huge northward velocity near 89.99 deg must stop with DIVERGED and
- * leave the state as it was before the failing sample. */
+/* Towards the pole: a huge northward velocity 0.01 deg below the latitude limit must stop
+ * with DIVERGED and leave the state as it was before the failing sample. */
 static void test_pole_divergence(void)
 {
     enum { NP = 1000 };
     static double gy[NP * 3], ac[NP * 3], qo[NP * 4], vo[NP * 3], po[NP * 3];
-    const double T = 0.01, L = 89.99 * DEG, h = 0.0;
+    const double T = 0.01, L = 89.89 * DEG, h = 0.0;
     const double g = ref_gravity(L, h);
     for (int k = 0; k < NP; ++k) {
         gy[3 * k] = gy[3 * k + 1] = gy[3 * k + 2] = 0.0;
@@ -1503,9 +1510,9 @@ static void test_pole_divergence(void)
     const gf_sins_config cfg = make_cfg(GF_SINS_INPUT_INCREMENTS, 1, GF_SINS_VERTICAL_HOLD, h);
     const double q0[4] = {1, 0, 0, 0}, v0[3] = {0.0, 1000.0, 0.0};
     gf_sins_state s, r;
-    CHECK(gf_sins_init(&s, &cfg, q0, v0, L, 1.0, h, 0.0) == GF_OK, "pole: init at 89.99 deg");
+    CHECK(gf_sins_init(&s, &cfg, q0, v0, L, 1.0, h, 0.0) == GF_OK, "pole: init at 89.89 deg");
     r = s;
-    /* 0.01 deg = 1.1 km from the pole at 10 m per step: ~110 steps */
+    /* 0.01 deg = 1.1 km from the limit at 10 m per step: ~110 steps */
     int k_fail = -1;
     gf_sins_state last;
     for (int k = 0; k < NP; ++k) {
@@ -1517,7 +1524,7 @@ static void test_pole_divergence(void)
             k_fail = k;
             break;
         }
-        CHECK(fabs(s.lat_rad) < 0.5 * PI, "pole: latitude stays below 90 deg while OK");
+        CHECK(fabs(s.lat_rad) < 89.9 * DEG, "pole: latitude stays below the limit while OK");
     }
     printf("pole: DIVERGED at sample %d, last latitude %.12f deg\n", k_fail, s.lat_rad / DEG);
     CHECK(k_fail > 50 && k_fail < 200, "pole: fails after ~110 samples (at %d)", k_fail);
@@ -1526,6 +1533,113 @@ static void test_pole_divergence(void)
               (int)done == k_fail,
           "pole: batch stops with DIVERGED at the same sample (n_done %zu)", done);
     CHECK(state_same(&r, &s), "pole: batch state = state before the failing sample");
+}
+
+/* The latitude limit of the ENU mechanization (gf_sins.h). Before it, a start at
+ * 90 deg - 2e-9 rad was accepted and one step east returned a longitude of tens of
+ * radians and a meaningless attitude with GF_OK. */
+static void test_latitude_limit(void)
+{
+    const gf_sins_config cfg = make_cfg(GF_SINS_INPUT_INCREMENTS, 1, GF_SINS_VERTICAL_HOLD, 0.0);
+    const double q0[4] = {1, 0, 0, 0}, v0[3] = {10.0, 0.0, 0.0};
+    const double dth[3] = {0, 0, 0}, dv[3] = {0, 0, 0.01 * 9.832};
+    gf_sins_state s;
+    const double lat_tester = 0.5 * PI - 2e-9;
+    const gf_status st = gf_sins_init(&s, &cfg, q0, v0, lat_tester, 1.0, 0.0, 0.0);
+    if (st == GF_OK) { /* what the unlimited mechanization did */
+        const gf_status st2 = gf_sins_step(&s, dth, dv, 0.01, NAN);
+        CHECK(0, "start at 90 deg - 2e-9 rad accepted; one step east returned status %d, "
+                 "longitude %.6g rad", (int)st2, s.lon_rad);
+    } else {
+        CHECK(st == GF_ERR_BAD_PARAMETER, "start at 90 deg - 2e-9 rad: BAD_PARAMETER (got %d)", (int)st);
+    }
+    /* the limit is 89.9 deg (89900 millidegrees), both hemispheres */
+    const double limit = GF_SINS_LAT_LIMIT_MDEG / 1000.0 * DEG;
+    CHECK(GF_SINS_LAT_LIMIT_MDEG == 89900, "limit 89.9 deg as documented");
+    for (int sgn = -1; sgn <= 1; sgn += 2) {
+        CHECK(gf_sins_init(&s, &cfg, q0, v0, sgn * limit, 1.0, 0.0, 0.0) == GF_ERR_BAD_PARAMETER,
+              "start at %+g x the limit refused", (double)sgn);
+        CHECK(gf_sins_init(&s, &cfg, q0, v0, sgn * nextafter(limit, 0.0), 1.0, 0.0, 0.0) == GF_OK,
+              "start just inside the limit accepted");
+    }
+    /* EARTH_FLAT does not use the latitude: only |lat| < 90 deg as before */
+    gf_sins_config flat = cfg;
+    flat.earth = GF_SINS_EARTH_FLAT;
+    CHECK(gf_sins_init(&s, &flat, q0, v0, 89.95 * DEG, 1.0, 0.0, 0.0) == GF_OK, "flat frame at 89.95 deg");
+    /* a state beyond the limit handed to a step (e.g. restored from saved bytes) */
+    CHECK(gf_sins_init(&s, &cfg, q0, v0, 89.0 * DEG, 1.0, 0.0, 0.0) == GF_OK, "init 89 deg");
+    CHECK(gf_sins_step(&s, dth, dv, 0.01, NAN) == GF_OK && s.have_prev, "a first step");
+    CHECK(gf_sins_state_check(&s) == GF_OK, "state check of a good state");
+    gf_sins_state bad = s, before;
+    bad.lat_rad = lat_tester;
+    before = bad;
+    CHECK(gf_sins_step(&bad, dth, dv, 0.01, NAN) == GF_ERR_BAD_PARAMETER && state_same(&bad, &before),
+          "a state beyond the limit: BAD_PARAMETER, unchanged");
+    CHECK(gf_sins_state_check(&bad) == GF_ERR_BAD_PARAMETER, "state check: latitude beyond the limit");
+    const struct { const char *what; size_t off; int ivalue; double dvalue; } scrambles[] = {
+        {"input 7", offsetof(gf_sins_state, cfg.input), 7, 0},
+        {"vertical -1", offsetof(gf_sins_state, cfg.vertical), -1, 0},
+        {"earth 2", offsetof(gf_sins_state, cfg.earth), 2, 0},
+        {"coning 3", offsetof(gf_sins_state, cfg.coning), 3, 0},
+        {"cos_lat 0", offsetof(gf_sins_state, cos_lat), 0, 0.0},
+        {"R_M NaN", offsetof(gf_sins_state, R_M_m), 0, NAN},
+        {"prev_gyro Inf", offsetof(gf_sins_state, prev_gyro), 0, INFINITY},
+        {"earth-rate sign 0.5", offsetof(gf_sins_state, earth_rate_sign), 0, 0.5},
+    };
+    for (size_t i = 0; i < sizeof scrambles / sizeof scrambles[0]; ++i) {
+        bad = s;
+        if (i < 4)
+            memcpy((char *)&bad + scrambles[i].off, &scrambles[i].ivalue, sizeof(int));
+        else
+            memcpy((char *)&bad + scrambles[i].off, &scrambles[i].dvalue, sizeof(double));
+        CHECK(gf_sins_state_check(&bad) == GF_ERR_BAD_PARAMETER, "state check: %s", scrambles[i].what);
+        before = bad;
+        const gf_status sst = gf_sins_step(&bad, dth, dv, 0.01, NAN);
+        CHECK(sst != GF_OK && memcmp(&bad, &before, sizeof bad) == 0,
+              "step with %s: status %d (not OK), state unchanged", scrambles[i].what, (int)sst);
+    }
+    /* More than a turn of longitude in one step (an absurd 6e9 m/s east on the equator,
+     * where nothing else diverges: w_in x v is vertical, the height is held): the
+     * longitude is still reported in (-pi, pi]; before, one subtraction of 2 pi left
+     * lon0 + 9.4 rad at 6.1 rad. */
+    const double vfast[3] = {6e9, 0.0, 0.0};
+    CHECK(gf_sins_init(&s, &cfg, q0, vfast, 0.0, 3.0, 0.0, 0.0) == GF_OK, "init on the equator");
+    const gf_status sf = gf_sins_step(&s, dth, dv, 0.01, NAN);
+    double RM, RN;
+    ref_radii(0.0, &RM, &RN);
+    const double want = remainder(3.0 + 0.01 * 6e9 / RN, 2 * PI);
+    CHECK(sf == GF_OK && s.lon_rad > -PI && s.lon_rad <= PI,
+          "a step of %.3g rad of longitude: status %d, longitude %.6g rad in (-pi, pi]", 0.01 * 6e9 / RN,
+          (int)sf, s.lon_rad);
+    /* the east velocity changes by ~0.5 m/s of 6e9 through the rotation compensation */
+    CHECK_CLOSE(s.lon_rad, want, 1e-8, "the longitude is the wrapped one");
+}
+
+/* A quaternion within the accepted 1e-6 of unit norm: Euler angles of the rotation it
+ * stands for. Unnormalised, C[2][1] = |q|^2 sin(theta) exceeded 1 near pitch 90 deg and
+ * was clipped: pitch 90 deg instead of 89.9 and the roll folded into the heading. */
+static void test_euler_of_unnormalised_quaternion(void)
+{
+    const double e[3] = {0.3, 89.9 * DEG, 0.2};
+    double qr[4];
+    ref_quat_euler(e, qr);
+    const double scales[4] = {1.0 + 9e-7, 1.0 - 9e-7, 1.0 + 1e-7, 1.0 - 3e-7};
+    for (int i = 0; i < 4; ++i) {
+        double q[4], back[3];
+        for (int k = 0; k < 4; ++k)
+            q[k] = qr[k] * scales[i];
+        CHECK(gf_quat_to_euler(q, back) == GF_OK, "|q| = %.9g accepted", scales[i]);
+        /* as the random round trip: 32 eps / cos(theta) */
+        const double tol = 32 * EPS / cos(e[1]);
+        CHECK(fabs(back[0] - e[0]) <= tol && fabs(back[1] - e[1]) <= tol && fabs(back[2] - e[2]) <= tol,
+              "|q| = %.9g: angles (%.12g %.12g %.12g), expected (%.12g %.12g %.12g)", scales[i], back[0],
+              back[1], back[2], e[0], e[1], e[2]);
+    }
+    double q[4];
+    for (int k = 0; k < 4; ++k)
+        q[k] = qr[k] * (1.0 + 2e-6);
+    double back[3];
+    CHECK(gf_quat_to_euler(q, back) == GF_ERR_BAD_PARAMETER, "|q| = 1 + 2e-6 refused");
 }
 
 /* Rate input: the first sample only starts the record. */
@@ -1584,6 +1698,8 @@ int main(void)
     test_step_errors();
     test_run_errors();
     test_pole_divergence();
+    test_latitude_limit();
+    test_euler_of_unnormalised_quaternion();
     test_rate_first_sample();
     TEST_MAIN_END();
 }

@@ -120,6 +120,51 @@ static void test_bad_input(void)
     CHECK(gf_vehicle_step(&s, 100.0, &x) == GF_ERR_DIVERGED, "past 89 deg");
 }
 
+/* A state whose profile indices were corrupted (a damaged FMU state), and a step so long
+ * that its quadrature piece count overflowed an int: refused with a status, nothing read
+ * beyond the segment array. Before, a 1e12 s step computed (int) of 4e12 pieces
+ * (undefined; in practice negative, so nothing was integrated) and returned GF_OK. */
+static void test_corrupted_state_and_huge_step(void)
+{
+    gf_vehicle_profile p = base_profile();
+    gf_vehicle_state s, before;
+    gf_vehicle_sample x;
+    CHECK(gf_vehicle_init(&s, &p, 0.0, &x, NULL) == GF_OK, "init");
+    CHECK(gf_vehicle_state_check(&s) == GF_OK, "check of a good state");
+    before = s;
+    x.time_s = -1.0;
+    const gf_status st = gf_vehicle_step(&s, 1e12, &x);
+    CHECK(st == GF_ERR_BAD_TIME && memcmp(&s, &before, sizeof s) == 0,
+          "a step of 1e12 s: BAD_TIME (got %d, sample time %g), state unchanged", (int)st, x.time_s);
+    CHECK(gf_vehicle_step(&s, 1e5 + 1.0, &x) == GF_ERR_BAD_TIME, "a step just over 1e5 s refused");
+    CHECK(gf_vehicle_step(&s, 1.0, &x) == GF_OK, "a normal step");
+    const struct { const char *what; size_t n_segments, next_segment; } bad[] = {
+        {"n_segments 33", GF_VEHICLE_MAX_SEGMENTS + 1, 0},
+        {"n_segments 1e9, next 5", 1000000000u, 5},
+        {"next_segment beyond n_segments", 2, 3},
+        {"next_segment 1e9", 2, 1000000000u},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
+        gf_vehicle_state b = s;
+        b.profile.n_segments = bad[i].n_segments;
+        b.next_segment = bad[i].next_segment;
+        before = b;
+        CHECK(gf_vehicle_step(&b, 2.0, &x) == GF_ERR_BAD_SIZE && memcmp(&b, &before, sizeof b) == 0,
+              "%s: step BAD_SIZE, state unchanged", bad[i].what);
+        CHECK(gf_vehicle_command(&b, 5.0, 0.0, 1.0) == GF_ERR_BAD_SIZE, "%s: command BAD_SIZE", bad[i].what);
+        CHECK(gf_vehicle_state_check(&b) == GF_ERR_BAD_SIZE, "%s: check BAD_SIZE", bad[i].what);
+    }
+    gf_vehicle_state b = s;
+    b.east_m = NAN;
+    CHECK(gf_vehicle_state_check(&b) == GF_ERR_NONFINITE_INPUT, "check: NaN displacement");
+    b = s;
+    b.R_M0_m = -1.0;
+    CHECK(gf_vehicle_state_check(&b) == GF_ERR_BAD_PARAMETER, "check: negative radius");
+    b = s;
+    b.profile.lat0_rad = 1.56;
+    CHECK(gf_vehicle_state_check(&b) == GF_ERR_BAD_PARAMETER, "check: start latitude beyond 89 deg");
+}
+
 static void test_command(void)
 {
     /* a command reached over 2 s: speed and heading rate arrive, with zero acceleration
@@ -143,6 +188,7 @@ int main(void)
     test_straight();
     test_circle();
     test_bad_input();
+    test_corrupted_state_and_huge_step();
     test_command();
     TEST_MAIN_END();
 }

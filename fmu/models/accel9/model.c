@@ -65,3 +65,12 @@ FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double 
     d->previous_step_s = h_s;
     return FMU_OK;
 }
+
+const char *model_validate_state(const ModelData *d)
+{
+    if (gf9_state_check(&d->solver) != GF_OK)
+        return "the solver state (lever arm, reference rate, angular acceleration) is invalid";
+    if (!(d->previous_step_s >= 0.0) || !isfinite(d->previous_step_s))
+        return "previous_step_s is not finite and >= 0";
+    return NULL;
+}

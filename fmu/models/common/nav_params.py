@@ -28,7 +28,8 @@ def initial_state() -> list:
              description="Initial velocity, East-North-Up"),
         dict(name="lat0", causality="parameter", variability="fixed", type="Float64",
              shape=(), unit="rad", start=0.5235987755982988, field="lat0_rad",
-             description="Initial geodetic latitude, |lat0| < pi/2"),
+             description="Initial geodetic latitude, |lat0| < 89.9 deg (the latitude limit "
+                         "of the ENU mechanization; earth = 0)"),
         dict(name="lon0", causality="parameter", variability="fixed", type="Float64",
              shape=(), unit="rad", start=1.9896753472735356, field="lon0_rad",
              description="Initial longitude"),

@@ -4,6 +4,7 @@
 #ifndef FMU_SKIP_STEPS_H
 #define FMU_SKIP_STEPS_H
 
+#include <math.h>
 #include <stdint.h>
 
 #include "fmu_model.h"
@@ -28,6 +29,21 @@ static inline int fmu_skip_this_step(int32_t skip_steps, int32_t *skipped, int *
     ++*skipped;
     *restart = *skipped == skip_steps;
     return 1;
+}
+
+/* For the navigators' model_validate_state: NULL if the stepping counters a doStep
+ * branches on are consistent (0 <= skipped <= skip_steps, started 0 or 1, the previous
+ * step finite and >= 0), else why not. */
+static inline const char *fmu_nav_counters_invalid(int32_t skip_steps, int32_t skipped,
+                                                   int32_t started, double previous_step_s)
+{
+    if (skip_steps < 0 || skipped < 0 || skipped > skip_steps)
+        return "skip_steps / skipped are not 0 <= skipped <= skip_steps";
+    if (started != 0 && started != 1)
+        return "started is not 0 or 1";
+    if (!(previous_step_s >= 0.0) || !isfinite(previous_step_s))
+        return "previous_step_s is not finite and >= 0";
+    return NULL;
 }
 
 #endif /* FMU_SKIP_STEPS_H */

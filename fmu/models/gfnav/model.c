@@ -26,6 +26,9 @@ static gf_status make_geometry(double l, gf_array_geometry *g)
 #endif
 }
 
+/* Number of accelerometers of the layout (the A input holds up to 12). */
+#define GFNAV_N_SENSORS (GFNAV_LAYOUT == 0 ? 6 : GFNAV_LAYOUT == 1 ? 9 : 12)
+
 static void publish(ModelData *d)
 {
     const gf_sins_state *s = &d->nav.nav;
@@ -74,8 +77,9 @@ static void log_refusal(FmuInstance *instance, const ModelData *d, gf_status st)
                       "quaternion", q[0], q[1], q[2], q[3]);
     else if (!gf_all_finite(v, 3))
         fmu_log_error(instance, "parameter v0 = [%g, %g, %g] m/s must be finite", v[0], v[1], v[2]);
-    else if (!(fabs(d->lat0_rad) < GF_HALF_PI))
-        fmu_log_error(instance, "parameter lat0 = %g rad is outside (-pi/2, pi/2)", d->lat0_rad);
+    else if (!(fabs(d->lat0_rad) < GF_SINS_LAT_LIMIT_RAD))
+        fmu_log_error(instance, "parameter lat0 = %g rad is outside the latitude limit +-89.9 deg "
+                      "of the ENU mechanization", d->lat0_rad);
     else if (!isfinite(d->lon0_rad))
         fmu_log_error(instance, "parameter lon0 = %g rad must be finite", d->lon0_rad);
     else if (!(d->h0_m > min_h_m) || !isfinite(d->h0_m))
@@ -167,4 +171,19 @@ FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double 
     d->started = 1;
     publish(d);
     return FMU_OK;
+}
+
+const char *model_validate_state(const ModelData *d)
+{
+    const char *why = fmu_nav_counters_invalid(d->skip_steps, d->skipped, d->started,
+                                               d->previous_step_s);
+    if (why)
+        return why;
+    if (gf_gfins_state_check(&d->nav.rate) != GF_OK)
+        return "the rate solver state (array solver, strategy, filter) is invalid";
+    if (d->nav.rate.solver.n_sensors != GFNAV_N_SENSORS)
+        return "the rate solver's sensor count is not the layout's";
+    if (gf_sins_state_check(&d->nav.nav) != GF_OK || d->nav.nav.cfg.input != GF_SINS_INPUT_RATES)
+        return "the navigation state (configuration, attitude, position) is invalid";
+    return NULL;
 }

@@ -502,3 +502,13 @@ const char *ins_gnss_state_problem(const ModelData *d)
         return "a flag of the filter is not 0 or 1";
     return NULL;
 }
+
+const char *model_validate_state(const ModelData *d)
+{
+    const char *why = ins_gnss_state_problem(d);
+    if (why)
+        return why;
+    if (d->started && gf_ins_filter_check(&d->filter) != GF_OK)
+        return "the filter state (layout, indices, nominal state, covariance) is invalid";
+    return NULL;
+}

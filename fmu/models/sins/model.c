@@ -54,8 +54,10 @@ static FmuStatus start_navigation(FmuInstance *instance, ModelData *d, double st
             fmu_log_error(instance, "parameters baro_tau, max_rate and max_specific_force must "
                           "be > 0 (got %g s, %g rad/s, %g m/s2)", d->baro_tau_s,
                           d->max_rate_rad_s, d->max_specific_force_m_s2);
-        else if (!(fabs(d->lat0_rad) < GF_HALF_PI))
-            fmu_log_error(instance, "parameter lat0 = %g rad is outside (-pi/2, pi/2)", d->lat0_rad);
+        else if (!(fabs(d->lat0_rad) < GF_SINS_LAT_LIMIT_RAD))
+            fmu_log_error(instance, "parameter lat0 = %g rad is outside (-%g, %g) deg, the latitude "
+                          "limit of the ENU mechanization", d->lat0_rad,
+                          GF_SINS_LAT_LIMIT_MDEG / 1000.0, GF_SINS_LAT_LIMIT_MDEG / 1000.0);
         else
             fmu_log_error(instance, "initial state rejected (%s): q0 must be a finite, non-zero "
                           "quaternion and v0, lat0, lon0, h0 finite", gf_status_string(st));
@@ -187,4 +189,26 @@ FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double 
     d->started = 1;
     publish(d);
     return FMU_OK;
+}
+
+const char *model_validate_state(const ModelData *d)
+{
+    const char *why = fmu_nav_counters_invalid(d->skip_steps, d->skipped, d->started,
+                                               d->previous_step_s);
+    if (why)
+        return why;
+    if (gf_sins_state_check(&d->nav) != GF_OK)
+        return "the navigation state (configuration, attitude, position) is invalid";
+    if (d->imu_comp != 0 && d->imu_comp != 1)
+        return "imu_comp is not 0 or 1";
+    if (d->imu_comp && gf_imu_errors_check(&d->imu, NULL) != GF_OK)
+        return "the IMU error model is invalid";
+    /* the low-pass: its section count sizes the filter-state copies of model_do_step */
+    if (d->lowpass_sections < 0 || d->lowpass_sections > 8)
+        return "lowpass_sections is not in 0..8";
+    if (d->lowpass_sections > 0 &&
+        (gf_biquad_check(&d->lowpass) != GF_OK ||
+         d->lowpass.n_sections != (size_t)d->lowpass_sections || d->lowpass.n_channels != 6))
+        return "the low-pass filter (sizes, coefficients, state) is invalid";
+    return NULL;
 }

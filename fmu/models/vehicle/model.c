@@ -313,3 +313,38 @@ FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double 
     d->vehicle = next;
     return FMU_OK;
 }
+
+const char *model_validate_state(const ModelData *d)
+{
+    static const size_t layout_sensors[3] = {6, 9, 12};
+    if (d->drive != 0 && d->drive != 1)
+        return "drive is not 0 or 1";
+    if (!(d->command_time_s > 0.0) || !isfinite(d->command_time_s))
+        return "command_time is not finite and > 0";
+    if (d->imu_errors != 0 && d->imu_errors != 1)
+        return "imu_errors is not 0 or 1";
+    if (d->imu_errors && gf_imu_errors_check(&d->imu, NULL) != GF_OK)
+        return "the IMU error model is invalid";
+    if (d->noise != 0 && d->noise != 1)
+        return "noise is not 0 or 1";
+    if (gf_imu_noise_state_check(&d->imu_noise) != GF_OK)
+        return "the IMU noise state is invalid";
+    if (!(d->array_noise_m_s2 >= 0.0) || !isfinite(d->array_noise_m_s2) ||
+        !isfinite(d->array_rng.spare))
+        return "array_noise or the array noise generator is invalid";
+    if (!gf_all_finite(d->array_bias_m_s2, VEHICLE_ARRAY_MAX))
+        return "array_bias is not finite";
+    /* the array's sensor count sizes the noise and output loops (VEHICLE_ARRAY_MAX) */
+    if (d->array_layout < 0 || d->array_layout > 2 ||
+        d->array.n_sensors != layout_sensors[d->array_layout])
+        return "array_layout or the array's sensor count is invalid";
+    for (size_t i = 0; i < d->array.n_sensors; ++i)
+        if (!gf_v3_isfinite(d->array.u_m[i]) || !gf_v3_isfinite(d->array.theta[i]))
+            return "the array geometry is not finite";
+    if (gf_vehicle_state_check(&d->vehicle) != GF_OK)
+        return "the vehicle state (profile indices, motion) is invalid";
+    if ((d->aiding.gnss.enabled || d->aiding.baro.enabled || d->aiding.odo.enabled) &&
+        gf_aiding_sim_check(&d->aiding_sim) != GF_OK)
+        return "the aiding sensors' state (GNSS queue, outages, parameters) is invalid";
+    return NULL;
+}

@@ -404,9 +404,57 @@ static void test_refusals(void)
     fmi2FreeInstance(c);
 }
 
+/* ---- damaged and crafted states (fmu2_test.h) ------------------------------------------ */
+
+static fmi2Status ins_step(fmi2Component c, double t_s)
+{
+    const int k = (int)(t_s / H_S + 0.5);
+    fmu_inputs(c, k);
+    return fmi2DoStep(c, t_s, H_S, fmi2True);
+}
+
+static void test_damaged_states(int filter)
+{
+    fmi2Component c = open_ready(filter, 0);
+    CHECK(fmi2ExitInitializationMode(c) == fmi2OK, "exit: %s", g_log);
+    const int mid = N / 2;
+    fmu_steps(c, 0, mid, g_fmu, g_ist);
+    fmi2ValueReference r[4 + 3 + 3];
+    vrs("q", 4, r);
+    vrs("v", 3, r + 4);
+    r[7] = vr("lat");
+    r[8] = vr("lon");
+    r[9] = vr("h");
+    const StatePatch patches[] = {
+        PATCH('i', filter.n_states, 36, "filter"),
+        PATCH('i', filter.idx_baro, 40, "filter"),
+        PATCH('i', filter.idx_sg, 15, "filter"),
+        PATCH('z', filter.kf.n, 36, "filter"),
+        PATCH('z', filter.ukf_w.n, 14, "filter"),
+        PATCH('i', filter.hist_head, 500, "filter"),
+        PATCH('i', filter.hist_count, -1, "filter"),
+        PATCH('i', filter.cfg.filter, 3, "filter"),
+        PATCH('i', filter.cfg.input, 5, "filter"),
+        PATCH('i', filter.nav.cfg.vertical, 1, "filter"),
+        PATCH('d', filter.nav.q_bn[0], 3.0, "filter"),
+        PATCH('d', filter.kf.P[0], -1.0, "filter"),
+        PATCH('i', skipped, -2, "skip"),
+        PATCH('i', started, 4, "started"),
+    };
+    const StateRegion regions[] = {
+        REGION(filter.cfg), REGION_HEAD(filter, offsetof(gf_ins_filter, kf) + 64),
+        REGION(filter.nav), REGION(filter.idx_sg), REGION(filter.hist_head),
+        REGION(filter.hist_count), REGION(filter.gate_run), REGION(skipped), REGION(started)};
+    check_damaged_states(c, mid * H_S, H_S, ins_step, N - mid, r, 10, patches,
+                         sizeof patches / sizeof patches[0], regions,
+                         sizeof regions / sizeof regions[0], 300);
+    fmi2FreeInstance(c);
+}
+
 int main(void)
 {
     turn_drive(g_truth, N, H_S);
+    test_damaged_states(GF_INS_EKF);
     test_equals_core(GF_INS_EKF, 0);
     test_equals_core(GF_INS_UKF, 0);
     test_equals_core(GF_INS_EKF, 2);

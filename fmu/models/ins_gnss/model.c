@@ -492,7 +492,7 @@ const char *ins_gnss_state_problem(const ModelData *d)
         f->idx_odo != idx_odo)
         return "filter idx_* do not match its configuration";
     if (f->kf.n != (size_t)n || f->ukf_w.n != (size_t)n)
-        return "kf.n or ukf_w.n differs from n_states";
+        return "filter kf.n or ukf_w.n differs from n_states";
     const gf_sins_config *sc = &f->nav.cfg;
     if (sc->input != f->cfg.input || sc->coning != f->cfg.coning ||
         sc->vertical != GF_SINS_VERTICAL_FREE || sc->earth != GF_SINS_EARTH_WGS84)

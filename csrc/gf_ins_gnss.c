@@ -627,41 +627,60 @@ static gf_status propagate_ekf(gf_ins_filter *f, gf_ins_epochs *ep)
     gf_v3_scale(f->acc_dtheta_rad, 1.0 / T, wb);
     gf_mat3 C;
     gf_q_to_dcm(f->nav.q_bn, &C);
-    double F[NMAX * NMAX], A[NMAX * NMAX], qd[NMAX];
+    double F[NMAX * NMAX], qd[NMAX];
     error_model(f, &C, f->nav.v_n_m_s, f->nav.lat_rad, f->nav.h_m, fb, wb, F, qd);
-    /* A = F T + (F T)^2 / 2 (F^2 from the non-zeros of F, rows of A accumulated as
-     * axpys); for intervals up to GF_INS_FIRST_ORDER_MAX_T_S the second-order term is
-     * dropped (see the header) */
-    for (int i = 0; i < n * n; ++i)
-        A[i] = F[i] * T;
+    /* A = F T + (F T)^2 / 2 in rows padded to the stride s: F T, then for each non-zero
+     * F_ik the row axpy A_i += T^2/2 F_ik F_k; for intervals up to
+     * GF_INS_FIRST_ORDER_MAX_T_S the second-order term is dropped (see the header) */
+    const size_t s = GF_PADDED((size_t)n);
+    double Fp[NMAX * GF_PADDED(NMAX)], A[NMAX * GF_PADDED(NMAX)];
+    for (int i = 0; i < n; ++i) {
+        for (int j = 0; j < n; ++j) {
+            Fp[i * s + j] = F[i * n + j];
+            A[i * s + j] = F[i * n + j] * T;
+        }
+        for (size_t j = (size_t)n; j < s; ++j)
+            Fp[i * s + j] = A[i * s + j] = 0.0;
+    }
     if (T > GF_INS_FIRST_ORDER_MAX_T_S) {
         const double h2 = 0.5 * T * T;
-        for (int i = 0; i < n; ++i) {
-            double *arow = A + i * n;
+        for (int i = 0; i < n; ++i)
             for (int k = 0; k < n; ++k) {
-                const double fik = F[i * n + k];
-                if (fik == 0.0)
-                    continue;
-                const double sk = h2 * fik;
-                const double *frow = F + k * n;
-                for (int j = 0; j < n; ++j)
-                    arow[j] += sk * frow[j];
+                const double fik = Fp[i * s + k];
+                if (fik != 0.0)
+                    gf_axpy4(s, h2 * fik, Fp + k * s, A + i * s);
+            }
+    }
+    /* A's non-zeros for the engine's structured predict */
+    size_t start[NMAX + 1], nnz = 0;
+    unsigned char col[NMAX * NMAX];
+    double val[NMAX * NMAX];
+    for (int i = 0; i < n; ++i) {
+        start[i] = nnz;
+        for (int j = 0; j < n; ++j) {
+            const double a = A[i * s + j];
+            if (a != 0.0) {
+                col[nnz] = (unsigned char)j;
+                val[nnz++] = a;
             }
         }
     }
+    start[n] = nnz;
     double qh[NMAX];
     for (int i = 0; i < n; ++i)
         qh[i] = 0.5 * T * qd[i];
-    gf_status st = gf_kalman_predict_sparse(&f->kf, A, qh, qh);
+    gf_status st = gf_kalman_predict_csr(&f->kf, start, col, val, qh, qh);
     if (st != GF_OK)
         return st == GF_ERR_NONFINITE_INPUT ? GF_ERR_DIVERGED : st;
     st = check_covariance(&f->kf);
     if (st != GF_OK)
         return st;
     if (ep) {
+        double Phi[NMAX * NMAX];      /* Phi = I + A, dense n x n for the smoother */
         for (int i = 0; i < n; ++i)
-            A[i * n + i] += 1.0;     /* Phi = I + A */
-        return epoch_open(f, ep, A);
+            for (int j = 0; j < n; ++j)
+                Phi[i * n + j] = A[i * s + j] + (i == j ? 1.0 : 0.0);
+        return epoch_open(f, ep, Phi);
     }
     return GF_OK;
 }

@@ -249,19 +249,8 @@ gf_status gf_kalman_update_gated(gf_kalman *kf, size_t m, const double *residual
 
 /* ---- structured predict ------------------------------------------------------------ */
 
-/* out[0..m) += a * in[0..m), m a multiple of 4 (rows padded to 4: the loop vectorises
- * without a remainder) */
-static inline void axpy4(size_t m, double a, const double *restrict in, double *restrict out)
-{
-    for (size_t j = 0; j < m; j += 4) {
-        out[j] += a * in[j];
-        out[j + 1] += a * in[j + 1];
-        out[j + 2] += a * in[j + 2];
-        out[j + 3] += a * in[j + 3];
-    }
-}
-
-#define PADDED(n) (((n) + 3) & ~(size_t)3)
+#define axpy4 gf_axpy4
+#define PADDED GF_PADDED
 
 /* The structured predict is a few thousand vectorisable multiply-adds: on x86-64 with
  * GCC it is compiled twice, for the baseline (SSE2) and for AVX2, and the loader picks

@@ -95,7 +95,7 @@ def main(argv=None):
         for x in ax:
             x.grid(True, lw=0.3)
         fig.tight_layout()
-        p = f"{a.out}/heading_30deg_ukf_ekf.png"
+        p = f"{a.out}/heading_{a.error_deg:g}deg_ukf_ekf.png"
         fig.savefig(p, dpi=110)
         print("figure:", p)
 

@@ -89,6 +89,8 @@ def main() -> None:
                   tmp, "integrate strategy")
         inc = np.vstack([np.zeros((1, 3)), rec.dtheta_rad]), np.vstack([np.zeros((1, 3)), rec.dv_m_s])
         _time_fmu(exe, "sins", {"dtheta": inc[0], "dv": inc[1]}, outs, n, h, tmp, "increments, coning")
+        _time_fmu(exe, "ins_gnss", {"dtheta": inc[0], "dv": inc[1]}, outs, n, h, tmp,
+                  "EKF, P every 0.1 s")
         _time_fmu(exe, "vehicle", {}, ["A", "dtheta", "dv", "q", "v", "lat", "lon", "h"], n, h, tmp,
                   "seed 001 run, outputs")
         print(f"2. vehicle + gfnav_qin9 co-simulation, {args.seconds:g} s at 100 Hz ({n} steps):")

@@ -17,8 +17,20 @@ import cffi
 
 HERE = pathlib.Path(__file__).resolve().parent
 # Public headers, in dependency order.
-HEADERS = ["gf_status.h", "gf_accel_array.h", "gf_earth.h", "gf_sins.h", "gf_kalman.h", "gf_gfins.h", "gf_biquad.h", "gf_imu_error.h", "gf_vehicle.h", "gf_noise.h",
-           "gf_aiding_sim.h"]
+HEADERS = [
+    "gf_status.h",
+    "gf_accel_array.h",
+    "gf_earth.h",
+    "gf_sins.h",
+    "gf_kalman.h",
+    "gf_gfins.h",
+    "gf_biquad.h",
+    "gf_imu_error.h",
+    "gf_vehicle.h",
+    "gf_noise.h",
+    "gf_aiding_sim.h",
+    "gf_ins_gnss.h",
+]
 _BLOCK = re.compile(r"/\* CDEF BEGIN \*/(.*?)/\* CDEF END \*/", re.S)
 _COMMENT = re.compile(r"/\*.*?\*/", re.S)
 

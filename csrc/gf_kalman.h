@@ -9,6 +9,20 @@
  *             P <- (I - K H) P (I - K H)^T + K R K^T      (Joseph form: stays symmetric
  *                                                           positive semi-definite)
  *
+ * Also here, so that every filter shares them:
+ *   - a structured predict, P <- (I + A)(P + D1)(I + A)^T + D2 (D diagonal), that skips
+ *     the zeros of A = Phi - I (navigation error models are ~70% zeros): the trapezoidal
+ *     rule for a diagonal continuous noise qc is D1 = D2 = qc T / 2;
+ *   - the unscented transform of the sigma-point (unscented) Kalman filter with the
+ *     scaled sigma points of seed 004 (section 2, eq. 25-38):
+ *         lambda = alpha^2 (N + kappa) - N,  gamma = sqrt(N + lambda),
+ *         W0m = lambda / (N + lambda),  W0c = W0m + 1 - alpha^2 + beta,
+ *         Wi = 1 / (2 (N + lambda)),  i = 1..2N;
+ *     points x, x + gamma L_j, x - gamma L_j with L L^T = P (Cholesky columns);
+ *   - one backward step of the Rauch-Tung-Striebel smoother:
+ *         A = P_k|k Phi^T P_k+1|k^-1,  x_k|N = x_k|k + A (x_k+1|N - x_k+1|k),
+ *         P_k|N = P_k|k + A (P_k+1|N - P_k+1|k) A^T.
+ *
  * Symmetric inputs. P0, Q and R are covariances: the engine reads all of each, so each
  * must be symmetric. An entry pair that differs by more than 1e-9 sqrt(|A_ii A_jj|)
  * (far above the round-off of any symmetric construction, far below a real asymmetry)
@@ -56,6 +70,74 @@ gf_status gf_kalman_predict(gf_kalman *kf, const double *F, const double *Q, int
  * error. */
 gf_status gf_kalman_update(gf_kalman *kf, size_t m, const double *residual, const double *H,
                            const double *R, double *nis);
+
+/* The same with an innovation gate: when nis_max > 0 and r^T S^-1 r > nis_max the filter
+ * is left unchanged and *accepted (may be NULL) is 0; otherwise it is updated and
+ * *accepted = 1. *nis (may be NULL) always receives r^T S^-1 r. */
+gf_status gf_kalman_update_gated(gf_kalman *kf, size_t m, const double *residual,
+                                 const double *H, const double *R, double nis_max,
+                                 double *nis, int *accepted);
+
+/* P <- (I + A)(P + diag(q1))(I + A)^T + diag(q2) with A = Phi - I (n x n, dense storage;
+ * its zero entries are skipped, so the cost is ~1.5 nnz(A) n multiply-adds instead of
+ * 2 n^3). q1, q2 (n) are diagonal process noises and may be NULL (zero); the trapezoidal
+ * rule is q1 = q2 = qc T / 2. x is not changed (error-state filters keep it 0 between
+ * updates). Errors: GF_ERR_NULL_POINTER, GF_ERR_BAD_SIZE; GF_ERR_NONFINITE_INPUT (A or q
+ * not finite: P unchanged). */
+gf_status gf_kalman_predict_sparse(gf_kalman *kf, const double *A, const double *q1,
+                                   const double *q2);
+
+/* The same with A given by its non-zeros, row by row (compressed sparse rows):
+ * row_start (n + 1), col and val (row_start[n] entries; columns < n). Errors as above,
+ * and GF_ERR_BAD_SIZE for a bad row_start or column. */
+gf_status gf_kalman_predict_csr(gf_kalman *kf, const size_t *row_start, const unsigned char *col,
+                                const double *val, const double *q1, const double *q2);
+
+/* Scaled unscented transform (seed 004 eq. 25-28): sigma-point spread and weights. */
+typedef struct gf_ukf_weights {
+    size_t n;          /* state dimension N */
+    double lambda;     /* alpha^2 (N + kappa) - N */
+    double gamma;      /* sqrt(N + lambda): spread of the points in units of sqrt(P) */
+    double wm0, wc0;   /* weights of the centre point (mean, covariance) */
+    double wi;         /* weight of each of the 2N other points (mean and covariance) */
+} gf_ukf_weights;
+
+/* Errors: GF_ERR_BAD_SIZE (n), GF_ERR_BAD_PARAMETER (alpha <= 0 or not finite,
+ * N + kappa <= 0, beta not finite). */
+gf_status gf_ukf_weights_init(gf_ukf_weights *w, size_t n, double alpha, double beta,
+                              double kappa);
+
+/* The 2n+1 sigma points of (kf->x, kf->P) as rows of X ((2n+1) x n): row 0 = x,
+ * row 1+j = x + gamma L_j, row 1+n+j = x - gamma L_j. Errors: GF_ERR_BAD_SIZE (w->n !=
+ * kf->n), GF_ERR_SINGULAR_GEOMETRY (P not positive definite). */
+gf_status gf_ukf_sigma_points(const gf_kalman *kf, const gf_ukf_weights *w, double *X);
+
+/* Time update from propagated points Y ((2n+1) x n, same order as X): x = sum Wm Y_i,
+ * P = sum Wc (Y_i - x)(Y_i - x)^T + Q (Q n x n, may be NULL) (seed 004 eq. 30-31). */
+gf_status gf_ukf_predict(gf_kalman *kf, const gf_ukf_weights *w, const double *Y,
+                         const double *Q);
+
+/* Measurement update (seed 004 eq. 33-38) with the points X the measurement points were
+ * made from and their images Zp ((2n+1) x m), measurement z (m), noise R (m x m,
+ * positive definite): y = sum Wm Zp_i, Pyy = sum Wc (Zp_i - y)(..)^T + R,
+ * Pxy = sum Wc (X_i - x)(Zp_i - y)^T, K = Pxy Pyy^-1, x += K (z - y), P -= K Pyy K^T.
+ * nis (may be NULL) = (z - y)^T Pyy^-1 (z - y); gate nis_max and *accepted as in
+ * gf_kalman_update_gated. Errors as gf_kalman_update; P not
+ * positive semi-definite afterwards is GF_ERR_DIVERGED (filter unchanged). */
+gf_status gf_ukf_update(gf_kalman *kf, const gf_ukf_weights *w, const double *X, size_t m,
+                        const double *Zp, const double *z, const double *R, double nis_max,
+                        double *nis, int *accepted);
+
+/* One backward Rauch-Tung-Striebel step (see the top of this file), n states, all
+ * matrices n x n row-major: P_post = P_k|k, Phi = transition k -> k+1, P_prior_next =
+ * P_k+1|k, P_s_next = P_k+1|N; x_post (x_k|k), x_prior_next (x_k+1|k) may be NULL
+ * (zero); x_s_next = x_k+1|N. Outputs x_s = x_k|N (n), P_s = P_k|N (n x n; may alias
+ * P_post). Errors: GF_ERR_BAD_SIZE, GF_ERR_NULL_POINTER, GF_ERR_SINGULAR_GEOMETRY
+ * (P_k+1|k not positive definite). */
+gf_status gf_kalman_rts_step(size_t n, const double *P_post, const double *x_post,
+                             const double *Phi, const double *P_prior_next,
+                             const double *x_prior_next, const double *P_s_next,
+                             const double *x_s_next, double *x_s, double *P_s);
 /* CDEF END */
 
 /* Checks a filter struct handed in by a caller (e.g. restored from saved bytes): n in

@@ -18,6 +18,22 @@ extern "C" {
 #define GF_LINALG_MAX_COLS 36
 #define GF_LINALG_MAX_ROWS 64
 
+/* out[0..m) += a * in[0..m), m a multiple of 4: rows padded to 4 doubles, so that the
+ * loop vectorises without a remainder (the structured Kalman predict and the filters'
+ * transition matrices use it). */
+static inline void gf_axpy4(size_t m, double a, const double *restrict in, double *restrict out)
+{
+    for (size_t j = 0; j < m; j += 4) {
+        out[j] += a * in[j];
+        out[j + 1] += a * in[j + 1];
+        out[j + 2] += a * in[j + 2];
+        out[j + 3] += a * in[j + 3];
+    }
+}
+
+/* n rounded up to a multiple of 4 (the padded row stride of gf_axpy4's callers) */
+#define GF_PADDED(n) (((n) + 3) & ~(size_t)3)
+
 /* Thin SVD A = U diag(s) V^T of an m x n matrix (m >= n, n <= GF_LINALG_MAX_COLS,
  * m <= GF_LINALG_MAX_ROWS) by one-sided Jacobi rotations (Hestenes), accurate to a few
  * ulp relative to s_max. a (m x n) is overwritten by U (orthonormal columns where

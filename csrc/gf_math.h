@@ -203,6 +203,21 @@ static inline void gf_q_from_rotvec(const double phi_rad[3], double out[4])
     out[0] = c; out[1] = s * phi_rad[0]; out[2] = s * phi_rad[1]; out[3] = s * phi_rad[2];
 }
 
+/* Rotation vector (rad) of a unit quaternion, the inverse of gf_q_from_rotvec on the
+ * shortest rotation (angle in [0, pi]; q and -q give the same vector). */
+static inline void gf_q_to_rotvec(const double q[4], double out_rad[3])
+{
+    const double sgn = q[0] < 0.0 ? -1.0 : 1.0;
+    const double c = sgn * q[0];
+    const double v[3] = {sgn * q[1], sgn * q[2], sgn * q[3]};
+    const double sn = gf_v3_norm(v);
+    /* angle = 2 atan2(|v|, c); the factor angle / |v| -> 2 / c (1 - |v|^2 / (3 c^2))
+     * for tiny |v|, where the remainder (|v|^4 terms) is below round-off */
+    const double k = sn < 1e-8 ? 2.0 / c * (1.0 - sn * sn / (3.0 * c * c))
+                               : 2.0 * atan2(sn, c) / sn;
+    gf_v3_scale(v, k, out_rad);
+}
+
 /* Rotates v by q: out = q (x) [0, v] (x) q*; out may alias v. */
 static inline void gf_q_rotate(const double q[4], const double v[3], double out[3])
 {

@@ -186,6 +186,37 @@ gf_status gf_sins_set_flat_position(gf_sins_state *state, const double *pos_m)
     return GF_OK;
 }
 
+gf_status gf_sins_set_navigation(gf_sins_state *state, const double *q_bn,
+                                 const double *v_n_m_s, double lat_rad, double lon_rad,
+                                 double h_m)
+{
+    if (!state || !q_bn || !v_n_m_s)
+        return GF_ERR_NULL_POINTER;
+    if (!gf_all_finite(q_bn, 4) || !gf_v3_isfinite(v_n_m_s) || !isfinite(lat_rad) ||
+        !isfinite(lon_rad) || !isfinite(h_m))
+        return GF_ERR_NONFINITE_INPUT;
+    gf_earth e;
+    const gf_status st = gf_earth_update(&e, lat_rad, h_m, NULL, 1.0);
+    if (st != GF_OK)
+        return st;
+    double q[4];
+    if (!gf_q_normalize(q_bn, q))
+        return GF_ERR_BAD_PARAMETER;
+    memcpy(state->q_bn, q, sizeof q);
+    gf_v3_copy(v_n_m_s, state->v_n_m_s);
+    if (lon_rad > GF_PI)
+        lon_rad -= 2.0 * GF_PI;
+    else if (lon_rad <= -GF_PI)
+        lon_rad += 2.0 * GF_PI;
+    state->lat_rad = lat_rad;
+    state->lon_rad = lon_rad;
+    state->h_m = h_m;
+    state->sin_lat = e.sin_lat;
+    state->cos_lat = e.cos_lat;
+    state->R_M_m = e.R_M_m;
+    return GF_OK;
+}
+
 gf_status gf_sins_reverse(gf_sins_state *state)
 {
     if (!state)
@@ -561,4 +592,11 @@ gf_status gf_sins_run(gf_sins_state *state, size_t n, const double *gyro, const 
     if (n_done)
         *n_done = done;
     return status;
+}
+
+gf_status gf_sins_step_trusted(gf_sins_state *state, const double *gyro, const double *accel,
+                               double dt_s)
+{
+    /* forward navigation only (the filters); the caller keeps *state valid */
+    return sins_update(state, gyro, accel, dt_s, NAN);
 }

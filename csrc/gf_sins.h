@@ -149,6 +149,17 @@ gf_status gf_sins_position(const gf_sins_state *state, double *pos);
 /* EARTH_FLAT: sets the position (m); the geodetic fields are then unused. */
 gf_status gf_sins_set_flat_position(gf_sins_state *state, const double *pos_m);
 
+/* Replaces the navigation quantities (attitude q_bn, normalised here; ENU velocity;
+ * latitude, longitude, height) and refreshes what the state keeps from them (sin and cos
+ * of the latitude, the meridian radius); configuration, time, the previous-sample
+ * memory and the mid-point acceleration are kept. For filters that correct the
+ * mechanization (closed-loop feedback). Errors: GF_ERR_NONFINITE_INPUT;
+ * GF_ERR_BAD_PARAMETER (|lat| >= 90 deg, quaternion not normalisable, height below
+ * -a/2); the state is unchanged on error. */
+gf_status gf_sins_set_navigation(gf_sins_state *state, const double *q_bn,
+                                 const double *v_n_m_s, double lat_rad, double lon_rad,
+                                 double h_m);
+
 /* Turns the navigator around in time (see above). Calling it twice restores the
  * navigation state and the direction; the previous-sample memory (coning terms, the
  * start of a rate record) is cleared each time, as the next sample is not adjacent. */
@@ -182,6 +193,12 @@ gf_status gf_sins_run(gf_sins_state *state, size_t n, const double *gyro, const 
  * attitude norm, latitude range, cos L > 0, R_M > 0); other non-finite numbers make the
  * step's results non-finite: GF_ERR_DIVERGED. */
 gf_status gf_sins_state_check(const gf_sins_state *state);
+
+/* Internal to the core: gf_sins_step forward in time without the check of *state, for
+ * callers that keep the state valid themselves (the integrated-navigation filter sets it
+ * only through gf_sins_init and gf_sins_set_navigation, which check). */
+gf_status gf_sins_step_trusted(gf_sins_state *state, const double *gyro, const double *accel,
+                               double dt_s);
 
 #ifdef __cplusplus
 }

@@ -169,7 +169,7 @@ def as_vector3(name: str, value, unit: str) -> np.ndarray:
     return as_array(name, value, (3,), unit)
 
 
-_CTYPES = {"double": np.float64, "uint8_t": np.uint8}
+_CTYPES = {"double": np.float64, "uint8_t": np.uint8, "int8_t": np.int8}
 
 
 def ptr(arr: np.ndarray, n: int | None = None, ctype: str = "double"):
@@ -181,6 +181,17 @@ def ptr(arr: np.ndarray, n: int | None = None, ctype: str = "double"):
     write beyond it. The array must outlive the view. (``n=None`` skips the size check;
     tests/test_validation.py makes sure no module calls it so.)
     """
+    if ctype not in _CTYPES:
+        # an array of C structs: a numpy structured array laid out as the struct
+        if not isinstance(arr, np.ndarray) or arr.dtype.itemsize != ffi.sizeof(ctype) \
+                or arr.dtype.names is None:
+            raise TypeError(f"a {ctype} buffer for C must be a numpy structured array of "
+                            f"{ffi.sizeof(ctype)}-byte records")
+        if not arr.flags.c_contiguous:
+            raise ValueError("a buffer for C must be C-contiguous")
+        if n is not None and arr.size != n:
+            raise ValueError(f"a {ctype} buffer of {arr.size} records where C accesses {n}")
+        return ffi.cast(f"{ctype} *", ffi.from_buffer(arr))
     want = _CTYPES[ctype]
     if not isinstance(arr, np.ndarray) or arr.dtype != want:
         raise TypeError(f"a {ctype} buffer for C must be a numpy {np.dtype(want).name} array; "

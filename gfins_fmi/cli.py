@@ -497,6 +497,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cosim, check=_check_cosim)
 
+    from gfins_fmi.estimation import cli as estimation_cli
+    parsers["integrate"] = estimation_cli.add_parser(sub)
+
     p = parsers["validate"] = sub.add_parser("validate", help="run fmpy's validation on every shipped FMU")
     p.set_defaults(func=_validate)
     p = parsers["info"] = sub.add_parser("info", help="version and paths of the shipped FMUs")

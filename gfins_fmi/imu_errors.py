@@ -253,25 +253,36 @@ class ImuNoise:
         # the first-order low-pass recursion with a = exp(-dt/tau), i.e. corner 1/(2 pi tau)
         return first_order_lowpass_noise(n, 3, sigma, 1.0 / (2 * np.pi * tau), dt, rng)
 
-    def sample(self, n: int, dt_s: float, rng: np.random.Generator):
-        """Noise to add to rates (rad/s) and specific forces (m/s^2): two (n, 3) arrays."""
+    def sample_parts(self, n: int, dt_s: float, rng: np.random.Generator) -> dict:
+        """The noise of :meth:`sample` by component, each (n, 3): ``gyro_white``,
+        ``gyro_bias`` (Gauss-Markov + rate random walk, rad/s), ``gyro_band``,
+        ``accel_white``, ``accel_bias`` (m/s^2), ``accel_band``. The bias parts are what an
+        integrated-navigation filter estimates (its truth in simulations)."""
         if n < 0 or not (np.isfinite(dt_s) and dt_s > 0):
             raise ValueError("n must be >= 0 and dt_s finite and > 0")
         deg = np.pi / 180.0
-        g = rng.normal(0.0, self.gyro_arw_deg_sqrt_h * deg / 60.0 / np.sqrt(dt_s), (n, 3))
-        g += self._gauss_markov(n, dt_s, self.gyro_bias_instability_deg_h * DEG_H,
-                                self.gyro_correlation_time_s, rng)
+        out = {}
+        out["gyro_white"] = rng.normal(0.0, self.gyro_arw_deg_sqrt_h * deg / 60.0 / np.sqrt(dt_s), (n, 3))
+        out["gyro_bias"] = self._gauss_markov(n, dt_s, self.gyro_bias_instability_deg_h * DEG_H,
+                                              self.gyro_correlation_time_s, rng)
         if self.gyro_rrw_deg_h_sqrt_h:
             K = self.gyro_rrw_deg_h_sqrt_h * DEG_H / 60.0     # rad/s per sqrt(s)
-            g += np.cumsum(rng.normal(0.0, K * np.sqrt(dt_s), (n, 3)), axis=0)
-        a = rng.normal(0.0, self.accel_vrw_ug_sqrt_hz * UG * np.sqrt(0.5 / dt_s), (n, 3))
-        a += self._gauss_markov(n, dt_s, self.accel_bias_instability_ug * UG,
-                                self.accel_correlation_time_s, rng)
+            out["gyro_bias"] = out["gyro_bias"] + np.cumsum(rng.normal(0.0, K * np.sqrt(dt_s), (n, 3)), axis=0)
+        out["accel_white"] = rng.normal(0.0, self.accel_vrw_ug_sqrt_hz * UG * np.sqrt(0.5 / dt_s), (n, 3))
+        out["accel_bias"] = self._gauss_markov(n, dt_s, self.accel_bias_instability_ug * UG,
+                                               self.accel_correlation_time_s, rng)
         if self.accel_rrw_ug_sqrt_s:
-            a += np.cumsum(rng.normal(0.0, self.accel_rrw_ug_sqrt_s * UG * np.sqrt(dt_s), (n, 3)), axis=0)
-        g += first_order_lowpass_noise(n, 3, self.gyro_band_deg_h * DEG_H, self.band_hz, dt_s, rng)
-        a += first_order_lowpass_noise(n, 3, self.accel_band_ug * UG, self.band_hz, dt_s, rng)
-        return g, a
+            out["accel_bias"] = out["accel_bias"] + np.cumsum(
+                rng.normal(0.0, self.accel_rrw_ug_sqrt_s * UG * np.sqrt(dt_s), (n, 3)), axis=0)
+        out["gyro_band"] = first_order_lowpass_noise(n, 3, self.gyro_band_deg_h * DEG_H, self.band_hz, dt_s, rng)
+        out["accel_band"] = first_order_lowpass_noise(n, 3, self.accel_band_ug * UG, self.band_hz, dt_s, rng)
+        return out
+
+    def sample(self, n: int, dt_s: float, rng: np.random.Generator):
+        """Noise to add to rates (rad/s) and specific forces (m/s^2): two (n, 3) arrays."""
+        p = self.sample_parts(n, dt_s, rng)
+        return (p["gyro_white"] + p["gyro_bias"] + p["gyro_band"],
+                p["accel_white"] + p["accel_bias"] + p["accel_band"])
 
 
 def seed001_gyro_misalignment(gamma_yz: float, gamma_zy: float, gamma_zx: float) -> np.ndarray:

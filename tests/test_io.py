@@ -524,8 +524,8 @@ def _rtk_walk_dir() -> pathlib.Path | None:
     """shared/data/rtk_walk beside the repository (CI, the lead's tree) or above a
     worktree, or GFINS_RTK_WALK_DIR."""
     env = os.environ.get("GFINS_RTK_WALK_DIR")
-    candidates = ([pathlib.Path(env)] if env else []) + [p / "shared" / "data" / "rtk_walk"
-                                                         for p in ROOT.parents]
+    candidates = ([pathlib.Path(env)] if env else []) + [ROOT / "tests" / "data" / "rtk_walk"] + \
+        [p / "shared" / "data" / "rtk_walk" for p in ROOT.parents]
     return next((c for c in candidates if (c / "imu_1730_sf.csv").is_file()), None)
 
 

@@ -27,6 +27,7 @@
 #include "gf_math.h"
 #include "gf_test.h"
 #include "gf_vehicle.h"
+#include "turn_drive.h"
 
 #define H_S 0.01
 enum { N = 1500 };   /* 15 s: 2 s rest, start to 15 m/s, a 180 deg turn in 6 s */
@@ -35,21 +36,7 @@ static gf_vehicle_sample g_truth[N];
 static double g_A[N][9];
 static void make_data(void)
 {
-    gf_vehicle_profile p;
-    memset(&p, 0, sizeof p);
-    p.lat0_rad = 0.5235987755982988;
-    p.lon0_rad = 1.9896753472735356;
-    p.h0_m = 100.0;
-    p.n_segments = 4;
-    const double seg[4][4] = {{2, 0, 0, 0}, {3, 15, 0, 0}, {1, 0, 0, 0}, {6, 0, 0, GF_PI}};
-    for (int i = 0; i < 4; ++i) {
-        p.segment[i].duration_s = seg[i][0];
-        p.segment[i].dspeed_m_s = seg[i][1];
-        p.segment[i].dheading_rad = seg[i][3];
-    }
-    gf_vehicle_state s;
-    CHECK(gf_vehicle_init(&s, &p, 0.0, &g_truth[0], NULL) == GF_OK, "vehicle");
-    CHECK(gf_vehicle_run(&s, N - 1, H_S, &g_truth[1], NULL) == GF_OK, "vehicle run");
+    turn_drive(g_truth, N, H_S);
     gf_array_geometry g;
     gf9_geometry(0.1, &g);
     for (int k = 0; k < N; ++k)

@@ -48,6 +48,27 @@ def skip_steps() -> dict:
                             "step (fmpy's SSP simulator starts every connection at 0)")
 
 
+def imu_inputs() -> list:
+    """The strapdown navigators' IMU sample (SINS, integrated navigator): increments or
+    rates, body right-front-up, chosen by the parameter input_mode."""
+    return [
+        dict(name="dtheta", causality="input", variability="continuous", type="Float64",
+             shape=(3,), unit="rad", start=0.0, field="dtheta_rad",
+             description="Gyro angle increment over the interval since the previous sample, "
+                         "ending now, body axes (right-front-up); used when input_mode = 0"),
+        dict(name="dv", causality="input", variability="continuous", type="Float64",
+             shape=(3,), unit="m/s", start=0.0, field="dv_m_s",
+             description="Accelerometer velocity increment over the interval since the "
+                         "previous sample, ending now, body axes; used when input_mode = 0"),
+        dict(name="gyro_rate", causality="input", variability="continuous", type="Float64",
+             shape=(3,), unit="rad/s", start=0.0, field="gyro_rad_s",
+             description="Angular rate w_ib^b now; used when input_mode = 1"),
+        dict(name="specific_force", causality="input", variability="continuous",
+             type="Float64", shape=(3,), unit="m/s2", start=0.0, field="accel_m_s2",
+             description="Specific force f^b now; used when input_mode = 1"),
+    ]
+
+
 def external_height() -> dict:
     return dict(name="h_ext", causality="input", variability="continuous", type="Float64",
                 shape=(), unit="m", start=float("nan"), field="h_ext_m",

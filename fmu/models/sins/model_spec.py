@@ -47,20 +47,7 @@ MODEL = dict(
              shape=(48,), start=0.0, field="lowpass_sos",
              description="Low-pass sections [b0 b1 b2 1 a1 a2] x lowpass_sections (e.g. "
                          "gfins_fmi.signal_conditioning.design_cheby2), applied after the compensation"),
-        dict(name="dtheta", causality="input", variability="continuous", type="Float64",
-             shape=(3,), unit=_RAD, start=0.0, field="dtheta_rad",
-             description="Gyro angle increment over the step ending now, body axes "
-                         "(right-front-up); used when input_mode = 0"),
-        dict(name="dv", causality="input", variability="continuous", type="Float64",
-             shape=(3,), unit="m/s", start=0.0, field="dv_m_s",
-             description="Accelerometer velocity increment over the step ending now, body "
-                         "axes; used when input_mode = 0"),
-        dict(name="gyro_rate", causality="input", variability="continuous", type="Float64",
-             shape=(3,), unit="rad/s", start=0.0, field="gyro_rad_s",
-             description="Angular rate w_ib^b now; used when input_mode = 1"),
-        dict(name="specific_force", causality="input", variability="continuous",
-             type="Float64", shape=(3,), unit="m/s2", start=0.0, field="accel_m_s2",
-             description="Specific force f^b now; used when input_mode = 1"),
+        *_COMMON["imu_inputs"](),
         _COMMON["external_height"](),
         dict(name="q", causality="output", variability="discrete", type="Float64",
              shape=(4,), field="q_bn", description="Attitude quaternion q_b^n"),

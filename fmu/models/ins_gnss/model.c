@@ -1,0 +1,514 @@
+/* model.c — the integrated navigator (error-state INS/GNSS filter, gf_ins_gnss) as an FMU
+ * model: FMI-agnostic; gf_ins_init when leaving initialization, gf_ins_step per doStep.
+ *
+ * Sampling (as the other navigators): doStep(t, h) consumes the IMU sample set for t —
+ * increments over (t_prev, t], t_prev the previous sample's time (at the start time there
+ * is none: the first doStep only starts the run), or rates at t (the first one starts the
+ * record) — and leaves the outputs at t.
+ *
+ * Measurements: each kind (GNSS position and, with gnss_vel_valid, velocity; barometer;
+ * odometer) whose *_valid input is > 0 in this doStep is handed to gf_ins_step with its
+ * time of validity t_m (*_time_s), sorted by time (at equal times GNSS position, GNSS
+ * velocity, barometer, odometer, as the batch API sorts them):
+ *   t_prev < t_m <= t        the IMU interval is split at t_m and the update made there;
+ *   t_m <= t_prev            logged by the core as stale (status 3);
+ *   t < t_m <= t + 1e-9 max(1, |t|) (the glue's tolerance on communication points):
+ *                            taken at t (a master's clock rounding, not a later time);
+ *   later                    refused with an error: a measurement cannot arrive before
+ *                            it is valid, so the master's timing is wrong.
+ * With the same samples, times and measurements the FMU makes the gf_ins_step calls that
+ * gf_ins_run makes, so it computes bit for bit what IntegratedNavigator.run computes. */
+#include <math.h>
+#include <string.h>
+
+#include "fmu_model.h"
+#include "gf_earth.h"
+#include "gf_math.h"
+#include "model.h"
+#include "skip_steps.h"
+
+#define N_MEAS_MAX 4   /* GNSS position, GNSS velocity, barometer, odometer */
+#define LOG_MAX 16     /* updates one sample can make: N_MEAS_MAX + NHC + ZUPT + ZARU */
+
+static int32_t saturate(uint64_t x)
+{
+    return x > (uint64_t)INT32_MAX ? INT32_MAX : (int32_t)x;
+}
+
+static void publish(ModelData *d)
+{
+    const gf_ins_filter *f = &d->filter;
+    memcpy(d->q_bn, f->nav.q_bn, sizeof d->q_bn);
+    gf_quat_to_euler(f->nav.q_bn, d->euler_rad);
+    memcpy(d->v_n_m_s, f->nav.v_n_m_s, sizeof d->v_n_m_s);
+    d->lat_rad = f->nav.lat_rad;
+    d->lon_rad = f->nav.lon_rad;
+    d->h_m = f->nav.h_m;
+    d->nav_time_s = f->t_s;
+    memcpy(d->std9, f->std9, sizeof d->std9);
+    memcpy(d->sensors, f->sensors, sizeof d->sensors);
+    d->n_imu = saturate(f->n_imu);
+    d->n_updates = saturate(f->n_updates);
+    d->n_rejected = saturate(f->n_rejected + d->n_unused);
+    d->standstill = f->standstill;
+}
+
+/* one update of a kind, for the monitoring outputs */
+static void record_update(ModelData *d, int32_t type, int32_t status, double nis, double t_s)
+{
+    const int k = type - 1;
+    if (k < 0 || k >= INS_FMU_KINDS)
+        return;
+    d->nis[k] = nis;
+    d->update_status[k] = status;
+    d->update_time_s[k] = t_s;
+    if (d->update_count[k] < INT32_MAX)
+        d->update_count[k]++;
+}
+
+static int all_positive(const double *x, int n)
+{
+    for (int i = 0; i < n; ++i)
+        if (!(isfinite(x[i]) && x[i] > 0.0))
+            return 0;
+    return 1;
+}
+
+/* The configuration refused by the core: *bad (gf_ins_init) names the field. */
+static void log_bad_config(FmuInstance *instance, const gf_ins_config *c, int32_t bad)
+{
+    static const char *const noise_names[] = {
+        "gyro_arw", "accel_vrw", "gyro_bias_std", "gyro_bias_tau", "accel_bias_std",
+        "accel_bias_tau", "gyro_scale_std", "gyro_scale_tau", "accel_scale_std",
+        "accel_scale_tau", "baro_bias_std", "baro_bias_tau", "odo_scale_std", "odo_scale_tau"};
+    const gf_ins_noise *q = &c->noise;
+    const double noise[] = {q->gyro_arw_rad_sqrt_s, q->accel_vrw_m_s_sqrt_s,
+                            q->gyro_bias_std_rad_s, q->gyro_bias_tau_s,
+                            q->accel_bias_std_m_s2, q->accel_bias_tau_s, q->gyro_scale_std,
+                            q->gyro_scale_tau_s, q->accel_scale_std, q->accel_scale_tau_s,
+                            q->baro_bias_std_m, q->baro_bias_tau_s, q->odo_scale_std,
+                            q->odo_scale_tau_s};
+    if (bad >= 10 && bad < 10 + (int32_t)(sizeof noise / sizeof noise[0])) {
+        fmu_log_error(instance, "parameter %s = %g must be finite and >= 0",
+                      noise_names[bad - 10], noise[bad - 10]);
+        return;
+    }
+    switch (bad) {
+    case 1:
+        fmu_log_error(instance, "parameter input_mode = %d must be 0 (increments) or 1 (rates)",
+                      (int)c->input);
+        break;
+    case 2:
+        fmu_log_error(instance, "parameter coning = %d must be 0 or 1", (int)c->coning);
+        break;
+    case 3:
+        fmu_log_error(instance, "parameter filter = %d must be 0 (EKF) or 1 (UKF)",
+                      (int)c->filter);
+        break;
+    case 4:
+        fmu_log_error(instance, "parameters scale_states = %d, baro_state = %d, odo_state = %d "
+                      "must each be 0 or 1", (int)c->scale_states, (int)c->baro_state,
+                      (int)c->odo_state);
+        break;
+    case 5:
+        fmu_log_error(instance, "parameter propagation_interval = %g s must be finite and >= 0",
+                      c->prop_interval_s);
+        break;
+    case 6:
+        fmu_log_error(instance, "parameter max_imu_gap = %g s must be finite and > 0",
+                      c->max_imu_gap_s);
+        break;
+    case 7:
+        fmu_log_error(instance, "parameters max_rate = %g rad/s and max_specific_force = %g "
+                      "m/s2 must be finite and > 0", c->max_rate_rad_s,
+                      c->max_specific_force_m_s2);
+        break;
+    case 8:
+        fmu_log_error(instance, "parameters ukf_alpha = %g (> 0), ukf_beta = %g, ukf_kappa = %g "
+                      "(finite, number of states + ukf_kappa > 0) are not usable",
+                      c->ukf_alpha, c->ukf_beta, c->ukf_kappa);
+        break;
+    case 30:
+        fmu_log_error(instance, "parameters gnss_lever_arm = [%g, %g, %g] m and odo_lever_arm "
+                      "= [%g, %g, %g] m must be finite", c->gnss_lever_m[0], c->gnss_lever_m[1],
+                      c->gnss_lever_m[2], c->odo_lever_m[0], c->odo_lever_m[1], c->odo_lever_m[2]);
+        break;
+    case 31:
+        fmu_log_error(instance, "parameter gate_prob = %g must be 0 (no gate) or in (0, 1)",
+                      c->gate_prob);
+        break;
+    case 32:
+        fmu_log_error(instance, "parameters nhc = %d (0 or 1), nhc_std = %g m/s (> 0) and "
+                      "nhc_interval = %g s (>= 0) are not usable", (int)c->nhc, c->nhc_std_m_s,
+                      c->nhc_interval_s);
+        break;
+    case 33:
+        fmu_log_error(instance, "parameters zupt = %d (0 or 1), zupt_std = %g m/s (> 0), "
+                      "zaru_std = %g rad/s (>= 0) and zupt_interval = %g s (>= 0) are not "
+                      "usable", (int)c->zupt, c->zupt_std_m_s, c->zaru_std_rad_s,
+                      c->zupt_interval_s);
+        break;
+    case 34:
+        fmu_log_error(instance, "parameters still_window = %g s, still_accel_std = %g m/s2 and "
+                      "still_gyro = %g rad/s must be finite and > 0", c->still_window_s,
+                      c->still_accel_std_m_s2, c->still_gyro_rad_s);
+        break;
+    default:
+        fmu_log_error(instance, "filter configuration refused (field code %d of gf_ins_init)",
+                      (int)bad);
+        break;
+    }
+}
+
+/* The initial state and its uncertainty; 0 when a parameter was refused (logged). P0 is
+ * diagonal, position converted from metres east, north, up to (dlat, dlon, dh) with the
+ * radii of gf_earth at (lat0, h0), as gfins_fmi.estimation.InitialState.covariance. */
+static int initial_covariance(FmuInstance *instance, const ModelData *d, int32_t n, double *P0)
+{
+    if (!(fabs(d->lat0_rad) < GF_HALF_PI * (89.0 / 90.0))) {
+        fmu_log_error(instance, "parameter lat0 = %g rad: |lat0| must be below 89 deg (the ENU "
+                      "error model is singular near the poles)", d->lat0_rad);
+        return 0;
+    }
+    if (!isfinite(d->lon0_rad) || !isfinite(d->h0_m) || !gf_all_finite(d->v0_m_s, 3) ||
+        !gf_all_finite(d->q0, 4)) {
+        fmu_log_error(instance, "parameters q0, v0, lon0 and h0 must be finite");
+        return 0;
+    }
+    if (!gf_all_finite(d->sensors0, GF_INS_N_SENSORS)) {
+        fmu_log_error(instance, "parameter sensors0 must be finite");
+        return 0;
+    }
+    const struct {
+        const char *name, *unit;
+        const double *x;
+        int n, used;
+    } blocks[] = {
+        {"std0_vel", "m/s", d->std0_vel_m_s, 3, 1},
+        {"std0_pos", "m", d->std0_pos_m, 3, 1},
+        {"std0_att", "rad", d->std0_att_rad, 3, 1},
+        {"std0_gyro_bias", "rad/s", d->std0_gyro_bias_rad_s, 3, 1},
+        {"std0_accel_bias", "m/s2", d->std0_accel_bias_m_s2, 3, 1},
+        {"std0_gyro_scale", "", d->std0_gyro_scale, 3, d->cfg.scale_states},
+        {"std0_accel_scale", "", d->std0_accel_scale, 3, d->cfg.scale_states},
+        {"std0_baro_bias", "m", &d->std0_baro_bias_m, 1, d->cfg.baro_state},
+        {"std0_odo_scale", "", &d->std0_odo_scale, 1, d->cfg.odo_state},
+    };
+    double sd[GF_INS_MAX_STATES];
+    int k = 0;
+    for (size_t b = 0; b < sizeof blocks / sizeof blocks[0]; ++b) {
+        if (!blocks[b].used)
+            continue;
+        const double *x = blocks[b].x;
+        if (!all_positive(x, blocks[b].n)) {
+            if (blocks[b].n == 3)
+                fmu_log_error(instance, "parameter %s = [%g, %g, %g] %s: every element must be "
+                              "finite and > 0", blocks[b].name, x[0], x[1], x[2], blocks[b].unit);
+            else
+                fmu_log_error(instance, "parameter %s = %g %s must be finite and > 0",
+                              blocks[b].name, x[0], blocks[b].unit);
+            return 0;
+        }
+        for (int i = 0; i < blocks[b].n; ++i)
+            sd[k++] = x[i];
+    }
+    if (k != n) { /* the flags were checked by the core: cannot happen */
+        fmu_log_error(instance, "internal: %d initial std for %d states", k, (int)n);
+        return 0;
+    }
+    gf_earth e;
+    if (gf_earth_update(&e, d->lat0_rad, d->h0_m, NULL, 1.0) != GF_OK) {
+        fmu_log_error(instance, "parameter h0 = %g m is absurd", d->h0_m);
+        return 0;
+    }
+    const double east = sd[GF_INS_IDX_POS], north = sd[GF_INS_IDX_POS + 1];
+    sd[GF_INS_IDX_POS] = north / (e.R_M_m + d->h0_m);                          /* dlat */
+    sd[GF_INS_IDX_POS + 1] = east / ((e.R_N_m + d->h0_m) * e.cos_lat);         /* dlon */
+    memset(P0, 0, (size_t)(n * n) * sizeof *P0);
+    for (int i = 0; i < n; ++i)
+        P0[i * n + i] = sd[i] * sd[i];
+    return 1;
+}
+
+static void reset_monitor(ModelData *d)
+{
+    for (int k = 0; k < INS_FMU_KINDS; ++k) {
+        d->nis[k] = NAN;
+        d->update_time_s[k] = NAN;
+        d->update_status[k] = -1;
+        d->update_count[k] = 0;
+    }
+    d->n_unused = 0;
+}
+
+/* Validates the parameters and starts the filter at t0_s (also after skip_steps). */
+static FmuStatus start_filter(FmuInstance *instance, ModelData *d, double t0_s)
+{
+    double P0[GF_INS_MAX_STATES * GF_INS_MAX_STATES];
+    int32_t n = 0, bad = 0;
+    if (gf_ins_state_count(&d->cfg, &n) != GF_OK) {
+        /* the core's check names the field; the filter is not touched */
+        memset(P0, 0, sizeof P0);
+        gf_ins_init(&d->filter, &d->cfg, t0_s, d->q0, d->v0_m_s, d->lat0_rad, d->lon0_rad,
+                    d->h0_m, d->sensors0, P0, &bad);
+        log_bad_config(instance, &d->cfg, bad);
+        return FMU_ERROR;
+    }
+    if (!initial_covariance(instance, d, n, P0))
+        return FMU_ERROR;
+    const gf_status st = gf_ins_init(&d->filter, &d->cfg, t0_s, d->q0, d->v0_m_s, d->lat0_rad,
+                                     d->lon0_rad, d->h0_m, d->sensors0, P0, &bad);
+    if (st != GF_OK) {
+        if (bad)
+            log_bad_config(instance, &d->cfg, bad);
+        else
+            fmu_log_error(instance, "initial state refused (%s): q0 must be a finite, non-zero "
+                          "quaternion", gf_status_string(st));
+        return FMU_ERROR;
+    }
+    d->started = 0;
+    reset_monitor(d);
+    publish(d);
+    return FMU_OK;
+}
+
+FmuStatus model_exit_initialization(FmuInstance *instance, ModelData *d, double start_time_s)
+{
+    if (!fmu_skip_steps_reset(instance, d->skip_steps, &d->skipped))
+        return FMU_ERROR;
+    return start_filter(instance, d, start_time_s);
+}
+
+/* One measurement input group: valid flag, time, and where the values sit. */
+static int take_time(FmuInstance *instance, const char *what, int32_t valid, double t_m,
+                     double t_s, double *t_use)
+{
+    if (valid < 0) {
+        fmu_log_error(instance, "t = %.9g s: input %s_valid = %d must be >= 0", t_s, what,
+                      (int)valid);
+        return 0;
+    }
+    if (!isfinite(t_m)) {
+        fmu_log_error(instance, "t = %.9g s: %s_valid = %d but %s_time_s = %g is not finite",
+                      t_s, what, (int)valid, what, t_m);
+        return 0;
+    }
+    *t_use = t_m;
+    if (t_m > t_s + 1e-9) {
+        if (t_m - t_s <= 1e-9 * fmax(1.0, fabs(t_s))) {
+            *t_use = t_s; /* the master's clock rounding (glue tolerance) */
+        } else {
+            fmu_log_error(instance, "t = %.9g s: %s measurement valid at %s_time_s = %.9g s, "
+                          "after the IMU sample it was delivered with: deliver a measurement in "
+                          "the step whose sample time reaches its time of validity", t_s, what,
+                          what, t_m);
+            return 0;
+        }
+    }
+    return 1;
+}
+
+static int values_ok(FmuInstance *instance, double t_s, const char *names, const double *z,
+                     const double *std, int m)
+{
+    if (!gf_all_finite(z, (size_t)m) || !all_positive(std, m)) {
+        if (m == 3)
+            fmu_log_error(instance, "t = %.9g s: inputs %s: values must be finite and std > 0 "
+                          "(got [%g, %g, %g], std [%g, %g, %g])", t_s, names, z[0], z[1], z[2],
+                          std[0], std[1], std[2]);
+        else
+            fmu_log_error(instance, "t = %.9g s: inputs %s: the value must be finite and the "
+                          "std > 0 (got %g, std %g)", t_s, names, z[0], std[0]);
+        return 0;
+    }
+    return 1;
+}
+
+/* The measurements delivered with this step, validated and sorted by time; 0 on a
+ * refused input (logged). */
+static int gather(FmuInstance *instance, const ModelData *d, double t_s, gf_ins_meas *meas,
+                  size_t *n_meas)
+{
+    size_t n = 0;
+    double t_m = 0.0;
+    if (d->gnss_valid) {
+        if (!take_time(instance, "gnss", d->gnss_valid, d->gnss_time_s, t_s, &t_m))
+            return 0;
+        const double pos[3] = {d->gnss_lat_rad, d->gnss_lon_rad, d->gnss_h_m};
+        if (!values_ok(instance, t_s, "GNSS gnss_lat_rad, gnss_lon_rad, gnss_h_m, gnss_pos_std_m",
+                       pos, d->gnss_pos_std_m, 3))
+            return 0;
+        if (!(fabs(d->gnss_lat_rad) < GF_HALF_PI)) {
+            fmu_log_error(instance, "t = %.9g s: input gnss_lat_rad = %g is outside (-pi/2, pi/2)",
+                          t_s, d->gnss_lat_rad);
+            return 0;
+        }
+        meas[n] = (gf_ins_meas){GF_INS_MEAS_GNSS_POS, t_m, {pos[0], pos[1], pos[2]},
+                                {d->gnss_pos_std_m[0], d->gnss_pos_std_m[1], d->gnss_pos_std_m[2]}};
+        ++n;
+        if (d->gnss_vel_valid != 0 && d->gnss_vel_valid != 1) {
+            fmu_log_error(instance, "t = %.9g s: input gnss_vel_valid = %d must be 0 or 1", t_s,
+                          (int)d->gnss_vel_valid);
+            return 0;
+        }
+        if (d->gnss_vel_valid) {
+            if (!values_ok(instance, t_s, "GNSS gnss_vel_enu_m_s, gnss_vel_std_m_s",
+                           d->gnss_vel_enu_m_s, d->gnss_vel_std_m_s, 3))
+                return 0;
+            const double *v = d->gnss_vel_enu_m_s, *s = d->gnss_vel_std_m_s;
+            meas[n++] = (gf_ins_meas){GF_INS_MEAS_GNSS_VEL, t_m, {v[0], v[1], v[2]},
+                                      {s[0], s[1], s[2]}};
+        }
+    }
+    if (d->baro_valid) {
+        if (!take_time(instance, "baro", d->baro_valid, d->baro_time_s, t_s, &t_m) ||
+            !values_ok(instance, t_s, "barometer baro_h_m, baro_std_m", &d->baro_h_m,
+                       &d->baro_std_m, 1))
+            return 0;
+        meas[n++] = (gf_ins_meas){GF_INS_MEAS_BARO, t_m, {d->baro_h_m, 0.0, 0.0},
+                                  {d->baro_std_m, 0.0, 0.0}};
+    }
+    if (d->odo_valid) {
+        if (!take_time(instance, "odo", d->odo_valid, d->odo_time_s, t_s, &t_m) ||
+            !values_ok(instance, t_s, "odometer odo_speed_m_s, odo_std_m_s", &d->odo_speed_m_s,
+                       &d->odo_std_m_s, 1))
+            return 0;
+        meas[n++] = (gf_ins_meas){GF_INS_MEAS_ODO, t_m, {d->odo_speed_m_s, 0.0, 0.0},
+                                  {d->odo_std_m_s, 0.0, 0.0}};
+    }
+    /* stable insertion sort by time: kinds in the order above at equal times */
+    for (size_t i = 1; i < n; ++i) {
+        const gf_ins_meas x = meas[i];
+        size_t j = i;
+        while (j > 0 && meas[j - 1].t_s > x.t_s) {
+            meas[j] = meas[j - 1];
+            --j;
+        }
+        meas[j] = x;
+    }
+    *n_meas = n;
+    return 1;
+}
+
+static void log_step_error(FmuInstance *instance, const ModelData *d, gf_status st, double t_s,
+                           const double *gyro, const double *accel)
+{
+    const gf_ins_filter *f = &d->filter;
+    const int increments = f->cfg.input == GF_SINS_INPUT_INCREMENTS;
+    const char *g = increments ? "dtheta" : "gyro_rate", *a = increments ? "dv" : "specific_force";
+    switch (st) {
+    case GF_ERR_NONFINITE_INPUT:
+        fmu_log_error(instance, "t = %.9g s: input %s = [%g, %g, %g] or %s = [%g, %g, %g] is not "
+                      "finite; the outputs keep the last good sample", t_s, g, gyro[0], gyro[1],
+                      gyro[2], a, accel[0], accel[1], accel[2]);
+        break;
+    case GF_ERR_OUT_OF_RANGE:
+        fmu_log_error(instance, "t = %.9g s: input %s = [%g, %g, %g] / %s = [%g, %g, %g] exceeds "
+                      "max_rate = %g rad/s or max_specific_force = %g m/s2", t_s, g, gyro[0],
+                      gyro[1], gyro[2], a, accel[0], accel[1], accel[2], f->cfg.max_rate_rad_s,
+                      f->cfg.max_specific_force_m_s2);
+        break;
+    case GF_ERR_BAD_TIME:
+        fmu_log_error(instance, "t = %.9g s: the IMU interval since the previous sample at %.9g s "
+                      "is not in (0, max_imu_gap = %g s]", t_s, f->t_s, f->cfg.max_imu_gap_s);
+        break;
+    case GF_ERR_DIVERGED:
+        fmu_log_error(instance, "t = %.9g s: the filter diverged (navigation state left its "
+                      "domain or the covariance lost positive definiteness); the outputs keep "
+                      "the last good sample", t_s);
+        break;
+    default:
+        fmu_log_error(instance, "t = %.9g s: filter step failed: %s", t_s, gf_status_string(st));
+        break;
+    }
+}
+
+FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double h_s)
+{
+    int restart = 0;
+    if (fmu_skip_this_step(d->skip_steps, &d->skipped, &restart)) /* start at the next sample */
+        return restart ? start_filter(instance, d, t_s + h_s) : FMU_OK;
+    gf_ins_meas meas[N_MEAS_MAX];
+    size_t n_meas = 0;
+    if (!gather(instance, d, t_s, meas, &n_meas))
+        return FMU_ERROR;
+    gf_ins_filter *f = &d->filter;
+    const int increments = f->cfg.input == GF_SINS_INPUT_INCREMENTS;
+    if (increments && !d->started) {
+        /* no increment ends at the filter's start: what arrives now is valid at or before
+         * it, stale as the core would call it */
+        for (size_t j = 0; j < n_meas; ++j)
+            record_update(d, meas[j].type, GF_INS_REJECTED_STALE, NAN, meas[j].t_s);
+        d->n_unused += n_meas;
+        d->started = 1;
+        publish(d);
+        return FMU_OK;
+    }
+    const double *gyro = increments ? d->dtheta_rad : d->gyro_rad_s;
+    const double *accel = increments ? d->dv_m_s : d->accel_m_s2;
+    gf_ins_innovation entries[LOG_MAX];
+    gf_ins_log log = {LOG_MAX, 0, 0, entries};
+    /* the core leaves the filter unchanged on every error but a divergence found after the
+     * mechanization: keep a copy so that a failed step changes nothing */
+    const gf_ins_filter before = *f;
+    const gf_status st = gf_ins_step(f, t_s, gyro, accel, n_meas, meas, NULL, &log);
+    if (st != GF_OK) {
+        *f = before;
+        log_step_error(instance, d, st, t_s, gyro, accel);
+        return FMU_ERROR;
+    }
+    for (size_t i = 0; i < log.count; ++i)
+        record_update(d, entries[i].type, entries[i].status, entries[i].nis, entries[i].t_s);
+    d->started = 1;
+    publish(d);
+    return FMU_OK;
+}
+
+const char *ins_gnss_state_problem(const ModelData *d)
+{
+    const gf_ins_filter *f = &d->filter;
+    if (d->skip_steps < 0 || d->skipped < 0 || d->skipped > d->skip_steps)
+        return "skip_steps / skipped out of range";
+    if (d->started != 0 && d->started != 1)
+        return "started is not 0 or 1";
+    if (f->n_states == 0 && f->kf.n == 0 && f->ukf_w.n == 0)
+        return NULL; /* not started yet (before exitInitializationMode) */
+    int32_t n = 0;
+    if (gf_ins_state_count(&f->cfg, &n) != GF_OK)
+        return "filter configuration out of range (an enumeration, flag or limit)";
+    if (f->n_states != n)
+        return "filter n_states does not match its configuration";
+    int32_t next = GF_INS_BASE_STATES, idx_sg = -1, idx_sa = -1, idx_baro = -1, idx_odo = -1;
+    if (f->cfg.scale_states) {
+        idx_sg = next;
+        idx_sa = next + 3;
+        next += 6;
+    }
+    if (f->cfg.baro_state)
+        idx_baro = next++;
+    if (f->cfg.odo_state)
+        idx_odo = next++;
+    if (f->idx_sg != idx_sg || f->idx_sa != idx_sa || f->idx_baro != idx_baro ||
+        f->idx_odo != idx_odo)
+        return "filter idx_* do not match its configuration";
+    if (f->kf.n != (size_t)n || f->ukf_w.n != (size_t)n)
+        return "filter kf.n or ukf_w.n differs from n_states";
+    const gf_sins_config *sc = &f->nav.cfg;
+    if (sc->input != f->cfg.input || sc->coning != f->cfg.coning ||
+        sc->vertical != GF_SINS_VERTICAL_FREE || sc->earth != GF_SINS_EARTH_WGS84)
+        return "mechanization configuration differs from the filter's";
+    if ((f->have_sample & ~1) || (f->standstill & ~1) || (f->nav.have_prev & ~1) ||
+        (f->nav0.have_prev & ~1))
+        return "a flag of the filter is not 0 or 1";
+    return NULL;
+}
+
+const char *model_validate_state(const ModelData *d)
+{
+    const char *why = ins_gnss_state_problem(d);
+    if (why)
+        return why;
+    if (d->started && gf_ins_filter_check(&d->filter) != GF_OK)
+        return "the filter state (layout, indices, nominal state, covariance) is invalid";
+    return NULL;
+}

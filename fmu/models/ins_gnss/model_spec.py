@@ -1,0 +1,255 @@
+"""Interface of the integrated-navigator FMU: the error-state INS/GNSS filter of the C
+core (csrc/gf_ins_gnss.h, EKF or UKF) aided by GNSS position/velocity, barometer and
+odometer, with non-holonomic and zero-velocity updates — the one place its variables are
+listed; fmu/tools/fmugen.py makes the FMI 2.0 and 3.0 modelDescription.xml and the C
+table from it. Parameter defaults equal gfins_fmi.estimation.FilterConfig's (checked by
+tests/test_fmu_ins_gnss.py); the noise and initial-uncertainty defaults describe a
+consumer-grade MEMS IMU (set yours)."""
+
+import math
+import pathlib
+import runpy
+
+_COMMON = runpy.run_path(str(pathlib.Path(__file__).resolve().parent.parent / "common" / "nav_params.py"))
+
+DEG = math.pi / 180.0
+# default IMU: gyro ARW 0.3 deg/sqrt(h), bias 10 deg/h over 1 h; accelerometer noise
+# density 100 ug/sqrt(Hz), bias 100 ug over 1 h (noise in SI as gf_ins_noise takes it:
+# FilterConfig.noise_si() of that ImuNoise)
+_GYRO_ARW = 0.3 * DEG / 60.0
+_ACCEL_VRW = 100 * 9.80665e-6 / math.sqrt(2.0)
+_GYRO_BIAS = 10.0 * DEG / 3600.0
+_ACCEL_BIAS = 100 * 9.80665e-6
+
+#: measurement kinds of the per-kind monitoring outputs, index = GF_INS_MEAS_* - 1
+KINDS = "gnss_pos, gnss_vel, baro, odometer, nhc, zupt, zaru"
+
+
+def _p(name, unit, start, field, description, type_="Float64", shape=()):
+    d = dict(name=name, causality="parameter", variability="fixed", type=type_, shape=shape,
+             start=start, field=field, description=description)
+    if unit:
+        d["unit"] = unit
+    return d
+
+
+def _in(name, unit, start, field, description, type_="Float64", shape=()):
+    d = dict(name=name, causality="input", variability="continuous" if type_ == "Float64"
+             else "discrete", type=type_, shape=shape, start=start, field=field,
+             description=description)
+    if unit:
+        d["unit"] = unit
+    return d
+
+
+def _out(name, unit, shape, field, description, type_="Float64"):
+    d = dict(name=name, causality="output", variability="discrete", type=type_,
+             shape=shape, field=field, description=description)
+    if unit:
+        d["unit"] = unit
+    return d
+
+
+_NAN = float("nan")
+
+
+def _filter_parameters():
+    c, q = "cfg.", "cfg.noise."
+    return [
+        _p("filter", None, 0, c + "filter", "0: extended Kalman filter; 1: unscented (sigma "
+           "points through the mechanization and the nonlinear measurement models)", "Int32"),
+        _p("input_mode", None, 0, c + "input", "0: increments (dtheta, dv); 1: rates "
+           "(gyro_rate, specific_force)", "Int32"),
+        _p("coning", None, 1, c + "coning", "1: two-sample coning and sculling corrections "
+           "in the mechanization; 0: none", "Int32"),
+        _p("propagation_interval", "s", 0.1, c + "prop_interval_s", "Covariance "
+           "propagation interval, >= 0 (0: every IMU sample); measurements propagate to "
+           "their own instant in any case"),
+        _p("max_imu_gap", "s", 0.5, c + "max_imu_gap_s", "A longer IMU interval is "
+           "refused (error), > 0"),
+        _p("max_rate", "rad/s", 50.0, c + "max_rate_rad_s",
+           "Samples with a larger angular rate are refused as absurd"),
+        _p("max_specific_force", "m/s2", 1000.0, c + "max_specific_force_m_s2",
+           "Samples with a larger specific force are refused as absurd"),
+        _p("scale_states", None, 0, c + "scale_states", "1: gyro and accelerometer "
+           "scale-factor states (21 states)", "Int32"),
+        _p("baro_state", None, 0, c + "baro_state", "1: barometer bias state", "Int32"),
+        _p("odo_state", None, 0, c + "odo_state", "1: odometer scale-factor state", "Int32"),
+        _p("ukf_alpha", None, 0.5, c + "ukf_alpha", "UKF sigma-point spread alpha, > 0 "
+           "(seed 004: small; 0.5 keeps the points within ~2 sigma)"),
+        _p("ukf_beta", None, 2.0, c + "ukf_beta", "UKF beta (2: Gaussian)"),
+        _p("ukf_kappa", None, 0.0, c + "ukf_kappa", "UKF kappa (N + kappa > 0)"),
+        _p("gyro_arw", None, _GYRO_ARW, q + "gyro_arw_rad_sqrt_s",
+           "Gyro white noise (angle random walk), rad/sqrt(s), >= 0"),
+        _p("accel_vrw", None, _ACCEL_VRW, q + "accel_vrw_m_s_sqrt_s",
+           "Accelerometer white noise (velocity random walk), m/s/sqrt(s), >= 0"),
+        _p("gyro_bias_std", "rad/s", _GYRO_BIAS, q + "gyro_bias_std_rad_s",
+           "Gyro bias, first-order Gauss-Markov: steady-state std, >= 0"),
+        _p("gyro_bias_tau", "s", 3600.0, q + "gyro_bias_tau_s",
+           "Gyro bias correlation time, >= 0 (0: random constant)"),
+        _p("accel_bias_std", "m/s2", _ACCEL_BIAS, q + "accel_bias_std_m_s2",
+           "Accelerometer bias, Gauss-Markov steady-state std, >= 0"),
+        _p("accel_bias_tau", "s", 3600.0, q + "accel_bias_tau_s",
+           "Accelerometer bias correlation time, >= 0 (0: random constant)"),
+        _p("gyro_scale_std", None, 1e-3, q + "gyro_scale_std",
+           "Gyro scale-factor error, Gauss-Markov std (dimensionless), >= 0"),
+        _p("gyro_scale_tau", "s", 0.0, q + "gyro_scale_tau_s",
+           "Gyro scale-factor correlation time, >= 0 (0: random constant)"),
+        _p("accel_scale_std", None, 1e-3, q + "accel_scale_std",
+           "Accelerometer scale-factor error, Gauss-Markov std, >= 0"),
+        _p("accel_scale_tau", "s", 0.0, q + "accel_scale_tau_s",
+           "Accelerometer scale-factor correlation time, >= 0"),
+        _p("baro_bias_std", "m", 1.0, q + "baro_bias_std_m",
+           "Barometer bias, Gauss-Markov std, >= 0"),
+        _p("baro_bias_tau", "s", 3600.0, q + "baro_bias_tau_s",
+           "Barometer bias correlation time, >= 0"),
+        _p("odo_scale_std", None, 0.01, q + "odo_scale_std",
+           "Odometer scale-factor error, Gauss-Markov std, >= 0"),
+        _p("odo_scale_tau", "s", 0.0, q + "odo_scale_tau_s",
+           "Odometer scale-factor correlation time, >= 0"),
+        _p("gnss_lever_arm", "m", 0.0, c + "gnss_lever_m",
+           "GNSS antenna phase centre from the IMU, body right-front-up", shape=(3,)),
+        _p("odo_lever_arm", "m", 0.0, c + "odo_lever_m",
+           "Odometer wheel contact point from the IMU, body right-front-up", shape=(3,)),
+        _p("gate_prob", None, 0.9999, c + "gate_prob", "Innovation gate: a measurement "
+           "whose NIS exceeds the chi-square quantile of this probability is rejected; "
+           "0: no gate, else in (0, 1)"),
+        _p("nhc", None, 0, c + "nhc", "1: non-holonomic constraint updates (lateral and "
+           "vertical velocity of the wheel point 0)", "Int32"),
+        _p("nhc_std", "m/s", 0.1, c + "nhc_std_m_s", "NHC measurement std, > 0"),
+        _p("nhc_interval", "s", 0.1, c + "nhc_interval_s",
+           "At most one NHC update per interval, >= 0"),
+        _p("zupt", None, 0, c + "zupt", "1: zero-velocity updates when the standstill "
+           "detector says the IMU is still", "Int32"),
+        _p("zupt_std", "m/s", 0.01, c + "zupt_std_m_s", "ZUPT measurement std, > 0"),
+        _p("zaru_std", "rad/s", 0.0, c + "zaru_std_rad_s",
+           "> 0: also zero-angular-rate updates at standstill, with this std"),
+        _p("zupt_interval", "s", 0.1, c + "zupt_interval_s",
+           "At most one ZUPT (and ZARU) per interval, >= 0"),
+        _p("still_window", "s", 0.5, c + "still_window_s",
+           "Standstill detector: averaging time, > 0"),
+        _p("still_accel_std", "m/s2", 0.05, c + "still_accel_std_m_s2",
+           "Standstill detector: std of |f| over the window below this, > 0"),
+        _p("still_gyro", "rad/s", 0.01, c + "still_gyro_rad_s",
+           "Standstill detector: mean |w| over the window below this, > 0"),
+    ]
+
+
+def _initial_uncertainty():
+    return [
+        _p("sensors0", None, 0.0, "sensors0", "Initial sensor-error estimates (gyro bias 3 "
+           "rad/s, accelerometer bias 3 m/s2, gyro scale 3, accelerometer scale 3, "
+           "barometer bias m, odometer scale)", shape=(14,)),
+        _p("std0_vel", "m/s", 0.1, "std0_vel_m_s", "Initial 1-sigma of the velocity, "
+           "east, north, up, > 0", shape=(3,)),
+        _p("std0_pos", "m", 1.0, "std0_pos_m", "Initial 1-sigma of the position, east, "
+           "north, up, > 0", shape=(3,)),
+        _p("std0_att", "rad", [0.01, 0.01, 0.05], "std0_att_rad", "Initial 1-sigma of the "
+           "attitude error (east, north tilt; up: heading), > 0", shape=(3,)),
+        _p("std0_gyro_bias", "rad/s", _GYRO_BIAS, "std0_gyro_bias_rad_s",
+           "Initial 1-sigma of the gyro biases, > 0", shape=(3,)),
+        _p("std0_accel_bias", "m/s2", _ACCEL_BIAS, "std0_accel_bias_m_s2",
+           "Initial 1-sigma of the accelerometer biases, > 0", shape=(3,)),
+        _p("std0_gyro_scale", None, 1e-3, "std0_gyro_scale",
+           "Initial 1-sigma of the gyro scale factors (scale_states = 1), > 0", shape=(3,)),
+        _p("std0_accel_scale", None, 1e-3, "std0_accel_scale",
+           "Initial 1-sigma of the accelerometer scale factors (scale_states = 1), > 0",
+           shape=(3,)),
+        _p("std0_baro_bias", "m", 1.0, "std0_baro_bias_m",
+           "Initial 1-sigma of the barometer bias (baro_state = 1), > 0"),
+        _p("std0_odo_scale", None, 0.01, "std0_odo_scale",
+           "Initial 1-sigma of the odometer scale factor (odo_state = 1), > 0"),
+    ]
+
+
+_HELD = " (when *_valid > 0; not read otherwise)"
+
+
+def _measurement_inputs():
+    return [
+        _in("gnss_valid", None, 0, "gnss_valid", "> 0: a GNSS epoch was delivered with "
+            "this step (the gnss_* inputs hold it; a count > 1 uses the newest)", "Int32"),
+        _in("gnss_time_s", "s", _NAN, "gnss_time_s", "GNSS time of validity, on the "
+            "simulation time scale" + _HELD),
+        _in("gnss_lat_rad", "rad", _NAN, "gnss_lat_rad", "GNSS antenna latitude" + _HELD),
+        _in("gnss_lon_rad", "rad", _NAN, "gnss_lon_rad", "GNSS antenna longitude" + _HELD),
+        _in("gnss_h_m", "m", _NAN, "gnss_h_m", "GNSS antenna height above the ellipsoid" + _HELD),
+        _in("gnss_vel_enu_m_s", "m/s", _NAN, "gnss_vel_enu_m_s",
+            "GNSS antenna velocity east, north, up" + _HELD, shape=(3,)),
+        _in("gnss_pos_std_m", "m", _NAN, "gnss_pos_std_m",
+            "GNSS position std east, north, up, > 0" + _HELD, shape=(3,)),
+        _in("gnss_vel_std_m_s", "m/s", _NAN, "gnss_vel_std_m_s",
+            "GNSS velocity std east, north, up, > 0" + _HELD, shape=(3,)),
+        _in("gnss_vel_valid", None, 1, "gnss_vel_valid",
+            "1: the GNSS epoch's velocity is used too; 0: position only", "Int32"),
+        _in("baro_valid", None, 0, "baro_valid",
+            "> 0: a barometer sample was delivered with this step", "Int32"),
+        _in("baro_time_s", "s", _NAN, "baro_time_s", "Barometer time of validity" + _HELD),
+        _in("baro_h_m", "m", _NAN, "baro_h_m", "Barometric height" + _HELD),
+        _in("baro_std_m", "m", _NAN, "baro_std_m", "Barometer std, > 0" + _HELD),
+        _in("odo_valid", None, 0, "odo_valid",
+            "> 0: an odometer sample was delivered with this step", "Int32"),
+        _in("odo_time_s", "s", _NAN, "odo_time_s", "Odometer time of validity" + _HELD),
+        _in("odo_speed_m_s", "m/s", _NAN, "odo_speed_m_s",
+            "Odometer forward speed of the wheel point" + _HELD),
+        _in("odo_std_m_s", "m/s", _NAN, "odo_std_m_s", "Odometer std, > 0" + _HELD),
+    ]
+
+
+def _outputs():
+    per_kind = f" per measurement kind ({KINDS})"
+    return [
+        _out("q", None, (4,), "q_bn", "Attitude quaternion q_b^n"),
+        _out("euler", "rad", (3,), "euler_rad",
+             "Heading (clockwise from north, [0, 2 pi)), pitch, roll"),
+        _out("v", "m/s", (3,), "v_n_m_s", "Velocity, East-North-Up"),
+        _out("lat", "rad", (), "lat_rad", "Geodetic latitude"),
+        _out("lon", "rad", (), "lon_rad", "Longitude"),
+        _out("h", "m", (), "h_m", "Height above the ellipsoid"),
+        _out("time_s", "s", (), "nav_time_s", "Time that the navigation outputs describe"),
+        _out("std", None, (9,), "std9", "1-sigma: velocity east, north, up (m/s), position "
+             "east, north, up (m), attitude east, north, up (rad)"),
+        _out("sensors", None, (14,), "sensors", "Sensor-error estimates: gyro bias (3, "
+             "rad/s), accelerometer bias (3, m/s2), gyro scale (3), accelerometer scale (3), "
+             "barometer bias (m), odometer scale"),
+        _out("n_imu", None, (), "n_imu", "IMU samples processed", "Int32"),
+        _out("n_updates", None, (), "n_updates", "Updates accepted", "Int32"),
+        _out("n_rejected", None, (), "n_rejected",
+             "Updates rejected (gate, singular, stale)", "Int32"),
+        _out("nis", None, (7,), "nis", "Normalised innovation squared of the last update"
+             + per_kind + "; NaN before the first and for stale measurements"),
+        _out("update_status", None, (7,), "update_status", "Outcome of the last update"
+             + per_kind + ": -1 none yet, 0 accepted, 1 rejected by the gate, 2 singular, "
+             "3 stale (valid at or before the filter's time)", "Int32"),
+        _out("update_time", "s", (7,), "update_time_s",
+             "Time of the last update" + per_kind + "; NaN before the first"),
+        _out("update_count", None, (7,), "update_count",
+             "Updates so far (accepted or not)" + per_kind, "Int32"),
+        _out("standstill", None, (), "standstill",
+             "1: the standstill detector says the IMU is still (zupt = 1)", "Int32"),
+    ]
+
+
+MODEL = dict(
+    model_name="gfins.IntegratedNavigator",
+    model_identifier="gfins_ins_gnss",
+    description=(
+        "Integrated navigation: error-state Kalman filter (EKF or UKF) correcting a WGS-84 "
+        "strapdown mechanization with GNSS position/velocity, barometer and odometer "
+        "(gf_ins_gnss). doStep(t, h) takes the IMU sample set at t (an increment covers the "
+        "interval since the previous sample; at the start time there is none) and the "
+        "measurements delivered with it; each carries its time of validity t_m: inside the "
+        "sample's interval the interval is split there, at or before its start it is stale, "
+        "after t it is refused. The outputs after the step describe t."
+    ),
+    default_experiment=dict(start_time=0.0, stop_time=60.0, step_size=0.01),
+    variables=[
+        *_filter_parameters(),
+        *_COMMON["initial_state"](),
+        *_initial_uncertainty(),
+        _COMMON["skip_steps"](),
+        *_COMMON["imu_inputs"](),
+        *_measurement_inputs(),
+        *_outputs(),
+    ],
+)

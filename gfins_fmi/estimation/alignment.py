@@ -1,0 +1,227 @@
+"""Initialisation of the integrated-navigation filter (issue 11, item 5): coarse alignment
+at standstill — levelling from the accelerometers, heading by gyrocompassing when the
+gyros can see the Earth's rotation — or the heading from GNSS velocity once moving.
+
+Which applies when (see docs/estimation.md):
+
+* levelling needs ~1 s at rest with any IMU: tilt error ~ accelerometer bias / g
+  (100 ug -> 0.006 deg);
+* gyrocompassing needs gyro bias << Earth rate x cos(latitude) (15 deg/h at the equator):
+  heading error ~ gyro bias / (Omega cos L), e.g. 0.01 deg/h -> 0.06 deg at 30 deg, 1 deg/h ->
+  4.4 deg; consumer MEMS gyros (tens to thousands of deg/h) cannot, and the heading comes
+  from GNSS velocity (the direction of travel of a vehicle, or of a walker holding the
+  device pointing forward) once the speed is well above the velocity noise;
+* near the poles (|lat| > 85 deg) the Earth rate is vertical and gives no heading.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Optional
+
+import numpy as np
+
+from gfins_fmi.sins import NavState, euler_to_quat
+
+__all__ = ["CoarseAlignment", "coarse_align", "heading_from_gnss", "AlignmentError", "StartingPoint",
+           "align_static_then_gnss"]
+
+_OMEGA = 7.292115e-5
+
+
+class AlignmentError(ValueError):
+    """The data cannot give the requested alignment (motion at 'standstill', too short,
+    near the poles); the message says why and what to do."""
+
+
+@dataclass
+class CoarseAlignment:
+    """Result of :func:`coarse_align`.
+
+    Attributes
+    ----------
+    euler_rad : (heading, pitch, roll), rad; heading NaN when not determined
+    tilt_std_rad : 1-sigma of pitch and roll from the accelerometer bias
+    heading_std_rad : 1-sigma of the heading (NaN when not determined)
+    heading_method : "gyrocompass" or "none"
+    t_s : (start, end) of the window used
+    f_mean_m_s2, w_mean_rad_s : mean specific force and rate over the window (body)
+    notes : what was found (motion, gyro too poor, ...)
+    """
+    euler_rad: np.ndarray
+    tilt_std_rad: float
+    heading_std_rad: float
+    heading_method: str
+    t_s: tuple
+    f_mean_m_s2: np.ndarray
+    w_mean_rad_s: np.ndarray
+    notes: list = field(default_factory=list)
+
+    def quaternion(self, heading_rad: Optional[float] = None) -> np.ndarray:
+        """q_b^n of the alignment (heading replaced by ``heading_rad`` if given)."""
+        e = self.euler_rad.copy()
+        if heading_rad is not None:
+            e[0] = heading_rad
+        if not np.isfinite(e[0]):
+            raise AlignmentError("the heading is not determined: give heading_rad (e.g. from "
+                                 "heading_from_gnss) or use an IMU that can gyrocompass")
+        return euler_to_quat(e)
+
+
+def _window_means(imu, t0, t1):
+    t = np.asarray(imu.t_s)
+    sel = (t > t0) & (t <= t1)
+    if np.count_nonzero(sel) < 10:
+        raise AlignmentError(f"the window ({t0}, {t1}] s holds {np.count_nonzero(sel)} IMU samples; "
+                             "an alignment needs at least 10 (and ~1 s or more)")
+    g, a = np.asarray(imu.gyro)[sel], np.asarray(imu.accel)[sel]
+    if imu.kind == "increments":
+        dt = np.diff(np.r_[t[np.flatnonzero(sel)[0] - 1] if np.flatnonzero(sel)[0] > 0 else t0, t[sel]])
+        w, f = g / dt[:, None], a / dt[:, None]
+    else:
+        w, f = g, a
+    return w, f
+
+
+def coarse_align(imu, t0_s: float, t1_s: float, lat_rad: float, *, gyro_bias_std_rad_s: float = 0.0,
+                 accel_bias_std_m_s2: float = 1e-3, max_accel_std_m_s2: float = 0.2,
+                 max_rate_rad_s: float = 0.05, max_heading_std_rad: float = np.radians(10.0)) -> CoarseAlignment:
+    """Analytic coarse alignment over the window (t0_s, t1_s] of an IMU record at rest.
+
+    Levelling: the mean specific force f is the up axis in body coordinates, so pitch =
+    asin(f_y / |f|), roll = atan2(-f_x, f_z) (C_b^n = Rz(-heading) Rx(pitch) Ry(roll)).
+    Gyrocompassing: the mean rate rotated to the level frame is the Earth rate, [-W cos L
+    sin(heading), W cos L cos(heading), W sin L], so heading = atan2(-w_x, w_y); its error
+    is ~ gyro bias / (W cos L), and the heading is kept only below ``max_heading_std_rad``.
+
+    Motion in the window (std of |f| above ``max_accel_std_m_s2`` or mean |w| above
+    ``max_rate_rad_s``) raises :class:`AlignmentError`.
+    """
+    if not abs(lat_rad) < np.pi / 2:
+        raise AlignmentError("lat_rad must be inside (-90, 90) deg")
+    w, f = _window_means(imu, t0_s, t1_s)
+    fn = np.linalg.norm(f, axis=1)
+    notes = []
+    if fn.std() > max_accel_std_m_s2 or np.linalg.norm(w, axis=1).mean() > max_rate_rad_s:
+        raise AlignmentError(f"motion during the static alignment window ({t0_s}, {t1_s}] s: std of |f| "
+                             f"{fn.std():.3g} m/s^2 (limit {max_accel_std_m_s2}), mean |w| "
+                             f"{np.linalg.norm(w, axis=1).mean():.3g} rad/s (limit {max_rate_rad_s}); "
+                             "choose a window at rest")
+    fm, wm = f.mean(axis=0), w.mean(axis=0)
+    u = fm / np.linalg.norm(fm)
+    pitch = float(np.arcsin(np.clip(u[1], -1.0, 1.0)))
+    roll = float(np.arctan2(-u[0], u[2]))
+    # body -> level frame (heading 0): C_tilt = Rx(pitch) Ry(roll)
+    cp, sp, cr, sr = np.cos(pitch), np.sin(pitch), np.cos(roll), np.sin(roll)
+    Rx = np.array([[1, 0, 0], [0, cp, -sp], [0, sp, cp]])
+    Ry = np.array([[cr, 0, sr], [0, 1, 0], [-sr, 0, cr]])
+    wl = Rx @ Ry @ wm
+    horiz = _OMEGA * np.cos(lat_rad)
+    heading, hstd, method = np.nan, np.nan, "none"
+    if abs(lat_rad) > np.radians(85.0):
+        notes.append("latitude beyond 85 deg: the Earth rate is nearly vertical, no gyrocompass heading")
+    else:
+        noise = np.linalg.norm(w - wm, axis=1).std() / np.sqrt(len(w))
+        sd = np.hypot(gyro_bias_std_rad_s, noise) / horiz
+        if sd <= max_heading_std_rad:
+            heading = float(np.arctan2(-wl[0], wl[1]) % (2 * np.pi))
+            hstd, method = float(sd), "gyrocompass"
+        else:
+            notes.append(f"gyrocompassing would give a heading sigma of {np.degrees(sd):.3g} deg (gyro bias "
+                         f"{np.degrees(gyro_bias_std_rad_s) * 3600:.3g} deg/h against an Earth rate of "
+                         f"{np.degrees(horiz) * 3600:.3g} deg/h here): heading left undetermined")
+    tilt_std = float(accel_bias_std_m_s2 / np.linalg.norm(fm))
+    return CoarseAlignment(np.array([heading, pitch, roll]), tilt_std, hstd, method, (t0_s, t1_s), fm, wm,
+                           notes)
+
+
+def heading_from_gnss(gnss, min_speed_m_s: float = 1.0, t_from_s: Optional[float] = None):
+    """The direction of travel (heading of the horizontal velocity, clockwise from north,
+    rad) at the first GNSS epoch (at or after ``t_from_s``) whose horizontal speed exceeds
+    ``min_speed_m_s``, with its 1-sigma (velocity noise / speed) and the epoch's time.
+    Returns (t_s, heading_rad, std_rad). Raises AlignmentError if the speed never
+    exceeds the threshold or the record has no velocity."""
+    v = getattr(gnss, "vel_enu_m_s", None)
+    if v is None:
+        raise AlignmentError("the GNSS record has no velocity: a heading from GNSS needs it")
+    v = np.asarray(v)
+    t = np.asarray(gnss.t_s)
+    sp = np.hypot(v[:, 0], v[:, 1])
+    ok = sp > min_speed_m_s
+    if t_from_s is not None:
+        ok &= t >= t_from_s
+    if not np.any(ok):
+        raise AlignmentError(f"the horizontal GNSS speed never exceeds {min_speed_m_s} m/s: no heading "
+                             "from the direction of travel")
+    k = int(np.flatnonzero(ok)[0])
+    vs = getattr(gnss, "vel_std_m_s", None)
+    sv = float(np.hypot(*np.asarray(vs)[k, :2]) / np.sqrt(2)) if vs is not None else 0.1
+    return float(t[k]), float(np.arctan2(v[k, 0], v[k, 1]) % (2 * np.pi)), float(sv / sp[k])
+
+
+@dataclass
+class StartingPoint:
+    """What a filter run needs at its start (see :func:`align_static_then_gnss`):
+    ``nav`` (NavState at ``nav.t_s``), the attitude 1-sigma (east, north, up; rad),
+    initial sensor estimates (``gfins_fmi.estimation.SENSOR_NAMES`` order) and notes."""
+    nav: NavState
+    attitude_std_rad: np.ndarray
+    sensors: np.ndarray
+    alignment: CoarseAlignment
+    notes: list
+
+
+def align_static_then_gnss(imu, gnss, static_window_s: tuple, *, min_speed_m_s: float = 1.0,
+                           gyro_bias_std_rad_s: float = 0.0, accel_bias_std_m_s2: float = 1e-3,
+                           travel_misalignment_rad: float = np.radians(10.0),
+                           **coarse_kw) -> StartingPoint:
+    """The start of a filter run from a record that begins at rest: levelling (and, if
+    the gyros allow, gyrocompassing) over ``static_window_s``; otherwise the heading from
+    the direction of travel at the first GNSS epoch faster than ``min_speed_m_s``, carried
+    back to the start through the gyros (mechanized from the static window with the rate
+    measured at rest removed as gyro bias). The body's forward axis (y) is taken to point
+    along the travel, within ``travel_misalignment_rad`` (1 sigma).
+
+    The state is placed at the end of the static window, at rest, at the GNSS position
+    interpolated there (the GNSS antenna; give the lever arm to the filter).
+    """
+    from gfins_fmi.sins import SinsConfig, Strapdown, quat_to_euler
+    t0, t1 = static_window_s
+    tg = np.asarray(gnss.t_s)
+    if not (tg[0] <= t1 <= tg[-1]):
+        raise AlignmentError(f"the GNSS record ([{tg[0]}, {tg[-1]}] s) does not cover the end of the "
+                             f"static window {t1} s: check the time scales")
+    lat = float(np.interp(t1, tg, gnss.lat_rad))
+    lon = float(np.interp(t1, tg, np.unwrap(gnss.lon_rad)))
+    h = float(np.interp(t1, tg, gnss.h_m))
+    al = coarse_align(imu, t0, t1, lat, gyro_bias_std_rad_s=gyro_bias_std_rad_s,
+                      accel_bias_std_m_s2=accel_bias_std_m_s2, **coarse_kw)
+    notes = list(al.notes)
+    sensors = np.zeros(14)
+    if al.heading_method == "gyrocompass":
+        heading, hstd = al.euler_rad[0], al.heading_std_rad
+        notes.append(f"heading by gyrocompassing: {np.degrees(heading):.2f} +- {np.degrees(hstd):.2f} deg")
+    else:
+        # the rate at rest is the gyro bias (the Earth rate, below the bias here, is left in)
+        sensors[0:3] = al.w_mean_rad_s
+        t_h, psi_gnss, s_gnss = heading_from_gnss(gnss, min_speed_m_s, t_from_s=t1)
+        t = np.asarray(imu.t_s)
+        sel = (t > t1) & (t <= t_h)
+        if not np.any(sel):
+            raise AlignmentError(f"no IMU sample between the static window's end ({t1} s) and the first "
+                                 f"GNSS epoch above {min_speed_m_s} m/s ({t_h} s)")
+        cfg = SinsConfig(input=imu.kind, vertical="hold", hold_height_m=h)
+        start = NavState(euler_to_quat(np.array([0.0, al.euler_rad[1], al.euler_rad[2]])), np.zeros(3),
+                         lat, lon, h, t1)
+        g = np.asarray(imu.gyro)[sel] - (sensors[0:3] if imu.kind == "rates" else
+                                        sensors[0:3] * np.diff(np.r_[t1, t[sel]])[:, None])
+        nav = Strapdown(start, cfg).run(g, np.asarray(imu.accel)[sel], t_s=t[sel])
+        psi_body = quat_to_euler(nav.q_bn[-1])[0]
+        heading = float((psi_gnss - psi_body) % (2 * np.pi))
+        drift = gyro_bias_std_rad_s * (t_h - t1)
+        hstd = float(np.sqrt(s_gnss ** 2 + travel_misalignment_rad ** 2 + drift ** 2))
+        notes.append(f"heading from GNSS velocity at {t_h:.2f} s ({np.degrees(psi_gnss):.1f} deg travel), "
+                     f"carried back {t_h - t1:.1f} s by the gyros: {np.degrees(heading):.1f} +- "
+                     f"{np.degrees(hstd):.1f} deg at the start")
+    q = euler_to_quat(np.array([heading, al.euler_rad[1], al.euler_rad[2]]))
+    nav0 = NavState(q, np.zeros(3), lat, lon, h, t1)
+    return StartingPoint(nav0, np.array([al.tilt_std_rad, al.tilt_std_rad, hstd]), sensors, al, notes)

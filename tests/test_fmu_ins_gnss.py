@@ -1,0 +1,423 @@
+"""The integrated-navigator FMU (gfins_ins_gnss, FMI 2.0 and 3.0) against the batch API
+(IntegratedNavigator.run) on a simulated drive: the same gf_ins_step calls, so the same
+bits; measurement timing, FMU states, refused parameters and inputs.
+
+Records: the drive and the GNSS epochs of tests/test_estimation.py (exact vehicle truth
+from gf_vehicle, IMU increments summed from a 1 kHz truth, GNSS antenna positions and
+velocities computed in numpy)."""
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+import pytest
+from fmpy import read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.validation import validate_fmu
+
+import gfins_fmi as gf
+from gfins_fmi._lib import ffi, lib
+from gfins_fmi.estimation import FilterConfig, InitialState, IntegratedNavigator
+from gfins_fmi.fmu import (FmuRunError, _InsGnssDriver, _INS_CONFIG_FIELDS,
+                           ins_gnss_fmu_parameters, run_ins_gnss_fmu)
+from test_estimation import Rec, drive, gnss_record, quiet_config
+
+LEVER = np.array([0.4, 1.2, 1.6])
+
+
+@pytest.fixture(scope="module")
+def rec():
+    """30 s of the drive: IMU increments at 100 Hz; GNSS at 1 Hz, 3 ms after IMU samples
+    (the interval is split there), with a lever arm; barometer at 10 Hz and odometer at
+    10 Hz at other odd instants."""
+    tr, imu = drive(30.0)
+    gnss = gnss_record(tr, np.arange(1003, len(tr.t_s), 1000), LEVER)
+    kb = np.arange(1057, len(tr.t_s), 100)
+    baro = Rec(t_s=tr.t_s[kb].copy(), h_m=tr.h_m[kb] + 2.0, std_m=np.full(len(kb), 0.5))
+    ko = np.arange(1021, len(tr.t_s), 100)
+    C = np.array(gf.trajectory.quat_to_dcm(tr.q_bn[ko]))
+    u = np.einsum("kji,kj->ki", C, tr.v_n_m_s[ko])[:, 1]       # forward speed, body y
+    odo = Rec(t_s=tr.t_s[ko].copy(), speed_m_s=1.002 * u, std_m_s=np.full(len(ko), 0.02))
+    return tr, imu, gnss, baro, odo
+
+
+def _initial(tr, k=0, cls=InitialState):
+    return cls(gf.NavState.from_trajectory(tr, k), position_std_m=(0.3, 0.2, 0.5),
+               velocity_std_m_s=0.05, attitude_std_rad=(1e-3, 1e-3, 5e-3))
+
+
+class _FmuP0(InitialState):
+    """The batch API's InitialState with the position variances converted as the FMU
+    converts them: metres to (dlat, dlon) with gf_earth's radii (the batch API uses
+    gfins_fmi.trajectory.radii, numpy's q**1.5 against the core's 1/sqrt(q)^3: a few ulp
+    apart). With this P0 both run on identical numbers."""
+
+    def covariance(self, config):
+        P = super().covariance(config)
+        e = ffi.new("gf_earth *")
+        nav = self.nav
+        assert lib.gf_earth_update(e, nav.lat_rad, nav.h_m, ffi.NULL, 1.0) == lib.GF_OK
+        pos = np.broadcast_to(np.asarray(self.position_std_m, float), (3,))
+        s_lat = pos[1] / (e.R_M_m + nav.h_m)
+        s_lon = pos[0] / ((e.R_N_m + nav.h_m) * e.cos_lat)
+        P[3, 3], P[4, 4] = s_lat * s_lat, s_lon * s_lon
+        return P
+
+
+CASES = {
+    "ekf": dict(),
+    "ukf": dict(filter="ukf"),
+    # every measurement kind, every optional state, NHC, propagation at every sample
+    "ekf-aided-23": dict(scale_factors=True, baro_bias=True, odometer_scale=True, nhc=True,
+                         propagation_interval_s=0.0),
+    "ukf-aided-23": dict(filter="ukf", scale_factors=True, baro_bias=True, odometer_scale=True,
+                         nhc=True),
+    "ekf-rates": dict(input="rates"),
+}
+
+
+def _case(rec, name):
+    tr, imu, gnss, baro, odo = rec
+    cfg = quiet_config(gnss_lever_arm_m=LEVER, **CASES[name])
+    aided = "aided" in name
+    if cfg.input == "rates":   # rate samples at the IMU times, the first at the start
+        imu = Rec(t_s=tr.t_s[::10].copy(), gyro=tr.gyro_rad_s[::10], accel=tr.accel_m_s2[::10],
+                  kind="rates")
+    return cfg, imu, gnss, baro if aided else None, odo if aided else None
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_ins_gnss_fmu_valid(version):
+    path = gf.fmu_path("ins_gnss", version)
+    assert validate_fmu(str(path)) == []
+    md = read_model_description(str(path))
+    assert md.coSimulation.modelIdentifier == "gfins_ins_gnss"
+    assert md.coSimulation.canGetAndSetFMUstate and md.coSimulation.canSerializeFMUstate
+
+
+def _start_values(version=3):
+    md = read_model_description(str(gf.fmu_path("ins_gnss", version)))
+    out = {}
+    for v in md.modelVariables:
+        if v.causality == "parameter":
+            vals = [float(x) for x in str(v.start).split()]
+            out[v.name] = vals if len(vals) > 1 or v.dimensions else vals[0]
+    return out
+
+
+def test_fmu_defaults_are_the_batch_defaults():
+    """The FMU's start values = what ins_gnss_fmu_parameters makes of FilterConfig() with the
+    documented default IMU and InitialState()'s defaults; every FMU parameter is set by it."""
+    imu = gf.ImuNoise(gyro_arw_deg_sqrt_h=0.3, gyro_bias_instability_deg_h=10.0,
+                      gyro_correlation_time_s=3600.0, accel_vrw_ug_sqrt_hz=100.0,
+                      accel_bias_instability_ug=100.0, accel_correlation_time_s=3600.0)
+    start = _start_values()
+    nav = gf.NavState(np.array(start["q0"]), np.array(start["v0"]), start["lat0"], start["lon0"],
+                      start["h0"], 0.0)
+    params = ins_gnss_fmu_parameters(FilterConfig(imu=imu), InitialState(nav))
+    assert set(start) - set(params) == {"skip_steps"}
+    assert set(params) <= set(start)
+    for name, value in params.items():
+        # the spec writes the SI noise with repr(): equal to the last bit
+        assert np.array_equal(np.asarray(start[name], float), np.asarray(value, float)), name
+    assert set(_INS_CONFIG_FIELDS) <= set(start)
+
+
+def _reference(cfg, imu, gnss, baro, odo, initial):
+    return IntegratedNavigator(cfg, initial).run(imu, gnss, baro, odo)
+
+
+FIELDS = ("t_s", "q_bn", "v_n_m_s", "lat_rad", "lon_rad", "h_m", "std", "sensors", "standstill")
+
+
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_fmu_equals_batch_bit_for_bit(rec, version, case):
+    """Same samples, times, measurements and P0: the FMU makes the gf_ins_step calls of
+    gf_ins_run, so every output and every update's time, kind, outcome and NIS are equal
+    to the last bit."""
+    cfg, imu, gnss, baro, odo = _case(rec, case)
+    init = _initial(rec[0], cls=_FmuP0)
+    ref = _reference(cfg, imu, gnss, baro, odo, init)
+    out = run_ins_gnss_fmu(imu, gnss, baro, odo, config=cfg, initial=init, fmi_version=version)
+    assert len(out) == len(ref) == len(imu.t_s)
+    for name in FIELDS:
+        assert np.array_equal(getattr(out, name), getattr(ref, name)), name
+    for name in ("t_s", "type", "status", "m", "nis"):
+        assert np.array_equal(out.innovations[name], ref.innovations[name], equal_nan=True), name
+    kinds = set(np.unique(ref.innovations["type"]).tolist())
+    assert kinds == ({1, 2, 3, 4, 5} if "aided" in case else {1, 2})
+    # and the filter works on these exact data: position within a centimetre of the truth
+    tr = rec[0]
+    k = np.searchsorted(tr.t_s, out.t_s[-1] - 1e-9)
+    assert abs(out.lat_rad[-1] - tr.lat_rad[k]) * 6.4e6 < 0.01
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_fmu_with_its_own_p0_agrees_with_the_batch(rec, version):
+    """With InitialState's own P0 (positions converted with numpy's radii) the batch API and
+    the FMU start a few ulp apart in two variances (measured 8.0e-16 relative, 3.6 ulp).
+    Measured after 30 s (EKF): positions and times identical; std 1.3e-15 relative;
+    q, v, sensor errors 4e-14 relative in their non-negligible components and 5e-20
+    absolute. Allowed: 8 ulp in P0; 1e-12 relative + 1e-18 absolute in the outputs (a
+    margin of 20 or more, far below anything physical)."""
+    cfg, imu, gnss, baro, odo = _case(rec, "ekf")
+    init = _initial(rec[0])
+    P_fmu, P_batch = _initial(rec[0], cls=_FmuP0).covariance(cfg), init.covariance(cfg)
+    assert np.all(np.abs(P_fmu - P_batch) <= 8 * np.finfo(float).eps * P_batch)
+    ref = _reference(cfg, imu, gnss, baro, odo, init)
+    out = run_ins_gnss_fmu(imu, gnss, config=cfg, initial=init, fmi_version=version)
+    for name in FIELDS:
+        x, y = np.asarray(getattr(out, name), float), np.asarray(getattr(ref, name), float)
+        assert np.all(np.abs(x - y) <= 1e-12 * np.abs(y) + 1e-18), name
+
+
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("serialize", [False, True])
+def test_fmu_state_restore_reproduces_the_run(rec, version, serialize):
+    """FMU state taken mid-run (after 1 200 samples), continued, restored and continued
+    again — in the same instance, or serialized into a fresh one — gives the same rows,
+    which are the batch API's."""
+    cfg, imu, gnss, baro, odo = _case(rec, "ukf-aided-23")
+    init = _initial(rec[0], cls=_FmuP0)
+    kw = dict(config=cfg, initial=init, fmi_version=version)
+    mid = 1200
+    a = _InsGnssDriver(imu, gnss, baro, odo, **kw)
+    b = _InsGnssDriver(imu, gnss, baro, odo, **kw)
+    try:
+        a.initialize()
+        a.run(0, mid)
+        s = a.slave.slave
+        state = s.getFMUState() if version == 3 else s.getFMUstate()
+        a.run(mid, a.n_steps)
+        first = a.out_f.copy(), a.out_i.copy()
+        a.out_f[mid:] = np.nan
+        if serialize:
+            blob = s.serializeFMUState(state) if version == 3 else s.serializeFMUstate(state)
+            b.initialize()
+            t = b.slave.slave
+            state_b = (t.deserializeFMUState if version == 3 else t.deSerializeFMUstate)(blob)
+            (t.setFMUState if version == 3 else t.setFMUstate)(state_b)
+            b.forget_inputs()
+            b.out_f[:mid], b.out_i[:mid] = first[0][:mid], first[1][:mid]
+            b.run(mid, b.n_steps)
+            again, sol = (b.out_f, b.out_i), b.solution()
+        else:
+            (s.setFMUState if version == 3 else s.setFMUstate)(state)
+            a.forget_inputs()
+            a.run(mid, a.n_steps)
+            again, sol = (a.out_f, a.out_i), a.solution()
+        (s.freeFMUState if version == 3 else s.freeFMUstate)(state)
+    finally:
+        a.close()
+        b.close()
+    assert np.array_equal(first[0], again[0], equal_nan=True) and np.array_equal(first[1], again[1])
+    ref = _reference(cfg, imu, gnss, baro, odo, init)
+    assert np.array_equal(sol.lat_rad, ref.lat_rad) and np.array_equal(sol.q_bn, ref.q_bn)
+
+
+REFUSED = [
+    ("filter", 2, "parameter filter = 2 must be 0"),
+    ("input_mode", 3, "parameter input_mode = 3"),
+    ("coning", -1, "parameter coning = -1"),
+    ("scale_states", 2, "scale_states = 2"),
+    ("propagation_interval", -0.1, "propagation_interval = -0.1 s"),
+    ("max_imu_gap", 0.0, "max_imu_gap = 0 s"),
+    ("max_rate", float("nan"), "max_rate = nan rad/s"),
+    ("gyro_bias_tau", -1.0, "parameter gyro_bias_tau = -1 must be finite and >= 0"),
+    ("accel_vrw", float("inf"), "parameter accel_vrw = inf"),
+    ("odo_scale_tau", -3.0, "parameter odo_scale_tau = -3"),
+    ("gnss_lever_arm", [0.0, float("nan"), 0.0], "gnss_lever_arm = \\[0, nan, 0\\] m"),
+    ("gate_prob", 1.5, "gate_prob = 1.5 must be 0"),
+    ("nhc", 1, None),                                      # with nhc_std = 0 below
+    ("zupt", 2, "zupt = 2"),
+    ("still_window", 0.0, "still_window = 0 s"),
+    ("ukf_kappa", -100.0, "ukf_kappa = -100"),             # with filter = 1 below
+    ("lat0", 1.56, "parameter lat0 = 1.56 rad: \\|lat0\\| must be below 89 deg"),
+    ("h0", float("nan"), "q0, v0, lon0 and h0 must be finite"),
+    ("sensors0", [0.0] * 13 + [float("nan")], "sensors0 must be finite"),
+    ("std0_pos", [1.0, 0.0, 1.0], "parameter std0_pos = \\[1, 0, 1\\] m: every element"),
+    ("std0_att", [1e-3, 1e-3, -1.0], "std0_att"),
+    ("std0_baro_bias", 0.0, "std0_baro_bias = 0 m"),       # with baro_state = 1 below
+    ("skip_steps", -1, "skip_steps = -1 must be >= 0"),
+]
+
+
+@pytest.mark.parametrize("name, value, match", REFUSED, ids=[r[0] for r in REFUSED])
+def test_bad_parameters_are_refused_naming_the_parameter(rec, name, value, match):
+    cfg, imu, gnss, _, _ = _case(rec, "ekf")
+    extra = {name: value}
+    if name == "nhc":
+        extra["nhc_std"] = 0.0
+        match = "nhc = 1 \\(0 or 1\\), nhc_std = 0 m/s"
+    if name == "ukf_kappa":
+        extra["filter"] = 1
+    if name == "std0_baro_bias":
+        extra["baro_state"] = 1
+    version = 3 if name in ("filter", "lat0", "std0_pos") else 2   # both glues: same model
+    with pytest.raises(FmuRunError, match="refused its parameters") as exc:
+        run_ins_gnss_fmu(Rec(t_s=imu.t_s[:5], gyro=imu.gyro[:5], accel=imu.accel[:5],
+                             kind="increments"), config=cfg, initial=_initial(rec[0]),
+                         parameters=extra, fmi_version=version)
+    assert any(re.search(match, m) for m in exc.value.messages), exc.value.messages
+
+
+def test_unused_optional_std_is_not_checked(rec):
+    """std0 of a block whose state is off is not used, so not refused."""
+    cfg, imu, gnss, _, _ = _case(rec, "ekf")
+    out = run_ins_gnss_fmu(Rec(t_s=imu.t_s[:5], gyro=imu.gyro[:5], accel=imu.accel[:5],
+                               kind="increments"), config=cfg, initial=_initial(rec[0]),
+                           parameters={"std0_baro_bias": 0.0, "std0_gyro_scale": [0, 0, 0]})
+    assert len(out) == 5
+
+
+def _driver(rec, case="ekf", version=2, **kw):
+    cfg, imu, gnss, baro, odo = _case(rec, case)
+    return _InsGnssDriver(imu, gnss, baro, odo, config=cfg, initial=_initial(rec[0], cls=_FmuP0),
+                          fmi_version=version, **kw), cfg, imu, gnss
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_measurement_delivered_late_is_stale(rec, version):
+    """GNSS epochs delivered 0.5 s after their time of validity (latency): valid before the
+    sample interval, logged as stale (status 3, NIS NaN) and counted as rejected, as the
+    batch API logs a measurement valid before the filter's time; the navigation equals the
+    batch run without GNSS."""
+    drv, cfg, imu, gnss = _driver(rec, version=version)
+    at = drv.gnss_at.copy()
+    drv.gnss_at[:] = -1
+    idx = np.flatnonzero(at >= 0)
+    drv.gnss_at[idx + 50] = at[idx]
+    try:
+        drv.initialize()
+        drv.run(0, drv.n_steps)
+        sol = drv.solution()
+        st, cnt = drv.out_i[-1, drv.cols_i["update_status"]], drv.out_i[-1, drv.cols_i["update_count"]]
+    finally:
+        drv.close()
+    inn = sol.innovations
+    assert len(inn) == 2 * len(idx) and np.all(inn["status"] == lib.GF_INS_REJECTED_STALE)
+    assert np.all(np.isnan(inn["nis"]))
+    assert list(st[:2]) == [3, 3] and list(cnt[:2]) == [len(idx)] * 2 and list(st[2:]) == [-1] * 5
+    # stale: no update, so the run is the free-inertial one with the same filter
+    ref = _reference(cfg, imu, None, None, None, _initial(rec[0], cls=_FmuP0))
+    assert np.array_equal(sol.lat_rad, ref.lat_rad) and np.array_equal(sol.std, ref.std)
+
+
+def _one_epoch_run(rec, version, k_fine, edit=None, steps=None):
+    """One exact GNSS epoch (truth row k_fine of the 1 kHz drive, a multiple of 10: on the
+    IMU sample k_fine / 10 - 1) delivered in the FMU step of that sample, its inputs changed
+    by ``edit``; returns (float outputs, int outputs, their columns, log, error, the
+    latitude output read after the run)."""
+    tr = rec[0]
+    drv, cfg, imu, gnss = _driver(rec, version=version)
+    step = k_fine // 10                 # FMU step k takes record row k - 1 (increments)
+    g = gnss_record(tr, np.array([k_fine]), LEVER)
+    row = np.r_[g.t_s, g.lat_rad, g.lon_rad, g.h_m, g.vel_enu_m_s[0], g.pos_std_m[0],
+                g.vel_std_m_s[0]]
+    if edit:
+        edit(row)
+    drv.gnss = row[None, :]
+    drv.gnss_at[:] = -1
+    drv.gnss_at[step] = 0
+    err = None
+    try:
+        drv.initialize()
+        try:
+            drv.run(0, steps or step + 20)
+        except FMICallException as exc:
+            err = exc
+        lat = drv.slave.get("lat")[0]
+        return (drv.out_f.copy(), drv.out_i.copy(), drv.cols_f, drv.cols_i, list(drv.log.messages),
+                err, lat)
+    finally:
+        drv.close()
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_measurement_from_the_future_is_refused(rec, version):
+    def future(row):
+        row[0] += 0.5                                # valid 0.5 s after the sample (1.01 s)
+    f, i, cf, ci, log, err, lat = _one_epoch_run(rec, version, 1010, future)
+    assert err is not None
+    assert any("gnss measurement valid at gnss_time_s = 1.51 s, after the IMU sample" in m
+               for m in log), log
+    assert lat == f[100, cf["lat"]][0]                # the outputs of the last good step are kept
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_measurement_within_the_clock_tolerance_is_taken_at_the_sample(rec, version):
+    """A time of validity 1e-8 s after the sample at t = 25.01 s: beyond the core's 1e-9 s
+    but within the glue's tolerance on communication points (1e-9 max(1, t) = 2.5e-8 s), a
+    master's clock rounding: the FMU takes it at the sample (accepted, logged at t)."""
+    def late(row):
+        row[0] += 1e-8
+    f, i, cf, ci, log, err, _ = _one_epoch_run(rec, version, 25010, late)
+    assert err is None, log
+    k = 2501
+    assert list(i[k, ci["update_status"]][:2]) == [0, 0]
+    assert list(i[k, ci["update_count"]][:2]) == [1, 1]
+    assert f[k, cf["update_time"]][0] == f[k, cf["time_s"]][0] == rec[1].t_s[2500]
+
+
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("column, value, match", [
+    (7, 0.0, "inputs GNSS gnss_lat_rad, gnss_lon_rad, gnss_h_m, gnss_pos_std_m: values must be "
+             "finite and std > 0 (got [0.5"),
+    (1, np.nan, "gnss_lat_rad"),
+    (4, np.inf, "gnss_vel_enu_m_s, gnss_vel_std_m_s: values must be finite and std > 0 (got [inf"),
+    (12, -1.0, "gnss_vel_std_m_s"),
+    (0, np.nan, "gnss_time_s = nan is not finite"),
+])
+def test_bad_measurement_input_is_refused(rec, version, column, value, match):
+    def bad(row):
+        row[column] = value
+    f, i, cf, ci, log, err, lat = _one_epoch_run(rec, version, 1010, bad)
+    assert err is not None and any(match in m for m in log), log
+    assert lat == f[100, cf["lat"]][0]
+
+
+def test_gnss_velocity_flag(rec):
+    """gnss_vel_valid = 0: position updates only, as the batch API with gnss_velocity=False."""
+    cfg, imu, gnss, _, _ = _case(rec, "ekf")
+    init = _initial(rec[0], cls=_FmuP0)
+    ref = IntegratedNavigator(cfg, init).run(imu, gnss, gnss_velocity=False)
+    out = run_ins_gnss_fmu(imu, gnss, config=cfg, initial=init, gnss_velocity=False)
+    assert set(out.innovations["type"].tolist()) == {1}
+    assert np.array_equal(out.lat_rad, ref.lat_rad) and np.array_equal(out.v_n_m_s, ref.v_n_m_s)
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_nonfinite_imu_sample_keeps_the_outputs(rec, version):
+    cfg, imu, gnss, _, _ = _case(rec, "ekf")
+    g = imu.gyro.copy()
+    g[250, 1] = np.nan
+    bad = Rec(t_s=imu.t_s, gyro=g, accel=imu.accel, kind="increments")
+    init = _initial(rec[0], cls=_FmuP0)
+    with pytest.raises(FmuRunError, match="record row 250") as exc:
+        run_ins_gnss_fmu(bad, gnss, config=cfg, initial=init, fmi_version=version)
+    assert any("input dtheta = [" in m and "is not finite" in m for m in exc.value.messages)
+    part = exc.value.partial
+    ref = IntegratedNavigator(cfg, init).run(Rec(t_s=imu.t_s[:250], gyro=imu.gyro[:250],
+                                                 accel=imu.accel[:250], kind="increments"), gnss)
+    assert len(part) == 250 and np.array_equal(part.lat_rad, ref.lat_rad)
+
+
+def test_helper_refuses_what_the_fmu_cannot_take(rec):
+    cfg, imu, gnss, _, _ = _case(rec, "ekf")
+    init = _initial(rec[0])
+    two = Rec(t_s=np.array([1.003, 1.006]), lat_rad=gnss.lat_rad[:2], lon_rad=gnss.lon_rad[:2],
+              h_m=gnss.h_m[:2], pos_std_m=gnss.pos_std_m[:2])
+    with pytest.raises(ValueError, match="two GNSS measurements fall into the interval of IMU "
+                                         "sample 100"):
+        run_ins_gnss_fmu(imu, two, config=cfg, initial=init)
+    with pytest.raises(ValueError, match="must be after initial.nav.t_s"):
+        run_ins_gnss_fmu(Rec(t_s=imu.t_s - imu.t_s[0], gyro=imu.gyro, accel=imu.accel,
+                             kind="increments"), config=cfg, initial=init)
+    with pytest.raises(ValueError, match="holds 'increments' but the filter is configured for "
+                                         "input='rates'"):
+        run_ins_gnss_fmu(imu, config=quiet_config(input="rates"), initial=init)
+    assert math.isfinite(run_ins_gnss_fmu(Rec(t_s=imu.t_s[:3], gyro=imu.gyro[:3],
+                                              accel=imu.accel[:3], kind="increments"),
+                                          config=cfg, initial=init).lat_rad[-1])

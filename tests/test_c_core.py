@@ -25,7 +25,7 @@ def _cmake_build_and_test(build_dir, *defines: str) -> str:
         [cmake, "-S", str(ROOT), "-B", str(build_dir), *gen, *defines,
          f"-DPython_EXECUTABLE={sys.executable}"],  # fmugen.py runs with this Python
         [cmake, "--build", str(build_dir), "-j", "2"],
-        [ctest, "--test-dir", str(build_dir), "--output-on-failure"],
+        [ctest, "--test-dir", str(build_dir), "--output-on-failure", "-j", "2"],
     ]
     log = []
     for cmd in steps:

@@ -33,10 +33,12 @@ from typing import Callable, Iterable, Mapping
 import numpy as np
 
 from gfins_fmi.fmu import MODELS, FmuRunError, _Log, _Slave, fmu_path
+from gfins_fmi.vehicle import Barometer, GnssReceiver, Odometer
 
-__all__ = ["System", "Connection", "vehicle_navigation", "CoSimulation", "write_ssp",
-           "run_ssp", "write_container", "run_container", "direct_navigation",
-           "navigation_errors", "differences_from_direct", "compare_runners", "NAVIGATORS"]
+__all__ = ["System", "Connection", "vehicle_navigation", "vehicle_integrated_navigation",
+           "InitialError", "CoSimulation", "write_ssp", "run_ssp", "write_container",
+           "run_container", "direct_navigation", "integrated_recording", "navigation_errors",
+           "differences_from_direct", "compare_runners", "NAVIGATORS", "AIDING_VARIABLES"]
 
 #: navigator name -> (FMU model, vehicle outputs connected to the navigator inputs)
 NAVIGATORS = {"gfnav_cube6": ("gfnav_cube6", [("A", "A", 6)]),
@@ -79,12 +81,16 @@ class System:
         What the runs record (FMI 3.0 names).
     step_s, stop_s : float
         Communication step and stop time (s); start time 0 unless given to a run.
+    sources : dict
+        The Python objects the start values were made from, for the references
+        (:func:`vehicle_integrated_navigation`: ``config``, ``initial``, ``gnss_velocity``).
     """
     components: dict
     connections: list
     outputs: dict = field(default_factory=dict)
     step_s: float = 0.01
     stop_s: float = 60.0
+    sources: dict = field(default_factory=dict)
 
     def scalar_parameters(self, name: str) -> dict:
         """Start values of one component as FMI 2.0 scalars (``x[1]`` ...)."""
@@ -138,42 +144,266 @@ def vehicle_navigation(navigator: str = "gfnav_qin9", profile=None, *, step_s: f
     hold_height : bool
         Hold the navigator's height at the vehicle's (a ground vehicle): vertical_mode 1.
     """
-    from gfins_fmi.sins import NavState
-    from gfins_fmi.vehicle import VehicleProfile, simulate_vehicle
+    from gfins_fmi.vehicle import VehicleProfile
     if navigator not in NAVIGATORS:
         raise ValueError(f"navigator must be one of {sorted(NAVIGATORS)}; got {navigator!r}")
-    if int(skip_steps) != skip_steps or skip_steps < 0:
-        raise ValueError(f"skip_steps must be an integer >= 0; got {skip_steps!r}")
     profile = profile or VehicleProfile.seed001(align_s=60.0)
     stop_s = profile.duration_s() + 30.0 if stop_s is None else float(stop_s)
     model, links = NAVIGATORS[navigator]
-    truth = simulate_vehicle(profile, skip_steps * step_s, step_s)
-    start = NavState.from_trajectory(truth, int(skip_steps))
-    veh = profile.as_parameters()
+    truth, start = _vehicle_start(profile, step_s, skip_steps)
+    veh = _vehicle_parameters(profile, imu_errors, imu_noise, noise_seed,
+                              noise=array_noise_m_s2 > 0)
     veh["l"] = float(l_m)
     if navigator in _LAYOUT:
         veh["array_layout"] = _LAYOUT[navigator]
-    if imu_errors is not None:
-        veh.update(imu_errors=1, **imu_errors.fmu_parameters())
-    if imu_noise is not None or array_noise_m_s2 > 0:
-        veh.update(noise=1, noise_seed=int(noise_seed), array_noise=float(array_noise_m_s2),
-                   **(imu_noise.fmu_parameters() if imu_noise is not None else {}))
+    if array_noise_m_s2 > 0:
+        veh["array_noise"] = float(array_noise_m_s2)
     if array_bias_m_s2 is not None:
         b = np.zeros(12)
         b[:len(np.ravel(array_bias_m_s2))] = np.ravel(array_bias_m_s2)
         veh["array_bias"] = b.tolist()
-    nav = {"q0": start.q_bn.tolist(), "v0": start.v_n_m_s.tolist(), "lat0": start.lat_rad,
-           "lon0": start.lon_rad, "h0": start.h_m, "skip_steps": int(skip_steps)}
+    nav = {**_start_parameters(start), "skip_steps": int(skip_steps)}
     if hold_height:
         nav.update(vertical_mode=1, hold_height=profile.h0_m)
     if navigator in _LAYOUT:
         nav.update(l=float(l_m), omega_init=truth.gyro_rad_s[int(skip_steps)].tolist())
     nav.update(navigator_parameters or {})
     conns = [Connection("vehicle", a, "navigator", b, n) for a, b, n in links]
-    outputs = {"vehicle": ["time_s", "lat", "lon", "h", "v", "euler", "q"] + [c.source_var for c in conns],
-               "navigator": ["time_s", "lat", "lon", "h", "v", "euler", "q"]}
+    outputs = {"vehicle": _TRUTH_OUTPUTS + [c.source_var for c in conns],
+               "navigator": list(_TRUTH_OUTPUTS)}
     return System({"vehicle": ("vehicle", veh), "navigator": (model, nav)}, conns, outputs,
                   float(step_s), stop_s)
+
+
+#: what a run records of the vehicle's truth and of a navigator's solution
+_TRUTH_OUTPUTS = ["time_s", "lat", "lon", "h", "v", "euler", "q"]
+
+
+def _vehicle_start(profile, step_s: float, skip_steps: int):
+    """The vehicle record up to the navigator's start, ``skip_steps`` steps after the
+    vehicle's (C vehicle model), and the true state there (a NavState)."""
+    from gfins_fmi.sins import NavState
+    from gfins_fmi.vehicle import simulate_vehicle
+    if isinstance(skip_steps, bool) or int(skip_steps) != skip_steps or skip_steps < 0:
+        raise ValueError(f"skip_steps must be an integer >= 0; got {skip_steps!r}")
+    truth = simulate_vehicle(profile, skip_steps * step_s, step_s)
+    return truth, NavState.from_trajectory(truth, int(skip_steps))
+
+
+def _vehicle_parameters(profile, imu_errors, imu_noise, noise_seed: int, noise: bool = False) -> dict:
+    """Start values of the vehicle FMU: the profile, the IMU errors it applies, its random
+    IMU errors (on with ``imu_noise`` or ``noise``) and the seed of its generators (IMU
+    noise and aiding sensors)."""
+    if isinstance(noise_seed, bool) or not isinstance(noise_seed, (int, np.integer)) \
+            or not 0 <= noise_seed < 2 ** 31:
+        raise ValueError(f"noise_seed must be an integer in [0, 2**31) (an FMU Int32); got "
+                         f"{noise_seed!r}")
+    veh = profile.as_parameters()
+    if imu_errors is not None:
+        veh.update(imu_errors=1, **imu_errors.fmu_parameters())
+    if imu_noise is not None or noise:
+        veh.update(noise=1, **(imu_noise.fmu_parameters() if imu_noise is not None else {}))
+    veh["noise_seed"] = int(noise_seed)
+    return veh
+
+
+def _start_parameters(nav) -> dict:
+    """A navigator's initial-state start values (the navigators' common parameters)."""
+    return {"q0": np.asarray(nav.q_bn, float).tolist(), "v0": np.asarray(nav.v_n_m_s, float).tolist(),
+            "lat0": float(nav.lat_rad), "lon0": float(nav.lon_rad), "h0": float(nav.h_m)}
+
+
+# ---- vehicle + integrated navigator ----------------------------------------------------
+#: the aiding outputs of the vehicle connected to the integrated navigator's inputs of the
+#: same names (FMI 3.0 names, sizes), by sensor
+AIDING_VARIABLES = {
+    "gnss": [("gnss_valid", 1), ("gnss_time_s", 1), ("gnss_lat_rad", 1), ("gnss_lon_rad", 1),
+             ("gnss_h_m", 1), ("gnss_vel_enu_m_s", 3), ("gnss_pos_std_m", 3),
+             ("gnss_vel_std_m_s", 3)],
+    "baro": [("baro_valid", 1), ("baro_time_s", 1), ("baro_h_m", 1), ("baro_std_m", 1)],
+    "odometer": [("odo_valid", 1), ("odo_time_s", 1), ("odo_speed_m_s", 1), ("odo_std_m_s", 1)],
+}
+#: what a run records of the integrated navigator (beyond the solution): its 1-sigma,
+#: sensor-error estimates and the per-kind monitoring outputs
+_INS_OUTPUTS = ["std", "sensors", "n_imu", "n_updates", "n_rejected", "nis", "update_status",
+                "update_time", "update_count", "standstill"]
+
+
+@dataclass(frozen=True)
+class InitialError:
+    """Errors of a navigator's initial state against the vehicle's true start, in the
+    integrated filter's definitions (csrc/gf_ins_gnss.h): position east, north, up (m),
+    velocity east, north, up (m/s), attitude phi east, north, up (rad) with
+    C_b^n(initial) = (I - [phi x]) C_b^n(true) to first order (q = q(-phi) (x) q_true)."""
+    position_m: tuple = (0.0, 0.0, 0.0)
+    velocity_m_s: tuple = (0.0, 0.0, 0.0)
+    attitude_rad: tuple = (0.0, 0.0, 0.0)
+
+    def apply(self, nav):
+        """``nav`` (a NavState) with these errors."""
+        from gfins_fmi._lib import as_vector3
+        from gfins_fmi.sins import NavState
+        from gfins_fmi.trajectory import _qmul, radii
+        dp = as_vector3("InitialError.position_m", self.position_m, "m")
+        dv = as_vector3("InitialError.velocity_m_s", self.velocity_m_s, "m/s")
+        phi = as_vector3("InitialError.attitude_rad", self.attitude_rad, "rad")
+        RM, RN, _, _ = radii(nav.lat_rad)
+        angle = float(np.linalg.norm(phi))
+        axis = phi / angle if angle > 0 else phi
+        q_err = np.r_[np.cos(angle / 2), -np.sin(angle / 2) * axis]          # q(-phi)
+        return NavState(_qmul(q_err, np.asarray(nav.q_bn, float)), np.asarray(nav.v_n_m_s, float) + dv,
+                        nav.lat_rad + dp[1] / (RM + nav.h_m),
+                        nav.lon_rad + dp[0] / ((RN + nav.h_m) * np.cos(nav.lat_rad)),
+                        nav.h_m + dp[2], nav.t_s)
+
+
+def vehicle_integrated_navigation(profile=None, *, gnss: GnssReceiver | None = GnssReceiver(),
+                                  baro: Barometer | None = None, odometer: Odometer | None = None,
+                                  config=None, initial_uncertainty: Mapping | None = None,
+                                  initial_error: InitialError | None = None,
+                                  gnss_velocity: bool = True, step_s: float = 0.01,
+                                  stop_s: float | None = None, skip_steps: int = 0,
+                                  imu_errors=None, imu_noise=None, noise_seed: int = 1) -> System:
+    """The vehicle FMU with its aiding sensors connected to the integrated-navigator FMU
+    (``gfins_ins_gnss``): IMU increments ``dtheta``, ``dv`` and, per sensor switched on,
+    the epochs (``gnss_valid``, ``gnss_time_s`` ... ``odo_std_m_s``, same names on both
+    sides; see :data:`AIDING_VARIABLES`).
+
+    Parameters
+    ----------
+    profile : gfins_fmi.vehicle.VehicleProfile, optional
+        The manoeuvre (default: seed 001's vehicle test with a 60 s alignment).
+    gnss, baro, odometer : GnssReceiver, Barometer, Odometer or None
+        The aiding sensors the vehicle simulates (default: a ``GnssReceiver()``, 1 Hz; no
+        barometer, no odometer). Their lever arms are the filter's: the receiver's antenna
+        lever arm becomes ``config.gnss_lever_arm_m``, the odometer's
+        ``config.odometer_lever_arm_m`` (a config that states another, non-zero one is
+        refused).
+    config : gfins_fmi.estimation.FilterConfig, optional
+        The filter (default: ``FilterConfig(imu=imu_noise)``, or the tactical-grade IMU of
+        ``estimation.scenarios.TACTICAL`` without ``imu_noise``; ``max_latency_s`` the
+        receiver's latency plus one step). With a GNSS latency, epochs arrive after
+        their time of validity: ``config.max_latency_s`` must cover it (refused
+        otherwise: every epoch would be stale).
+    initial_uncertainty : mapping, optional
+        Keyword arguments of :class:`gfins_fmi.estimation.InitialState` (position_std_m,
+        velocity_std_m_s, attitude_std_rad, gyro_bias_std_rad_s, ..., sensors).
+    initial_error : InitialError, optional
+        Errors of the filter's initial state against the vehicle's true start (default:
+        none; the start is the truth at ``skip_steps * step_s`` from the C vehicle model).
+    gnss_velocity : bool
+        Use the epochs' velocities too (the navigator's ``gnss_vel_valid``).
+    step_s, stop_s : float
+        Communication step (s) and stop time (s; default: end of the profile + 30 s).
+    skip_steps : int
+        Navigator doSteps to ignore at the start (1 for fmpy's SSP simulator and container,
+        which pass no outputs before the first step).
+    imu_errors : gfins_fmi.ImuErrors, optional
+        Deterministic IMU errors the vehicle applies (the filter estimates biases, and
+        scale factors with ``config.scale_factors``).
+    imu_noise : gfins_fmi.ImuNoise, optional
+        Random IMU errors drawn by the vehicle FMU (seed ``noise_seed``).
+    noise_seed : int
+        Seed of the vehicle's generators: IMU noise and aiding sensors (= the ``seed`` of
+        ``simulate_vehicle``, which gives the same epochs), 0 <= seed < 2**31.
+
+    Returns
+    -------
+    System
+        ``sources`` holds the ``config`` and ``initial`` (InitialState) the navigator's
+        start values were made from, for :func:`direct_navigation`.
+    """
+    from dataclasses import replace
+    from gfins_fmi._lib import as_scalar, lib
+    from gfins_fmi.estimation import FilterConfig, InitialState
+    from gfins_fmi.estimation.scenarios import TACTICAL
+    from gfins_fmi.fmu import ins_gnss_fmu_parameters
+    from gfins_fmi.vehicle import VehicleProfile
+    for name, value, cls in (("gnss", gnss, GnssReceiver), ("baro", baro, Barometer),
+                             ("odometer", odometer, Odometer)):
+        if value is not None and not isinstance(value, cls):
+            raise TypeError(f"{name} must be a {cls.__name__} or None; got {type(value).__name__}")
+    if initial_error is not None and not isinstance(initial_error, InitialError):
+        raise TypeError(f"initial_error must be a cosim.InitialError; got {type(initial_error).__name__}")
+    step_s = as_scalar("step_s", step_s, "s", above=0.0)
+    profile = profile or VehicleProfile.seed001(align_s=60.0)
+    stop_s = profile.duration_s() + 30.0 if stop_s is None else as_scalar("stop_s", stop_s, "s",
+                                                                           at_least=step_s)
+    latency = gnss.latency_s if gnss is not None else 0.0
+    if config is None:
+        config = FilterConfig(imu=imu_noise if imu_noise is not None else TACTICAL,
+                              max_latency_s=latency + step_s if latency > 0 else 0.0)
+    elif not isinstance(config, FilterConfig):
+        raise TypeError(f"config must be a gfins_fmi.estimation.FilterConfig; got {type(config).__name__}")
+    # the filter's lever arms are the sensors' (one installation)
+    arms = {}
+    for field_name, sensor in (("gnss_lever_arm_m", gnss), ("odometer_lever_arm_m", odometer)):
+        if sensor is None:
+            continue
+        mounted = tuple(float(x) for x in sensor.lever_arm_m)
+        stated = tuple(float(x) for x in getattr(config, field_name))
+        if any(stated) and stated != mounted:
+            raise ValueError(f"config.{field_name} = {stated} m differs from the sensor's "
+                             f"lever_arm_m = {mounted} m: the filter takes the sensor's; leave "
+                             "the config's at zero")
+        arms[field_name] = mounted
+    config = replace(config, **arms)
+    if latency > 0:
+        if config.max_latency_s < latency:
+            raise ValueError(f"the GNSS epochs arrive {latency} s after their time of validity "
+                             f"but config.max_latency_s = {config.max_latency_s} s: every epoch "
+                             f"would be stale; set FilterConfig(max_latency_s >= {latency})")
+        history = int(lib.GF_INS_HISTORY)
+        if latency >= (history - 1) * step_s:
+            raise ValueError(f"GNSS latency {latency} s spans more than the filter's history "
+                             f"of {history} IMU samples ({(history - 1) * step_s:g} s at "
+                             f"step_s = {step_s} s): the epochs would be stale")
+    _, start = _vehicle_start(profile, step_s, skip_steps)
+    nav0 = initial_error.apply(start) if initial_error is not None else start
+    initial = InitialState(nav0, **dict(initial_uncertainty or {}))
+    nav = ins_gnss_fmu_parameters(config, initial)          # checks config and initial
+    nav["skip_steps"] = int(skip_steps)
+    if not gnss_velocity:
+        nav["gnss_vel_valid"] = 0
+    veh = _vehicle_parameters(profile, imu_errors, imu_noise, noise_seed)
+    conns = [Connection("vehicle", v, "navigator", v, 3) for v in ("dtheta", "dv")]
+    for key, sensor in (("gnss", gnss), ("baro", baro), ("odometer", odometer)):
+        if sensor is not None:
+            veh.update(sensor.fmu_parameters())
+            conns += [Connection("vehicle", v, "navigator", v, n) for v, n in AIDING_VARIABLES[key]]
+    outputs = {"vehicle": _TRUTH_OUTPUTS + [c.source_var for c in conns],
+               "navigator": _TRUTH_OUTPUTS + _INS_OUTPUTS}
+    return System({"vehicle": ("vehicle", veh), "navigator": ("ins_gnss", nav)}, conns, outputs,
+                  step_s, stop_s,
+                  sources={"config": config, "initial": initial, "gnss_velocity": bool(gnss_velocity)})
+
+
+def integrated_example() -> dict:
+    """Keyword arguments of :func:`vehicle_integrated_navigation` for the worked example
+    (examples/cosim_ins_gnss.py) and ``gfins cosim --navigator ins_gnss``: a tactical-grade
+    IMU (random errors of ``estimation.scenarios.TACTICAL`` drawn by the vehicle FMU); a
+    GNSS receiver at 1 Hz, 0.37 s off the IMU grid, 0.1 s latency, antenna 1.9 m from the
+    IMU, out from 300 s to 360 s (seed 001's first 180 deg turn and 30 s after it); a
+    barometer at 10 Hz with a 2 m bias; an odometer at 10 Hz with a 0.5 % scale error on a
+    wheel beside and below the IMU (the vehicle's point without sideslip is the IMU, so a
+    wheel point with no forward offset obeys the non-holonomic constraint); the filter with
+    barometer-bias and odometer-scale states, NHC, 0.2 s of latency allowed; initial
+    errors of 1-1.2 m, 0.05 m/s and 2-10 mrad within its initial uncertainty."""
+    from gfins_fmi.estimation import FilterConfig
+    from gfins_fmi.estimation.scenarios import TACTICAL
+    return dict(
+        gnss=GnssReceiver(rate_hz=1.0, offset_s=0.37, latency_s=0.1, lever_arm_m=(0.3, 1.1, 1.5),
+                          outages_s=((300.0, 360.0),)),
+        baro=Barometer(rate_hz=10.0, offset_s=0.05, bias0_m=2.0, std_m=0.5),
+        odometer=Odometer(rate_hz=10.0, offset_s=0.03, lever_arm_m=(0.75, 0.0, -0.3),
+                          scale_error=0.005, std_m_s=0.05),
+        config=FilterConfig(imu=TACTICAL, baro_bias=True, baro_bias_std_m=3.0,
+                            odometer_scale=True, nhc=True, max_latency_s=0.2),
+        initial_uncertainty=dict(position_std_m=(1.5, 1.5, 2.0), velocity_std_m_s=0.1,
+                                 attitude_std_rad=(0.005, 0.005, 0.02)),
+        initial_error=InitialError(position_m=(1.0, -0.8, 1.2), velocity_m_s=(0.05, -0.04, 0.02),
+                                   attitude_rad=(0.002, -0.002, 0.01)),
+        imu_noise=TACTICAL, noise_seed=11)
 
 
 # ---- Python master --------------------------------------------------------------------
@@ -226,42 +456,52 @@ class CoSimulation:
                     raise ValueError(f"component {name}: unknown model {model!r}")
                 self.slaves[name] = _Slave(fmu_path(model, fmi_version), fmi_version, self.log,
                                            logging_on, instance_name=name)
-            self._links = []     # (dest, dest refs, source, source refs, n)
+            # the connections grouped by (source, dest, type): one get and one set per
+            # group and step, whatever the number of variables
+            groups: dict = {}   # (source, dest, type) -> [source vrs, read, picked, dest vrs, set]
             for c in system.connections:
                 for comp in (c.source, c.dest):
                     if comp not in self.slaves:
                         raise ValueError(f"connection {c}: no component {comp!r}")
-                src = self._refs(c.source, c.source_var, c.size)
-                dst = self._refs(c.dest, c.dest_var, c.size)
-                self._links.append((c.dest, dst, c.source, src))
+                s_vrs, s_n, s_typ = self._refs(c.source, c.source_var, c.size)
+                d_vrs, d_n, d_typ = self._refs(c.dest, c.dest_var, c.size)
+                if s_typ != d_typ:
+                    raise ValueError(f"connection {c}: {s_typ} output to {d_typ} input")
+                if d_n != c.size:
+                    raise ValueError(f"connection {c}: {c.dest}.{c.dest_var} has {d_n} elements")
+                g = groups.setdefault((c.source, c.dest, s_typ), [[], 0, [], [], 0])
+                g[2] += range(g[1], g[1] + c.size)
+                g[0] += s_vrs
+                g[1] += s_n
+                g[3] += d_vrs
+                g[4] += d_n
+            self._links = []  # (dest, dest group, source, source group, picked elements or None)
+            for (src, dst, typ), (s_vrs, s_n, pick, d_vrs, d_n) in groups.items():
+                self._links.append((dst, (d_vrs, d_n, typ), src, (s_vrs, s_n, typ),
+                                    None if pick == list(range(s_n)) else pick))
         except Exception:
             self.close()
             raise
 
     def _refs(self, comp: str, var: str, size: int):
-        """(value refs, count to read, count used) for the first ``size`` elements."""
-        s = self.slaves[comp]
-        vrs, n, _ = s.refs(var)
+        """(value refs, values read, "Float64" or "Int32") of a connected variable whose
+        first ``size`` elements are used: FMI 2.0 the scalars themselves, FMI 3.0 the
+        whole array (a longer output feeding a shorter input is read whole)."""
+        vrs, n, typ = self.slaves[comp].refs(var)
+        typ = "Int32" if typ in ("Integer", "Int32") else "Float64"
         if size > n:
             raise ValueError(f"{comp}.{var} has {n} elements; the connection needs {size}")
         if self.version == 2:
-            return vrs[:size], size, size
-        return vrs, n, size  # FMI 3.0 reads whole arrays; the first `size` are used
-
-    def _get(self, comp, refs):
-        s = self.slaves[comp].slave
-        vrs, n, size = refs
-        values = s.getReal(vrs) if self.version == 2 else s.getFloat64(vrs, n)
-        return values if size == n else values[:size]
-
-    def _set(self, comp, refs, values):
-        s = self.slaves[comp].slave
-        (s.setReal if self.version == 2 else s.setFloat64)(refs[0], values)
+            return vrs[:size], size, typ
+        return vrs, n, typ
 
     def _transfer(self, dest: str | None = None):
-        for d, dst, src_comp, src in self._links:
+        for d, dst, src_comp, src, pick in self._links:
             if dest is None or d == dest:
-                self._set(d, dst, self._get(src_comp, src))
+                values = self.slaves[src_comp].get_group(src)
+                if pick is not None:
+                    values = [values[i] for i in pick]
+                self.slaves[d].set_group(dst, values)
 
     def _call(self, what: str, fn, *args, **kwargs):
         from fmpy.fmi1 import FMICallException
@@ -321,27 +561,34 @@ class CoSimulation:
         h = self.system.step_s if step_s is None else step_s
         stop = self.system.stop_s if stop_s is None else stop_s
         n = int(round((stop - self.time_s) / h))
-        # one get call per component per row: all its recorded variables together
-        plan = []   # (component, (vrs, count, count), [(key, start, stop)])
-        rows = {}
+        # one get call per component, type and row: all its recorded variables together,
+        # into one table per group, split into variables at the end
+        plan = []   # (component, (vrs, count, type), table, [(name, start, stop)])
         for c, names in self.system.outputs.items():
-            vrs, parts, pos = [], [], 0
+            by_type: dict = {}
             for v in names:
-                r, cnt, _ = self.slaves[c].refs(v)
+                r, cnt, typ = self.slaves[c].refs(v)
+                typ = "Int32" if typ in ("Integer", "Int32") else "Float64"
+                vrs, parts = by_type.setdefault(typ, ([], []))
+                start = parts[-1][2] if parts else 0
                 vrs += r
-                parts.append(((c, v), pos, pos + cnt))
-                rows[(c, v)] = np.empty((n + 1, cnt))
-                pos += cnt
-            plan.append((c, (vrs, pos, pos), parts))
+                parts.append((f"{c}.{v}", start, start + cnt))
+            for typ, (vrs, parts) in by_type.items():
+                table = np.empty((n + 1, parts[-1][2]), np.int64 if typ == "Int32" else float)
+                plan.append((c, (vrs, parts[-1][2], typ), table, parts))
         times = np.empty(n + 1)
         t0 = self.time_s
 
         def record(i):
             times[i] = self.time_s
-            for c, refs_c, parts in plan:
-                values = self._get(c, refs_c)
-                for key, a, b in parts:
-                    rows[key][i] = values[a:b]
+            for c, group, table, _ in plan:
+                table[i] = self.slaves[c].get_group(group)
+
+        def split(rows):
+            out = {name: table[:rows, a:b].copy() for _, _, table, parts in plan
+                   for name, a, b in parts}
+            out["time"] = times[:rows].copy()
+            return out
         bar = None
         if progress:
             from tqdm import tqdm
@@ -359,16 +606,13 @@ class CoSimulation:
                 if bar and k % 1000 == 999:
                     bar.update(1000)
         except FmuRunError as exc:  # keep what was recorded
-            exc.partial = {f"{c}.{v}": a[:done + 1].copy() for (c, v), a in rows.items()}
-            exc.partial["time"] = times[:done + 1].copy()
+            exc.partial = split(done + 1)
             raise
         finally:
             if bar:
                 bar.update(n - bar.n)
                 bar.close()
-        out = {f"{c}.{v}": a for (c, v), a in rows.items()}
-        out["time"] = times
-        return out
+        return split(n + 1)
 
     # -- roll-back ------------------------------------------------------------------------
     def get_state(self) -> dict:
@@ -656,7 +900,7 @@ def _start_values(model: str, given: Mapping) -> Callable:
 
 
 def direct_navigation(system: System, sensors: Mapping[str, np.ndarray], start_time_s: float = 0.0,
-                      imu_errors=None):
+                      imu_errors=None, initial=None):
     """Run the system's navigator through cffi (no FMU) on sensor records.
 
     Parameters
@@ -665,6 +909,12 @@ def direct_navigation(system: System, sensors: Mapping[str, np.ndarray], start_t
         ``{"A": (n, n_sensors)}`` array samples at t_k = start + (skip + k) h for a
         gyro-free navigator, or ``{"dtheta": (n, 3), "dv": (n, 3)}`` increments over
         (t_(k-1), t_k], k = skip + 1 ... for the SINS.
+
+        For the integrated navigator (``ins_gnss``): what :func:`integrated_recording`
+        returns; the batch API then runs on it (see :func:`_integrated_reference`).
+    initial : gfins_fmi.estimation.InitialState, optional
+        ``ins_gnss`` only: the batch API's initial state (default: the system's, with the
+        covariance the FMU makes of its stds, :class:`gfins_fmi.fmu.FmuInitialState`).
     imu_errors : gfins_fmi.ImuErrors, optional
         The error model the SINS FMU compensates (``imu_comp = 1``; its
         ``fmu_parameters()`` must be the navigator's): the increments are compensated
@@ -674,11 +924,14 @@ def direct_navigation(system: System, sensors: Mapping[str, np.ndarray], start_t
     -------
     NavSolution
         Row k: the state at t_(skip + k) (gyro-free: the sample; SINS: after the k-th
-        increment, row 0 the initial state).
+        increment, row 0 the initial state). ``ins_gnss``: the IntegratedSolution of
+        ``IntegratedNavigator.run``, row k the state after the k-th increment.
     """
     from gfins_fmi.gyrofree import STRATEGIES, GyroFreeNavigator, layout
     from gfins_fmi.sins import _VERTICAL, NavState, SinsConfig, Strapdown
     model, nav = system.components["navigator"]
+    if model == "ins_gnss":
+        return _integrated_reference(system, sensors, initial)
     value = _start_values(model, nav)
     h = system.step_s
     t0 = start_time_s + value("skip_steps") * h
@@ -711,6 +964,166 @@ def direct_navigation(system: System, sensors: Mapping[str, np.ndarray], start_t
     return sd.run(dth, dv, h)
 
 
+def _series(result, kind: str, comp: str, var: str, size: int | None = None) -> np.ndarray:
+    """A variable recorded by a run, (rows,) for a scalar (``size`` None) or (rows, size):
+    ``kind`` "master" (:meth:`CoSimulation.run`: arrays under "comp.var"), "ssp"
+    (:func:`run_ssp`: FMI 2.0 scalars "comp.var[i]") or "container" (:func:`run_container`:
+    "comp_var_i")."""
+    if kind not in ("master", "ssp", "container"):
+        raise ValueError(f"kind must be 'master', 'ssp' or 'container'; got {kind!r}")
+    if kind == "master":
+        a = np.asarray(result[f"{comp}.{var}"])
+        return a[:, 0] if size is None else a[:, :size]
+
+    def key(i=None):
+        k = f"{comp}.{var}" if i is None else f"{comp}.{var}[{i}]"
+        return k.replace(".", "_").replace("[", "_").replace("]", "") if kind == "container" else k
+    if size is None:
+        return np.asarray(result[key()])
+    return np.stack([np.asarray(result[key(i)]) for i in range(1, size + 1)], 1)
+
+
+def integrated_recording(system: System, result, kind: str = "master") -> dict:
+    """What the integrated navigator of a run (:func:`vehicle_integrated_navigation`)
+    consumed and produced, read from the recorded rows.
+
+    Every runner records a navigator one row after the vehicle outputs it consumed (the
+    navigator's row j took the vehicle's row j - 1): the Python master (Jacobi, or
+    Gauss-Seidel with the navigator first) records the initial row and then a row after
+    each step; the SSP simulator and the container hand a step what was read after the
+    previous one. The navigator's IMU samples are its rows where ``n_imu`` counts 1, 2,
+    ... N; the row before the first is its start (the first doStep of an increments
+    navigator only starts the run; skipped steps come before it). Epochs delivered with
+    the start step are never handed to the filter (the FMU counts them as rejected).
+
+    Parameters
+    ----------
+    kind : {"master", "ssp", "container"}
+        The runner that made ``result`` (see :func:`differences_from_direct`).
+
+    Returns
+    -------
+    dict
+        ``t_s`` (N + 1,): the start time and the sample times (the navigator's own
+        ``time_s``); ``dtheta``, ``dv`` (N, 3): the increments it took; ``gnss``,
+        ``baro``, ``odometer``: the epochs it was handed (``GnssMeasurements`` ...;
+        None for a sensor not connected) and ``gnss_sample`` ... (m,): the sample, 1 .. N,
+        each came with; ``solution``: the navigator's rows as an ``IntegratedSolution``
+        (innovations from its monitoring outputs, residuals NaN).
+    """
+    from gfins_fmi.estimation import IntegratedSolution
+    from gfins_fmi.fmu import _monitor_innovations
+    from gfins_fmi.vehicle import BaroMeasurements, GnssMeasurements, OdometerMeasurements
+    model, _ = system.components["navigator"]
+    if model != "ins_gnss":
+        raise ValueError(f"integrated_recording reads an ins_gnss navigator; this system's is {model!r}")
+
+    def nav(var, size=None):
+        return _series(result, kind, "navigator", var, size)
+
+    def veh(var, size=None):
+        return _series(result, kind, "vehicle", var, size)
+    n_imu = nav("n_imu").astype(np.int64)
+    rows = np.flatnonzero(n_imu > 0)
+    N = len(rows)
+    if N == 0 or rows[0] < 1 or not np.array_equal(n_imu[rows], np.arange(1, N + 1)) \
+            or not np.array_equal(rows, np.arange(rows[0], rows[0] + N)):
+        raise ValueError("the recording does not show one IMU sample per navigator step after "
+                         "its start (n_imu 1, 2, ...): was it made by a CoSimulation (Jacobi or "
+                         "navigator first), run_ssp or run_container of this system?")
+    start = rows[0] - 1
+    used = rows - 1                                  # the vehicle rows the samples took
+    T = nav("time_s")
+    out = {"t_s": np.r_[T[start], T[rows]], "dtheta": veh("dtheta", 3)[used],
+           "dv": veh("dv", 3)[used]}
+    links = {c.dest_var for c in system.connections}
+    kinds = {"gnss": ("gnss", GnssMeasurements), "baro": ("baro", BaroMeasurements),
+             "odometer": ("odo", OdometerMeasurements)}
+    for key, (prefix, cls) in kinds.items():
+        out[key] = out[f"{key}_sample"] = None
+        if f"{prefix}_valid" not in links:
+            continue
+        k = np.flatnonzero(veh(f"{prefix}_valid")[used] > 0)
+        out[f"{key}_sample"] = k + 1
+        r = used[k]
+        if key == "gnss":
+            v = {f: veh(f"gnss_{f}", 3)[r] for f in ("vel_enu_m_s", "pos_std_m", "vel_std_m_s")}
+            out[key] = cls(veh("gnss_time_s")[r], veh("gnss_lat_rad")[r], veh("gnss_lon_rad")[r],
+                           veh("gnss_h_m")[r], v["pos_std_m"], v["vel_enu_m_s"], v["vel_std_m_s"],
+                           np.zeros(len(r), np.int8))
+        elif key == "baro":
+            out[key] = cls(veh("baro_time_s")[r], veh("baro_h_m")[r], veh("baro_std_m")[r])
+        else:
+            out[key] = cls(veh("odo_time_s")[r], veh("odo_speed_m_s")[r], veh("odo_std_m_s")[r])
+    counts = nav("update_count", 7).astype(np.int64)
+    inn = _monitor_innovations(counts[rows], counts[start], nav("update_time", 7)[rows],
+                               nav("update_status", 7)[rows].astype(np.int64), nav("nis", 7)[rows])
+    out["solution"] = IntegratedSolution(
+        T[rows], nav("q", 4)[rows], nav("v", 3)[rows], nav("lat")[rows], nav("lon")[rows],
+        nav("h")[rows], nav("std", 9)[rows], nav("sensors", 14)[rows],
+        nav("standstill")[rows].astype(bool), inn, system.sources.get("config"))
+    return out
+
+
+def _integrated_reference(system: System, rec: Mapping, initial=None):
+    """The batch API (``IntegratedNavigator.run``) on what the co-simulated integrated
+    navigator consumed (:func:`integrated_recording`), each epoch handed in with the IMU
+    sample it arrived with.
+
+    ``IntegratedNavigator.run`` takes an epoch with the first sample whose time reaches
+    its time of validity; so does the FMU when the epoch arrives in time (zero latency:
+    the vehicle delivers it at the end of the step it falls in, the navigator gets it with
+    that step's increment). An epoch that arrives later (latency) reaches the FMU with a
+    later sample, valid before that sample's interval: the batch API is then fed in pieces
+    (it continues where it stopped), a piece starting at each such sample, so that the
+    epoch comes with it, and the core makes the same delayed update (its history,
+    ``FilterConfig.max_latency_s``). A time of validity within the FMU's clock tolerance
+    after the sample (1e-9 max(1, |t|) s, beyond the core's 1e-9 s) is taken at the
+    sample, as the FMU does. ``initial`` (default: the system's as the FMU takes it,
+    :class:`gfins_fmi.fmu.FmuInitialState`) starts the filter at the recorded start time.
+    """
+    from dataclasses import fields, replace
+    from gfins_fmi.estimation import IntegratedNavigator, IntegratedSolution
+    from gfins_fmi.fmu import FmuInitialState
+    from gfins_fmi.io.records import ImuRecord
+    cfg = system.sources["config"]
+    init = FmuInitialState.of(system.sources["initial"]) if initial is None else initial
+    t = np.asarray(rec["t_s"], float)
+    T = t[1:]
+    N = len(T)
+    init = replace(init, nav=replace(init.nav, t_s=float(t[0])))
+    starts, epochs = {0}, {}
+    for key in ("gnss", "baro", "odometer"):
+        m = rec.get(key)
+        if m is None:
+            continue
+        k = np.asarray(rec[f"{key}_sample"]) - 1                # 0-based sample
+        tk = T[k]
+        tm = np.array(m.t_s, float)
+        clock = (tm > tk + 1e-9) & (tm - tk <= 1e-9 * np.maximum(1.0, np.abs(tk)))
+        tm[clock] = tk[clock]
+        natural = np.searchsorted(T + 1e-9, tm, side="left")  # gf_ins_run's sample
+        starts.update(k[natural < k].tolist())
+        epochs[key] = (replace(m, t_s=tm), k)
+    bounds = sorted(starts) + [N]
+    navigator = IntegratedNavigator(cfg, init)
+    parts = []
+    for a, b in zip(bounds[:-1], bounds[1:]):
+        imu = ImuRecord(T[a:b], rec["dtheta"][a:b], rec["dv"][a:b], kind="increments",
+                        source="co-simulation")
+        sel = {}
+        for key, (m, k) in epochs.items():
+            take = (k >= a) & (k < b)
+            sel[key] = type(m)(**{f.name: getattr(m, f.name)[take] for f in fields(m)}) \
+                if np.any(take) else None
+        parts.append(navigator.run(imu, sel.get("gnss"), sel.get("baro"), sel.get("odometer"),
+                                   gnss_velocity=system.sources.get("gnss_velocity", True)))
+    cat = {f: np.concatenate([getattr(p, f) for p in parts])
+           for f in ("t_s", "q_bn", "v_n_m_s", "lat_rad", "lon_rad", "h_m", "std", "sensors",
+                     "standstill", "innovations")}
+    return IntegratedSolution(**cat, config=cfg)
+
+
 def navigation_errors(result: Mapping) -> dict:
     """Navigation error against the vehicle's truth for a :meth:`CoSimulation.run`
     result (Jacobi, or Gauss-Seidel with the navigator first): row k + 1 of the
@@ -720,7 +1133,8 @@ def navigation_errors(result: Mapping) -> dict:
     -------
     dict with t_s (n,), horizontal_m (n,) horizontal position error (m, north/east with
     the WGS-84 radii), velocity_m_s (n,) norm of the horizontal velocity error and
-    attitude_rad (n,) attitude error angle.
+    attitude_rad (n, 3) the attitude error as a rotation vector (ENU, rad) of
+    q_nav (x) q_true* (its norm is the error angle).
     """
     from gfins_fmi.trajectory import attitude_error_rad, radii
     t = result["vehicle.time_s"][:-1, 0]
@@ -743,40 +1157,32 @@ def differences_from_direct(system: System, result, kind: str = "master", imu_er
     ``kind``: "master" (a :meth:`CoSimulation.run` result), "ssp" (:func:`run_ssp`) or
     "container" (:func:`run_container`, FMI 2.0). The rows are aligned as each runner
     records them (see their docstrings); ``imu_errors`` as for :func:`direct_navigation`.
-    Returns {"lat_rad": ..., "v_m_s": ...}.
+    Returns {"lat_rad": ..., "v_m_s": ...}; for the integrated navigator (``ins_gnss``)
+    also "lon_rad", "h_m", "q", "std" and "sensors", against the batch API
+    (``IntegratedNavigator.run``) on the recorded increments and epochs.
     """
     model, nav = system.components["navigator"]
+    if kind not in ("master", "ssp", "container"):
+        raise ValueError(f"kind must be 'master', 'ssp' or 'container'; got {kind!r}")
+    if model == "ins_gnss":
+        rec = integrated_recording(system, result, kind)
+        ref, sol = direct_navigation(system, rec), rec["solution"]
+        return {name: float(np.max(np.abs(getattr(sol, f) - getattr(ref, f))))
+                for name, f in (("lat_rad", "lat_rad"), ("lon_rad", "lon_rad"), ("h_m", "h_m"),
+                                ("v_m_s", "v_n_m_s"), ("q", "q_bn"), ("std", "std"),
+                                ("sensors", "sensors"))}
     gyro_free = model.startswith("gfnav_")
     n_in = NAVIGATORS[model][1][0][2] if gyro_free else 3
 
-    def col(name, i=None):
-        """A column of an SSP or container result (FMI 2.0 scalar names)."""
-        key = f"{name}[{i}]" if i is not None else name
-        if kind == "container":
-            key = key.replace(".", "_").replace("[", "_").replace("]", "")
-        return np.asarray(result[key])
-
-    if kind not in ("master", "ssp", "container"):
-        raise ValueError(f"kind must be 'master', 'ssp' or 'container'; got {kind!r}")
-    if kind == "master":
-        first = 1 if gyro_free else 2
-        data = ({"A": result["vehicle.A"][:-1, :n_in]} if gyro_free else
-                {"dtheta": result["vehicle.dtheta"][1:-1], "dv": result["vehicle.dv"][1:-1]})
-        lat = result["navigator.lat"][first:, 0]
-        v = result["navigator.v"][first:]
-    else:
-        # rows recorded after each step (the container has the initial row first): the
-        # vehicle's row k describes t_(k+1), the navigator's the sample it took at t_k
-        off = 1 if kind == "container" else 0
-        if gyro_free:
-            A = np.stack([col("vehicle.A", i) for i in range(1, n_in + 1)], 1)
-            data, first = {"A": A[off:-1]}, off + 1
-        else:  # the first increment consumed ends one step after the navigation start
-            data = {k: np.stack([col(f"vehicle.{k}", i) for i in (1, 2, 3)], 1)[off + 1:-1]
-                    for k in ("dtheta", "dv")}
-            first = off + 2
-        lat = col("navigator.lat")[first:]
-        v = np.stack([col("navigator.v", i) for i in (1, 2, 3)], 1)[first:]
+    def rows(comp, var, size=None):
+        return _series(result, kind, comp, var, size)
+    # the navigator's row j took the vehicle's row j - 1 (every runner); its first sample
+    # comes after the initial row (master, container), the skipped steps and, for the
+    # SINS, the step that only starts it
+    first = (kind != "ssp") + int(nav.get("skip_steps", 0)) + (0 if gyro_free else 1)
+    data = ({"A": rows("vehicle", "A", n_in)[first - 1:-1]} if gyro_free else
+            {k: rows("vehicle", k, 3)[first - 1:-1] for k in ("dtheta", "dv")})
+    lat, v = rows("navigator", "lat")[first:], rows("navigator", "v", 3)[first:]
     sol = direct_navigation(system, data, imu_errors=imu_errors)
     return {"lat_rad": float(np.max(np.abs(sol.lat_rad - lat))),
             "v_m_s": float(np.max(np.abs(sol.v_n_m_s - v)))}
@@ -785,9 +1191,11 @@ def differences_from_direct(system: System, result, kind: str = "master", imu_er
 def compare_runners(navigator: str, profile, stop_s: float, out_dir: str | pathlib.Path,
                     step_s: float = 0.01, fmi_version: int = 3,
                     runners: Iterable[str] = ("master", "ssp", "container"),
-                    progress: bool = False) -> dict:
+                    progress: bool = False, options: Mapping | None = None) -> dict:
     """Run vehicle + ``navigator`` along ``profile`` through each runner and compare each
-    navigation solution with the cffi navigator on the sensor data that runner recorded.
+    navigation solution with the cffi navigator on the sensor data that runner recorded
+    (``"ins_gnss"``: :func:`vehicle_integrated_navigation` with ``options``, default
+    :func:`integrated_example`, against the batch API ``IntegratedNavigator.run``).
 
     "master": :class:`CoSimulation` (FMI ``fmi_version``); "ssp": an SSP file in
     ``out_dir`` run by fmpy's SSP simulator; "container": an FMI 2.0 container FMU in
@@ -807,8 +1215,13 @@ def compare_runners(navigator: str, profile, stop_s: float, out_dir: str | pathl
     out = {}
     for runner in runners:
         skip = 0 if runner == "master" else 1
-        system = vehicle_navigation(navigator, profile, step_s=step_s, stop_s=stop_s,
-                                    skip_steps=skip)
+        if navigator == "ins_gnss":
+            system = vehicle_integrated_navigation(
+                profile, step_s=step_s, stop_s=stop_s, skip_steps=skip,
+                **(integrated_example() if options is None else dict(options)))
+        else:
+            system = vehicle_navigation(navigator, profile, step_s=step_s, stop_s=stop_s,
+                                        skip_steps=skip)
         t0 = time.perf_counter()
         path = None
         if runner == "master":

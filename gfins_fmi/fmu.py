@@ -20,9 +20,10 @@ import numpy as np
 from gfins_fmi._lib import (GfinsError, as_array, as_positive_scalar, as_rows, as_scalar,
                             as_vector3)
 from gfins_fmi.accel_array import Accel9Solution
+from gfins_fmi.estimation.ins_gnss import InitialState
 
 __all__ = ["MODELS", "fmu_path", "validate", "run_fmu", "run_accel9_fmu", "run_sins_fmu", "run_gfnav_fmu",
-           "run_ins_gnss_fmu", "ins_gnss_fmu_parameters", "FmuRunError"]
+           "run_ins_gnss_fmu", "ins_gnss_fmu_parameters", "FmuInitialState", "FmuRunError"]
 
 #: model name -> model identifier of the FMUs shipped
 MODELS = {"accel9": "gfins_accel9", "sins": "gfins_sins", "gfnav_cube6": "gfins_gfnav_cube6",
@@ -442,6 +443,7 @@ _INS_CONFIG_FIELDS = {
     "baro_bias_std": "noise.baro_bias_std_m", "baro_bias_tau": "noise.baro_bias_tau_s",
     "odo_scale_std": "noise.odo_scale_std", "odo_scale_tau": "noise.odo_scale_tau_s",
     "gnss_lever_arm": "gnss_lever_m", "odo_lever_arm": "odo_lever_m", "gate_prob": "gate_prob",
+    "gate_reset_count": "gate_reset_count", "max_latency": "max_latency_s",
     "nhc": "nhc", "nhc_std": "nhc_std_m_s", "nhc_interval": "nhc_interval_s", "zupt": "zupt",
     "zupt_std": "zupt_std_m_s", "zaru_std": "zaru_std_rad_s", "zupt_interval": "zupt_interval_s",
     "still_window": "still_window_s", "still_accel_std": "still_accel_std_m_s2",
@@ -501,11 +503,64 @@ def ins_gnss_fmu_parameters(config, initial) -> dict:
     return params
 
 
+class FmuInitialState(InitialState):
+    """An :class:`~gfins_fmi.estimation.InitialState` whose covariance is the P0 the
+    integrated-navigator FMU makes of the same start values: the position stds converted
+    from metres (east, north) to (dlat, dlon) with the radii of gf_earth, the C core's
+    Earth model. ``InitialState.covariance`` converts with ``trajectory.radii`` (numpy:
+    ``q**1.5`` where gf_earth has ``(1/sqrt(q))**3``), which can differ in the last bit;
+    with this P0 the batch API and the FMU start from identical numbers."""
+
+    @classmethod
+    def of(cls, initial: InitialState) -> "FmuInitialState":
+        """The same initial state and stds."""
+        from dataclasses import fields
+        return cls(**{f.name: getattr(initial, f.name) for f in fields(initial)})
+
+    def covariance(self, config) -> np.ndarray:
+        from gfins_fmi._lib import ffi, lib
+        P = super().covariance(config)
+        e = ffi.new("gf_earth *")
+        nav = self.nav
+        if lib.gf_earth_update(e, nav.lat_rad, nav.h_m, ffi.NULL, 1.0) != lib.GF_OK:
+            raise ValueError(f"initial.nav.h_m = {nav.h_m!r} m is absurd")
+        pos = np.broadcast_to(np.asarray(self.position_std_m, float), (3,))
+        s_lat = pos[1] / (e.R_M_m + nav.h_m)
+        s_lon = pos[0] / ((e.R_N_m + nav.h_m) * e.cos_lat)
+        P[3, 3], P[4, 4] = s_lat * s_lat, s_lon * s_lon
+        return P
+
+
 _INS_FLOAT_OUT = ("q", "v", "lat", "lon", "h", "time_s", "std", "sensors", "nis", "update_time")
 _INS_INT_OUT = ("standstill", "update_status", "update_count")
 _INS_GNSS_IN = ("gnss_time_s", "gnss_lat_rad", "gnss_lon_rad", "gnss_h_m", "gnss_vel_enu_m_s",
                 "gnss_pos_std_m", "gnss_vel_std_m_s")
 _INS_KINDS = 7     # per-kind monitoring outputs: GF_INS_MEAS_GNSS_POS .. GF_INS_MEAS_ZARU
+
+
+def _monitor_innovations(counts, counts_before, update_time, update_status, nis) -> np.ndarray:
+    """The innovation log of consecutive steps of the integrated-navigator FMU rebuilt from
+    its per-kind monitoring outputs (rows: steps; columns: kinds GF_INS_MEAS_GNSS_POS ..
+    ZARU): a kind's ``update_count`` grows by one per update, whose time, outcome and NIS
+    ``update_time``, ``update_status`` and ``nis`` hold; the updates of a step ordered by
+    time, then kind, as the core makes them. ``counts_before``: the counts before the
+    first row. Fields t_s, type, status, m, nis; r and s_std NaN (not FMU outputs)."""
+    from gfins_fmi.estimation.ins_gnss import _INNOV_DTYPE
+    counts = np.asarray(counts)
+    if len(counts) == 0:
+        return np.zeros(0, _INNOV_DTYPE)
+    grew = counts != np.vstack([np.asarray(counts_before)[None, :], counts[:-1]])
+    r, k = np.nonzero(grew)
+    t = np.asarray(update_time)[r, k]
+    order = np.lexsort((k, t, r))
+    r, k, t = r[order], k[order], t[order]
+    inn = np.zeros(len(r), _INNOV_DTYPE)
+    ty = k + 1
+    inn["t_s"], inn["type"] = t, ty
+    inn["status"], inn["nis"] = np.asarray(update_status)[r, k], np.asarray(nis)[r, k]
+    inn["m"] = np.select([ty <= 2, ty == 5, ty <= 4], [3, 2, 1], 3)
+    inn["r"] = inn["s_std"] = np.nan
+    return inn
 
 
 class _InsGnssDriver:
@@ -660,26 +715,13 @@ class _InsGnssDriver:
         """The IntegratedSolution of the record rows whose FMU steps are done (up to FMU
         step ``k_end``, default all)."""
         from gfins_fmi.estimation import IntegratedSolution
-        from gfins_fmi.estimation.ins_gnss import _INNOV_DTYPE
         k_end = self.n_steps if k_end is None else k_end
         F, I = self.out_f[self.shift:k_end], self.out_i[self.shift:k_end]
         cf, ci = self.cols_f, self.cols_i
-        # innovation log from the per-kind outputs: a kind's count grows by one per update
         counts = self.out_i[:, ci["update_count"]]
         before = counts[self.shift - 1] if self.shift else np.zeros(_INS_KINDS, np.int64)
-        rows = []
-        for r in range(len(F)):
-            grew = np.flatnonzero(counts[r + self.shift] != before)
-            before = counts[r + self.shift]
-            for k in sorted(grew, key=lambda kk: (F[r, cf["update_time"]][kk], kk)):
-                rows.append((F[r, cf["update_time"]][k], k + 1, I[r, ci["update_status"]][k],
-                             F[r, cf["nis"]][k]))
-        inn = np.zeros(len(rows), _INNOV_DTYPE)
-        if rows:
-            t_, ty, st, nis = map(np.asarray, zip(*rows))
-            inn["t_s"], inn["type"], inn["status"], inn["nis"] = t_, ty, st, nis
-            inn["m"] = np.select([ty <= 2, ty == 5, ty <= 4], [3, 2, 1], 3)
-            inn["r"] = inn["s_std"] = np.nan
+        inn = _monitor_innovations(counts[self.shift:k_end], before, F[:, cf["update_time"]],
+                                   I[:, ci["update_status"]], F[:, cf["nis"]])
         return IntegratedSolution(
             F[:, cf["time_s"]][:, 0].copy(), F[:, cf["q"]].copy(), F[:, cf["v"]].copy(),
             F[:, cf["lat"]][:, 0].copy(), F[:, cf["lon"]][:, 0].copy(), F[:, cf["h"]][:, 0].copy(),

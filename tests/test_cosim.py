@@ -298,7 +298,7 @@ def test_master_reports_fmu_errors_with_the_log():
             m.initialize()
 
 
-@pytest.mark.parametrize("navigator", ["gfnav_cube6", "sins"])
+@pytest.mark.parametrize("navigator", ["gfnav_cube6", "sins", "ins_gnss"])
 def test_cli_cosim_checks_every_runner(tmp_path, navigator, capsys):
     from gfins_fmi.cli import main
     rc = main(["cosim", "--navigator", navigator, "--seconds", "4", "--align", "1",
@@ -306,7 +306,8 @@ def test_cli_cosim_checks_every_runner(tmp_path, navigator, capsys):
     out = capsys.readouterr().out
     assert rc == 0, out
     assert "bit for bit" in out
-    assert (tmp_path / "cosim_errors.csv").is_file()
+    errors = np.loadtxt(tmp_path / "cosim_errors.csv", delimiter=",", skiprows=1)
+    assert errors.shape == (400, 4)        # a row per step, a column per header name
     assert (tmp_path / "vehicle_navigation.ssp").is_file()
     assert validate(tmp_path / "vehicle_navigation.fmu") == []
 

@@ -17,9 +17,9 @@ from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
 import gfins_fmi as gf
-from gfins_fmi._lib import ffi, lib
+from gfins_fmi._lib import lib
 from gfins_fmi.estimation import FilterConfig, InitialState, IntegratedNavigator
-from gfins_fmi.fmu import (FmuRunError, _InsGnssDriver, _INS_CONFIG_FIELDS,
+from gfins_fmi.fmu import (FmuInitialState, FmuRunError, _InsGnssDriver, _INS_CONFIG_FIELDS,
                            ins_gnss_fmu_parameters, run_ins_gnss_fmu)
 from test_estimation import Rec, drive, gnss_record, quiet_config
 
@@ -47,22 +47,9 @@ def _initial(tr, k=0, cls=InitialState):
                velocity_std_m_s=0.05, attitude_std_rad=(1e-3, 1e-3, 5e-3))
 
 
-class _FmuP0(InitialState):
-    """The batch API's InitialState with the position variances converted as the FMU
-    converts them: metres to (dlat, dlon) with gf_earth's radii (the batch API uses
-    gfins_fmi.trajectory.radii, numpy's q**1.5 against the core's 1/sqrt(q)^3: a few ulp
-    apart). With this P0 both run on identical numbers."""
-
-    def covariance(self, config):
-        P = super().covariance(config)
-        e = ffi.new("gf_earth *")
-        nav = self.nav
-        assert lib.gf_earth_update(e, nav.lat_rad, nav.h_m, ffi.NULL, 1.0) == lib.GF_OK
-        pos = np.broadcast_to(np.asarray(self.position_std_m, float), (3,))
-        s_lat = pos[1] / (e.R_M_m + nav.h_m)
-        s_lon = pos[0] / ((e.R_N_m + nav.h_m) * e.cos_lat)
-        P[3, 3], P[4, 4] = s_lat * s_lat, s_lon * s_lon
-        return P
+# the batch API's InitialState with the P0 the FMU makes of the same stds (gf_earth's radii;
+# the batch API converts with numpy's, a few ulp apart): both run on identical numbers
+_FmuP0 = FmuInitialState
 
 
 CASES = {
@@ -230,6 +217,8 @@ REFUSED = [
     ("odo_scale_tau", -3.0, "parameter odo_scale_tau = -3"),
     ("gnss_lever_arm", [0.0, float("nan"), 0.0], "gnss_lever_arm = \\[0, nan, 0\\] m"),
     ("gate_prob", 1.5, "gate_prob = 1.5 must be 0"),
+    ("gate_reset_count", -2, "gate_reset_count = -2 must be >= 0"),
+    ("max_latency", float("nan"), "max_latency = nan s must be finite and >= 0"),
     ("nhc", 1, None),                                      # with nhc_std = 0 below
     ("zupt", 2, "zupt = 2"),
     ("still_window", 0.0, "still_window = 0 s"),

@@ -131,6 +131,7 @@ static void core_config(gf_ins_config *c, int filter)
     c->odo_state = 1;
     c->nhc = 1;
     c->gate_prob = 0.9999;
+    c->gate_reset_count = 5;          /* the FMU's default (FilterConfig's) */
     c->noise.gyro_arw_rad_sqrt_s = 1e-4;
     c->noise.accel_vrw_m_s_sqrt_s = 1e-3;
     c->noise.gyro_bias_std_rad_s = 1e-5;
@@ -367,6 +368,8 @@ static void test_refusals(void)
 {
     expect_refused("filter", "filter", 5, 1, "parameter filter = 5 must be 0 (EKF) or 1 (UKF)");
     expect_refused("gate", "gate_prob", 1.0, 0, "parameter gate_prob = 1 must be 0");
+    expect_refused("gate_reset_count", "gate_reset_count", -1, 1, "gate_reset_count = -1 must be >= 0");
+    expect_refused("max_latency", "max_latency", -0.1, 0, "parameter max_latency = -0.1 s");
     expect_refused("noise", "accel_bias_tau", -2.0, 0, "parameter accel_bias_tau = -2");
     expect_refused("std0_pos", "std0_pos[2]", 0.0, 0, "parameter std0_pos = [1, 0, 3] m");
     expect_refused("std0_odo_scale", "std0_odo_scale", NAN, 0, "std0_odo_scale = nan");

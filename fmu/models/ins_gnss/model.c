@@ -134,8 +134,12 @@ static void log_bad_config(FmuInstance *instance, const gf_ins_config *c, int32_
                       c->gnss_lever_m[2], c->odo_lever_m[0], c->odo_lever_m[1], c->odo_lever_m[2]);
         break;
     case 31:
-        fmu_log_error(instance, "parameter gate_prob = %g must be 0 (no gate) or in (0, 1)",
-                      c->gate_prob);
+        if (c->gate_reset_count < 0)
+            fmu_log_error(instance, "parameter gate_reset_count = %d must be >= 0 (0: never "
+                          "force an update)", (int)c->gate_reset_count);
+        else
+            fmu_log_error(instance, "parameter gate_prob = %g must be 0 (no gate) or in (0, 1)",
+                          c->gate_prob);
         break;
     case 32:
         fmu_log_error(instance, "parameters nhc = %d (0 or 1), nhc_std = %g m/s (> 0) and "
@@ -147,6 +151,10 @@ static void log_bad_config(FmuInstance *instance, const gf_ins_config *c, int32_
                       "zaru_std = %g rad/s (>= 0) and zupt_interval = %g s (>= 0) are not "
                       "usable", (int)c->zupt, c->zupt_std_m_s, c->zaru_std_rad_s,
                       c->zupt_interval_s);
+        break;
+    case 35:
+        fmu_log_error(instance, "parameter max_latency = %g s must be finite and >= 0",
+                      c->max_latency_s);
         break;
     case 34:
         fmu_log_error(instance, "parameters still_window = %g s, still_accel_std = %g m/s2 and "

@@ -114,6 +114,14 @@ def _filter_parameters():
         _p("gate_prob", None, 0.9999, c + "gate_prob", "Innovation gate: a measurement "
            "whose NIS exceeds the chi-square quantile of this probability is rejected; "
            "0: no gate, else in (0, 1)"),
+        _p("gate_reset_count", None, 5, c + "gate_reset_count", "After this many consecutive "
+           "gate rejections of one measurement kind the next one is applied (logged as "
+           "forced, update_status 4), so that a filter that drifted away recovers; 0: never",
+           "Int32"),
+        _p("max_latency", "s", 0.0, c + "max_latency_s", "Measurements delivered after "
+           "their time of validity (a receiver's latency) are used up to this late, >= 0: "
+           "predicted from the nominal state kept at their time of validity (the last 128 "
+           "IMU samples) and applied to the current state; 0: they are stale"),
         _p("nhc", None, 0, c + "nhc", "1: non-holonomic constraint updates (lateral and "
            "vertical velocity of the wheel point 0)", "Int32"),
         _p("nhc_std", "m/s", 0.1, c + "nhc_std_m_s", "NHC measurement std, > 0"),

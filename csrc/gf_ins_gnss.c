@@ -1189,7 +1189,8 @@ static gf_status update_at(gf_ins_filter *f, int32_t type, const gf_ins_meas *ms
         }
         st = gf_kalman_update_gated(&f->kf, (size_t)m, r, H, R, gate, &nis, &accepted);
     }
-    const double t = f->t_s;
+    /* logged at the measurement's time of validity (a delayed one is applied later) */
+    const double t = ms ? ms->t_s : f->t_s;
     if (st == GF_ERR_SINGULAR_GEOMETRY || st == GF_ERR_DIVERGED) {
         f->n_rejected++;
         log_entry(log, t, type, GF_INS_REJECTED_SINGULAR, m, nis, r, s_std);

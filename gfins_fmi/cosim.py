@@ -914,7 +914,7 @@ def direct_navigation(system: System, sensors: Mapping[str, np.ndarray], start_t
         returns; the batch API then runs on it (see :func:`_integrated_reference`).
     initial : gfins_fmi.estimation.InitialState, optional
         ``ins_gnss`` only: the batch API's initial state (default: the system's, with the
-        covariance the FMU makes of its stds, :class:`gfins_fmi.fmu.FmuInitialState`).
+        covariance the FMU makes of its stds: both convert with gf_earth).
     imu_errors : gfins_fmi.ImuErrors, optional
         The error model the SINS FMU compensates (``imu_comp = 1``; its
         ``fmu_parameters()`` must be the navigator's): the increments are compensated
@@ -1080,14 +1080,13 @@ def _integrated_reference(system: System, rec: Mapping, initial=None):
     ``FilterConfig.max_latency_s``). A time of validity within the FMU's clock tolerance
     after the sample (1e-9 max(1, |t|) s, beyond the core's 1e-9 s) is taken at the
     sample, as the FMU does. ``initial`` (default: the system's as the FMU takes it,
-    :class:`gfins_fmi.fmu.FmuInitialState`) starts the filter at the recorded start time.
+    same start as the FMU) starts the filter at the recorded start time.
     """
     from dataclasses import fields, replace
     from gfins_fmi.estimation import IntegratedNavigator, IntegratedSolution
-    from gfins_fmi.fmu import FmuInitialState
     from gfins_fmi.io.records import ImuRecord
     cfg = system.sources["config"]
-    init = FmuInitialState.of(system.sources["initial"]) if initial is None else initial
+    init = system.sources["initial"] if initial is None else initial
     t = np.asarray(rec["t_s"], float)
     T = t[1:]
     N = len(T)

@@ -23,7 +23,7 @@ from gfins_fmi.accel_array import Accel9Solution
 from gfins_fmi.estimation.ins_gnss import InitialState
 
 __all__ = ["MODELS", "fmu_path", "validate", "run_fmu", "run_accel9_fmu", "run_sins_fmu", "run_gfnav_fmu",
-           "run_ins_gnss_fmu", "ins_gnss_fmu_parameters", "FmuInitialState", "FmuRunError"]
+           "run_ins_gnss_fmu", "ins_gnss_fmu_parameters", "FmuRunError"]
 
 #: model name -> model identifier of the FMUs shipped
 MODELS = {"accel9": "gfins_accel9", "sins": "gfins_sins", "gfnav_cube6": "gfins_gfnav_cube6",
@@ -501,34 +501,6 @@ def ins_gnss_fmu_parameters(config, initial) -> dict:
         std0_baro_bias=float(given(initial.baro_bias_std_m, config.baro_bias_std_m)),
         std0_odo_scale=float(given(initial.odometer_scale_std, config.odometer_scale_std)))
     return params
-
-
-class FmuInitialState(InitialState):
-    """An :class:`~gfins_fmi.estimation.InitialState` whose covariance is the P0 the
-    integrated-navigator FMU makes of the same start values: the position stds converted
-    from metres (east, north) to (dlat, dlon) with the radii of gf_earth, the C core's
-    Earth model. ``InitialState.covariance`` converts with ``trajectory.radii`` (numpy:
-    ``q**1.5`` where gf_earth has ``(1/sqrt(q))**3``), which can differ in the last bit;
-    with this P0 the batch API and the FMU start from identical numbers."""
-
-    @classmethod
-    def of(cls, initial: InitialState) -> "FmuInitialState":
-        """The same initial state and stds."""
-        from dataclasses import fields
-        return cls(**{f.name: getattr(initial, f.name) for f in fields(initial)})
-
-    def covariance(self, config) -> np.ndarray:
-        from gfins_fmi._lib import ffi, lib
-        P = super().covariance(config)
-        e = ffi.new("gf_earth *")
-        nav = self.nav
-        if lib.gf_earth_update(e, nav.lat_rad, nav.h_m, ffi.NULL, 1.0) != lib.GF_OK:
-            raise ValueError(f"initial.nav.h_m = {nav.h_m!r} m is absurd")
-        pos = np.broadcast_to(np.asarray(self.position_std_m, float), (3,))
-        s_lat = pos[1] / (e.R_M_m + nav.h_m)
-        s_lon = pos[0] / ((e.R_N_m + nav.h_m) * e.cos_lat)
-        P[3, 3], P[4, 4] = s_lat * s_lat, s_lon * s_lon
-        return P
 
 
 _INS_FLOAT_OUT = ("q", "v", "lat", "lon", "h", "time_s", "std", "sensors", "nis", "update_time")

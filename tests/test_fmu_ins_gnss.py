@@ -19,7 +19,7 @@ from fmpy.validation import validate_fmu
 import gfins_fmi as gf
 from gfins_fmi._lib import lib
 from gfins_fmi.estimation import FilterConfig, InitialState, IntegratedNavigator
-from gfins_fmi.fmu import (FmuInitialState, FmuRunError, _InsGnssDriver, _INS_CONFIG_FIELDS,
+from gfins_fmi.fmu import (FmuRunError, _InsGnssDriver, _INS_CONFIG_FIELDS,
                            ins_gnss_fmu_parameters, run_ins_gnss_fmu)
 from test_estimation import Rec, drive, gnss_record, quiet_config
 
@@ -47,9 +47,6 @@ def _initial(tr, k=0, cls=InitialState):
                velocity_std_m_s=0.05, attitude_std_rad=(1e-3, 1e-3, 5e-3))
 
 
-# the batch API's InitialState with the P0 the FMU makes of the same stds (gf_earth's radii;
-# the batch API converts with numpy's, a few ulp apart): both run on identical numbers
-_FmuP0 = FmuInitialState
 
 
 CASES = {
@@ -125,7 +122,7 @@ def test_fmu_equals_batch_bit_for_bit(rec, version, case):
     gf_ins_run, so every output and every update's time, kind, outcome and NIS are equal
     to the last bit."""
     cfg, imu, gnss, baro, odo = _case(rec, case)
-    init = _initial(rec[0], cls=_FmuP0)
+    init = _initial(rec[0])
     ref = _reference(cfg, imu, gnss, baro, odo, init)
     out = run_ins_gnss_fmu(imu, gnss, baro, odo, config=cfg, initial=init, fmi_version=version)
     assert len(out) == len(ref) == len(imu.t_s)
@@ -143,21 +140,15 @@ def test_fmu_equals_batch_bit_for_bit(rec, version, case):
 
 @pytest.mark.parametrize("version", [2, 3])
 def test_fmu_with_its_own_p0_agrees_with_the_batch(rec, version):
-    """With InitialState's own P0 (positions converted with numpy's radii) the batch API and
-    the FMU start a few ulp apart in two variances (measured 8.0e-16 relative, 3.6 ulp).
-    Measured after 30 s (EKF): positions and times identical; std 1.3e-15 relative;
-    q, v, sensor errors 4e-14 relative in their non-negligible components and 5e-20
-    absolute. Allowed: 8 ulp in P0; 1e-12 relative + 1e-18 absolute in the outputs (a
-    margin of 20 or more, far below anything physical)."""
+    """InitialState converts the position stds with gf_earth's radii as the FMU does, so
+    the batch API and the FMU start from the same P0 and compute the same bits."""
     cfg, imu, gnss, baro, odo = _case(rec, "ekf")
     init = _initial(rec[0])
-    P_fmu, P_batch = _initial(rec[0], cls=_FmuP0).covariance(cfg), init.covariance(cfg)
-    assert np.all(np.abs(P_fmu - P_batch) <= 8 * np.finfo(float).eps * P_batch)
     ref = _reference(cfg, imu, gnss, baro, odo, init)
     out = run_ins_gnss_fmu(imu, gnss, config=cfg, initial=init, fmi_version=version)
     for name in FIELDS:
         x, y = np.asarray(getattr(out, name), float), np.asarray(getattr(ref, name), float)
-        assert np.all(np.abs(x - y) <= 1e-12 * np.abs(y) + 1e-18), name
+        assert np.array_equal(x, y), name
 
 
 @pytest.mark.parametrize("version", [2, 3])
@@ -167,7 +158,7 @@ def test_fmu_state_restore_reproduces_the_run(rec, version, serialize):
     again — in the same instance, or serialized into a fresh one — gives the same rows,
     which are the batch API's."""
     cfg, imu, gnss, baro, odo = _case(rec, "ukf-aided-23")
-    init = _initial(rec[0], cls=_FmuP0)
+    init = _initial(rec[0])
     kw = dict(config=cfg, initial=init, fmi_version=version)
     mid = 1200
     a = _InsGnssDriver(imu, gnss, baro, odo, **kw)
@@ -263,7 +254,7 @@ def test_unused_optional_std_is_not_checked(rec):
 
 def _driver(rec, case="ekf", version=2, **kw):
     cfg, imu, gnss, baro, odo = _case(rec, case)
-    return _InsGnssDriver(imu, gnss, baro, odo, config=cfg, initial=_initial(rec[0], cls=_FmuP0),
+    return _InsGnssDriver(imu, gnss, baro, odo, config=cfg, initial=_initial(rec[0]),
                           fmi_version=version, **kw), cfg, imu, gnss
 
 
@@ -290,7 +281,7 @@ def test_measurement_delivered_late_is_stale(rec, version):
     assert np.all(np.isnan(inn["nis"]))
     assert list(st[:2]) == [3, 3] and list(cnt[:2]) == [len(idx)] * 2 and list(st[2:]) == [-1] * 5
     # stale: no update, so the run is the free-inertial one with the same filter
-    ref = _reference(cfg, imu, None, None, None, _initial(rec[0], cls=_FmuP0))
+    ref = _reference(cfg, imu, None, None, None, _initial(rec[0]))
     assert np.array_equal(sol.lat_rad, ref.lat_rad) and np.array_equal(sol.std, ref.std)
 
 
@@ -370,7 +361,7 @@ def test_bad_measurement_input_is_refused(rec, version, column, value, match):
 def test_gnss_velocity_flag(rec):
     """gnss_vel_valid = 0: position updates only, as the batch API with gnss_velocity=False."""
     cfg, imu, gnss, _, _ = _case(rec, "ekf")
-    init = _initial(rec[0], cls=_FmuP0)
+    init = _initial(rec[0])
     ref = IntegratedNavigator(cfg, init).run(imu, gnss, gnss_velocity=False)
     out = run_ins_gnss_fmu(imu, gnss, config=cfg, initial=init, gnss_velocity=False)
     assert set(out.innovations["type"].tolist()) == {1}
@@ -383,7 +374,7 @@ def test_nonfinite_imu_sample_keeps_the_outputs(rec, version):
     g = imu.gyro.copy()
     g[250, 1] = np.nan
     bad = Rec(t_s=imu.t_s, gyro=g, accel=imu.accel, kind="increments")
-    init = _initial(rec[0], cls=_FmuP0)
+    init = _initial(rec[0])
     with pytest.raises(FmuRunError, match="record row 250") as exc:
         run_ins_gnss_fmu(bad, gnss, config=cfg, initial=init, fmi_version=version)
     assert any("input dtheta = [" in m and "is not finite" in m for m in exc.value.messages)

@@ -267,13 +267,17 @@ class InitialState:
 
     def covariance(self, config: FilterConfig) -> np.ndarray:
         """P0 (n x n, diagonal) in the filter's states (position as dL, dlon rad, dh m)."""
-        from gfins_fmi.trajectory import radii
         noise = config.noise_si()
         nav = self.nav
-        RM, RN, _, _ = radii(nav.lat_rad)
+        # the radii of the C core's Earth model (gf_earth), so that the FMU, which converts
+        # its position stds in C, starts from the same numbers to the last bit
+        e = ffi.new("gf_earth *")
+        if lib.gf_earth_update(e, float(nav.lat_rad), float(nav.h_m), ffi.NULL, 1.0) != lib.GF_OK:
+            raise ValueError(f"initial.nav: latitude {nav.lat_rad!r} rad or height {nav.h_m!r} m "
+                             "is outside the Earth model (|lat| < 90 deg, h > -a/2)")
         pos = _vec3("position_std_m", self.position_std_m, "m")
         d = [*_vec3("velocity_std_m_s", self.velocity_std_m_s, "m/s"),
-             pos[1] / (RM + nav.h_m), pos[0] / ((RN + nav.h_m) * math.cos(nav.lat_rad)), pos[2],
+             pos[1] / (e.R_M_m + nav.h_m), pos[0] / ((e.R_N_m + nav.h_m) * e.cos_lat), pos[2],
              *_vec3("attitude_std_rad", self.attitude_std_rad, "rad"),
              *_vec3("gyro_bias_std_rad_s", self.gyro_bias_std_rad_s if self.gyro_bias_std_rad_s
                     is not None else noise["gyro_bias_std_rad_s"], "rad/s"),

@@ -14,7 +14,7 @@ The record (gfins_fmi.estimation.scenarios)
     Two 60 s GNSS outages (at 40 % and 70 % of the record) are cut from the GNSS record
     both filters get. The filters start from the truth perturbed by a fixed error
     (position E, N, U +1.5, -1.0, +2.0 m; velocity +0.10, -0.10, +0.05 m/s; roll +0.1 deg,
-    pitch -0.1 deg, heading +1.0 deg), about 1 sigma of the initial uncertainty below.
+    pitch -0.1 deg, heading +1.0 deg), 0.5 to 1 sigma of the initial uncertainty below.
 
 gfins_fmi (timed: ``integrate(imu, gnss, config=..., initial=...)``, whole record)
     FilterConfig(imu=TACTICAL) with its defaults (EKF, increments, coning/sculling,
@@ -65,8 +65,8 @@ the outages of the maximum horizontal error in each, as in evaluation.outage_pro
 Timing (first record only): best of --repeat of the whole filter run (record preparation
 excluded; gfins_fmi is run once before, pyins on 10 s for numba's JIT), wall
 time (time.perf_counter) and CPU time of this process (time.process_time); BLAS threads
-are pinned to one (the machine is shared). The load average is printed before and
-after.
+are pinned to one (the machine is shared). The load average is printed with each record
+and after the pyins timing.
 """
 from __future__ import annotations
 
@@ -286,8 +286,11 @@ def main(argv=None) -> None:
                     help="accuracy is taken from this time after the start (s)")
     ap.add_argument("--skip-pyins", action="store_true")
     a = ap.parse_args(argv)
+    if a.minutes * 60.0 * 0.3 <= OUTAGE_S:
+        ap.error(f"--minutes must exceed {OUTAGE_S / 0.3 / 60.0:.2f}: the two {OUTAGE_S:g} s outages "
+                 "(at 40 % and 70 % of the record) must fit apart and before the end")
     if a.minutes * 60.0 * 0.4 < a.converge_s:
-        ap.error("the first outage (at 40 %% of the record) must come after --converge-s")
+        ap.error("the first outage (at 40 % of the record) must come after --converge-s")
     if a.repeat < 1 or a.seeds < 1:
         ap.error("--repeat and --seeds must be >= 1")
     try:

@@ -42,7 +42,14 @@ __all__ = ["System", "Connection", "vehicle_navigation", "CoSimulation", "write_
 NAVIGATORS = {"gfnav_cube6": ("gfnav_cube6", [("A", "A", 6)]),
               "gfnav_qin9": ("gfnav_qin9", [("A", "A", 9)]),
               "gfnav_12": ("gfnav_12", [("A", "A", 12)]),
-              "sins": ("sins", [("dtheta", "dtheta", 3), ("dv", "dv", 3)])}
+              "sins": ("sins", [("dtheta", "dtheta", 3), ("dv", "dv", 3)]),
+              # the integrated navigator: IMU increments and the GNSS epochs the vehicle's
+              # receiver delivers (same names on both sides; gnss_valid is an Int32)
+              "ins_gnss": ("ins_gnss", [("dtheta", "dtheta", 3), ("dv", "dv", 3)] + [
+                  (v, v, n) for v, n in (("gnss_valid", 1), ("gnss_time_s", 1),
+                                         ("gnss_lat_rad", 1), ("gnss_lon_rad", 1),
+                                         ("gnss_h_m", 1), ("gnss_vel_enu_m_s", 3),
+                                         ("gnss_pos_std_m", 3), ("gnss_vel_std_m_s", 3))])}
 _LAYOUT = {"gfnav_cube6": 0, "gfnav_qin9": 1, "gfnav_12": 2}
 
 
@@ -104,14 +111,15 @@ def vehicle_navigation(navigator: str = "gfnav_qin9", profile=None, *, step_s: f
                        imu_errors=None, array_bias_m_s2=None, imu_noise=None,
                        array_noise_m_s2: float = 0.0, noise_seed: int = 1,
                        navigator_parameters: Mapping | None = None,
-                       hold_height: bool = True) -> System:
+                       hold_height: bool = True, gnss=None, filter_config=None) -> System:
     """The vehicle FMU connected to a navigator FMU.
 
     Parameters
     ----------
-    navigator : {"gfnav_cube6", "gfnav_qin9", "gfnav_12", "sins"}
-        Gyro-free navigator (array outputs A connected) or strapdown INS (increments
-        dtheta, dv connected; input_mode 0).
+    navigator : {"gfnav_cube6", "gfnav_qin9", "gfnav_12", "sins", "ins_gnss"}
+        Gyro-free navigator (array outputs A connected), strapdown INS (increments
+        dtheta, dv connected; input_mode 0) or the integrated navigator (increments and
+        the GNSS receiver's epochs connected).
     profile : gfins_fmi.vehicle.VehicleProfile, optional
         The manoeuvre (default: seed 001's vehicle test with a 60 s alignment).
     step_s, stop_s : float
@@ -136,7 +144,16 @@ def vehicle_navigation(navigator: str = "gfnav_qin9", profile=None, *, step_s: f
     navigator_parameters : mapping, optional
         More navigator start values (FMI 3.0 names), e.g. ``{"strategy": 3}``.
     hold_height : bool
-        Hold the navigator's height at the vehicle's (a ground vehicle): vertical_mode 1.
+        Hold the navigator's height at the vehicle's (a ground vehicle): vertical_mode 1
+        (not for ``"ins_gnss"``, whose height the GNSS corrects).
+    gnss : gfins_fmi.vehicle.GnssReceiver, optional
+        ``"ins_gnss"``: the vehicle's receiver (default ``GnssReceiver()``, 1 Hz); the
+        filter is told its lever arm.
+    filter_config : gfins_fmi.estimation.FilterConfig, optional
+        ``"ins_gnss"``: the filter (default: ``FilterConfig`` of ``imu_noise``, else of
+        the tactical-grade IMU of ``gfins_fmi.estimation.scenarios.TACTICAL``, with the
+        receiver's lever arm); it starts from the true state with ``InitialState``'s
+        default 1-sigmas.
     """
     from gfins_fmi.sins import NavState
     from gfins_fmi.vehicle import VehicleProfile, simulate_vehicle
@@ -164,6 +181,21 @@ def vehicle_navigation(navigator: str = "gfnav_qin9", profile=None, *, step_s: f
         veh["array_bias"] = b.tolist()
     nav = {"q0": start.q_bn.tolist(), "v0": start.v_n_m_s.tolist(), "lat0": start.lat_rad,
            "lon0": start.lon_rad, "h0": start.h_m, "skip_steps": int(skip_steps)}
+    if navigator == "ins_gnss":
+        from gfins_fmi.estimation import FilterConfig, InitialState
+        from gfins_fmi.fmu import ins_gnss_fmu_parameters
+        from gfins_fmi.vehicle import GnssReceiver
+        gnss = GnssReceiver() if gnss is None else gnss
+        veh.update(gnss.fmu_parameters())
+        if filter_config is None:
+            from gfins_fmi.estimation.scenarios import TACTICAL
+            filter_config = FilterConfig(imu=imu_noise or TACTICAL,
+                                         gnss_lever_arm_m=tuple(gnss.lever_arm_m))
+        cfg = filter_config
+        nav.update(ins_gnss_fmu_parameters(cfg, InitialState(start)))
+        hold_height = False
+    elif gnss is not None or filter_config is not None:
+        raise ValueError("gnss and filter_config are for navigator='ins_gnss'")
     if hold_height:
         nav.update(vertical_mode=1, hold_height=profile.h0_m)
     if navigator in _LAYOUT:
@@ -239,24 +271,32 @@ class CoSimulation:
             raise
 
     def _refs(self, comp: str, var: str, size: int):
-        """(value refs, count to read, count used) for the first ``size`` elements."""
+        """(value refs, count to read, count used, "Float64" or "Int32") for the first
+        ``size`` elements."""
         s = self.slaves[comp]
-        vrs, n, _ = s.refs(var)
+        vrs, n, typ = s.refs(var)
+        kind = "Int32" if typ in ("Integer", "Int32") else "Float64"
         if size > n:
             raise ValueError(f"{comp}.{var} has {n} elements; the connection needs {size}")
         if self.version == 2:
-            return vrs[:size], size, size
-        return vrs, n, size  # FMI 3.0 reads whole arrays; the first `size` are used
+            return vrs[:size], size, size, kind
+        return vrs, n, size, kind  # FMI 3.0 reads whole arrays; the first `size` are used
 
     def _get(self, comp, refs):
-        s = self.slaves[comp].slave
-        vrs, n, size = refs
-        values = s.getReal(vrs) if self.version == 2 else s.getFloat64(vrs, n)
+        s = self.slaves[comp]
+        vrs, n, size, kind = refs
+        if kind == "Int32":
+            values = s.get_group((vrs, n, kind))
+        else:
+            values = s.slave.getReal(vrs) if self.version == 2 else s.slave.getFloat64(vrs, n)
         return values if size == n else values[:size]
 
     def _set(self, comp, refs, values):
-        s = self.slaves[comp].slave
-        (s.setReal if self.version == 2 else s.setFloat64)(refs[0], values)
+        s = self.slaves[comp]
+        if refs[3] == "Int32":
+            s.set_group((refs[0], refs[1], "Int32"), values)
+        else:
+            (s.slave.setReal if self.version == 2 else s.slave.setFloat64)(refs[0], values)
 
     def _transfer(self, dest: str | None = None):
         for d, dst, src_comp, src in self._links:
@@ -333,17 +373,20 @@ class CoSimulation:
                                  f"current time {self.time_s!r} s")
             n = points.size - 1
         # one get call per component per row: all its recorded variables together
-        plan = []   # (component, (vrs, count, count), [(key, start, stop)])
+        plan = []   # (component, (vrs, count, count, kind), [(key, start, stop)])
         rows = {}
         for c, names in self.system.outputs.items():
-            vrs, parts, pos = [], [], 0
+            groups = {}      # kind -> (vrs, parts, count): one get per component and type
             for v in names:
-                r, cnt, _ = self.slaves[c].refs(v)
+                r, cnt, typ = self.slaves[c].refs(v)
+                vrs, parts, pos = groups.setdefault("Int32" if typ in ("Integer", "Int32")
+                                                    else "Float64", ([], [], [0]))
                 vrs += r
-                parts.append(((c, v), pos, pos + cnt))
+                parts.append(((c, v), pos[0], pos[0] + cnt))
                 rows[(c, v)] = np.empty((n + 1, cnt))
-                pos += cnt
-            plan.append((c, (vrs, pos, pos), parts))
+                pos[0] += cnt
+            for kind, (vrs, parts, pos) in groups.items():
+                plan.append((c, (vrs, pos[0], pos[0], kind), parts))
         times = np.empty(n + 1)
         t0 = self.time_s
 

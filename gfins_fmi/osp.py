@@ -97,13 +97,14 @@ def _steps(stop_s: float, step_s: float) -> int:
 class _Run:
     """One libcosim execution: slaves by name, their variables, a time-series observer."""
 
-    def __init__(self, execution):
+    def __init__(self, execution, n_rows: int):
         Observer, self.VT = _libcosim()[2:4]
         self.ex = execution
         self.index = {info.name.decode(): info.index for info in self.ex.slave_infos()}
         self.vars = {name: {v.name.decode(): v for v in self.ex.slave_variables(i)}
                      for name, i in self.index.items()}
-        self.obs = Observer.create_time_series()
+        # every row kept (without a size libcosim keeps the last 10 000 samples)
+        self.obs = Observer.create_time_series(buffer_size=int(n_rows))
         self.ex.add_observer(self.obs)
         self.recorded: dict = {}        # "comp.var" -> [scalar variable descriptions]
 
@@ -234,7 +235,7 @@ def run_libcosim(system, stop_s: float | None = None, step_s: float | None = Non
         slaves.append(LocalSlave(str(fmu_path(model, 2)), name))
         if ex.add_local_slave(slaves[-1]) < 0:
             raise FmuRunError(f"libcosim could not load {model}'s FMI 2.0 FMU", [])
-    run = _Run(ex)
+    run = _Run(ex, n + 1)
     for name in system.components:
         for key, value in system.scalar_parameters(name).items():
             (v,) = run.scalars(name, key)
@@ -282,6 +283,6 @@ def run_libcosim_ssp(path: str | pathlib.Path, outputs: Mapping[str, list], stop
     except AssertionError as exc:                 # libcosimpy's way of saying it failed
         from libcosimpy._internal import get_last_error_message
         raise FmuRunError(f"libcosim could not load {path}: {get_last_error_message()}", []) from exc
-    run = _Run(ex)
+    run = _Run(ex, n + 1)
     run.record(outputs)
     return run.simulate(n, ns)

@@ -101,3 +101,15 @@ def test_refusals_before_libcosim_sees_them(tmp_path):
         osp.run_libcosim_ssp(cosim.write_ssp(system, tmp_path / "bad.ssp"), system.outputs, 1.0, STEP_S)
     with pytest.raises(ValueError, match="not a whole number of nanoseconds"):
         osp.communication_points(1e-10 / 3, 3)
+
+
+def test_every_row_of_a_long_run_is_kept():
+    """More than the 10 000 samples libcosim's time-series observer keeps by default:
+    10 001 rows, in order (the vehicle's time output at each row is the row's time; the
+    vehicle adds the step to the previous point, so within an ulp: bound 1e-14 s)."""
+    system = cosim.vehicle_navigation("sins", PROFILE, step_s=0.001, stop_s=10.0)
+    system.outputs = {"vehicle": ["time_s"]}
+    theirs = osp.run_libcosim(system)
+    assert theirs["vehicle.time_s"].shape == (10_001, 1)
+    assert np.array_equal(theirs["time"], osp.communication_points(0.001, 10_000))
+    assert np.max(np.abs(theirs["vehicle.time_s"][:, 0] - theirs["time"])) < 1e-14

@@ -75,7 +75,7 @@ def main(argv=None):
         print(f"| {name} | serial (1 thread, this process) | {r['wall']:.1f} | {r['cpu']:.1f} | - | - | "
               f"{'/'.join(f'{x:.1f}' for x in r['load'])} |", flush=True)
     for n in a.workers:
-        with LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+        with LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
                           silence_logs=logging.ERROR) as cluster, \
                 Client(cluster.scheduler_address) as client:
             client.run(_warm)

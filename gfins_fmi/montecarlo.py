@@ -9,9 +9,10 @@ calls release the GIL (cffi), so threads run the core in parallel. Pass any Exec
 command asked for: N local threads, or a dask.distributed cluster
 (``Client(address).get_executor()``).
 
-What a remote executor receives: per job, the task (pickled with its closure, i.e. the
-arrays it captured), the run indices and their generators; it returns the task's dicts.
-``batch`` runs go in one job, so the task is shipped once per batch, not once per run.
+What a remote executor receives: the task (pickled with its closure, i.e. the arrays it
+captured) and per job the run indices and their generators; it returns the task's
+dicts. On a dask cluster the task is scattered once and each worker fetches it once;
+other executors (a process pool) get it with every job, and ``batch`` runs go in one job.
 """
 from __future__ import annotations
 
@@ -85,12 +86,16 @@ def run(task: Callable[[int, np.random.Generator], dict], n_runs: int, seed: int
         from tqdm import tqdm
         bar = tqdm(total=n_runs, desc=desc, unit="run")
     results: list = [None] * n_runs
+    payload = task
+    client = getattr(ex, "_client", None)    # a dask ClientExecutor: ship the task once,
+    if client is not None:                   # each worker fetches it once, not per job
+        payload = client.scatter(task, hash=False)
     try:
         futures = {}
         for k0 in range(0, n_runs, int(batch)):
             ks = list(range(k0, min(n_runs, k0 + int(batch))))
             rngs = [np.random.default_rng(seqs[k]) for k in ks]
-            futures[ex.submit(_batch, task, ks, rngs)] = ks
+            futures[ex.submit(_batch, payload, ks, rngs)] = ks
         for fut in cf.as_completed(futures):
             ks = futures[fut]
             for k, r in zip(ks, fut.result()):

@@ -24,7 +24,7 @@ from gfins_fmi.cli import main  # noqa: E402
 def scheduler():
     """Address of a local scheduler with one single-threaded worker process."""
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
-                                  dashboard_address=None, silence_logs=logging.ERROR) as cluster:
+                                  dashboard_address=":0", silence_logs=logging.ERROR) as cluster:
         yield cluster.scheduler_address
 
 

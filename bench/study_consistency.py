@@ -85,9 +85,10 @@ def main(argv=None):
             lo3, hi3 = chi2_band(3, N)
             ins_nis = np.mean((mean_nis >= lo3) & (mean_nis <= hi3))
             print(f"{filt.upper()}: {N} runs of {a.minutes:g} min in {el:.1f} s (CPU of this process "
-                  f"{cpu:.1f} s); average NEES (15 states) inside [{lo:.2f}, {hi:.2f}] at {100 * inside:.1f}% of {len(mean_nees)} epochs "
-                  f"(median {np.median(mean_nees):.2f}); average NIS (3 dof) inside [{lo3:.2f}, {hi3:.2f}] "
-                  f"at {100 * ins_nis:.1f}% of {len(mean_nis)} updates (median {np.median(mean_nis):.2f})")
+                  f"{cpu:.1f} s); average NEES (15 states) inside [{lo:.2f}, {hi:.2f}] at "
+                  f"{100 * inside:.1f}% of {len(mean_nees)} epochs (median {np.median(mean_nees):.2f}); "
+                  f"average NIS (3 dof) inside [{lo3:.2f}, {hi3:.2f}] at {100 * ins_nis:.1f}% of "
+                  f"{len(mean_nis)} updates (median {np.median(mean_nis):.2f})")
             if a.out:
                 p = plot_consistency(f"{a.out}/consistency_{filt}.png", t_ep, mean_nees, (lo, hi), t_nis,
                                      mean_nis, (lo3, hi3), title=f"{filt.upper()}: {N} Monte-Carlo runs, "

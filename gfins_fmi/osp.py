@@ -42,6 +42,8 @@ def available() -> str | None:
     """None when libcosimpy can be used here, else the reason it cannot."""
     try:
         import libcosimpy.CosimExecution  # noqa: F401
+        from libcosimpy._internal import libcosimc
+        libcosimc()                  # loads the bundled C library (lazily loaded otherwise)
     except ImportError as exc:
         return (f"libcosimpy is not importable ({exc}); pip install 'gfins_fmi[osp]' "
                 "(wheels for Linux x86_64 and Windows x64, Python 3.11-3.14)")

@@ -62,8 +62,10 @@ def run(task: Callable[[int, np.random.Generator], dict], n_runs: int, seed: int
     batch : int, optional
         Runs per submitted job. Default: 1 on a thread pool (nothing is copied);
         otherwise about four jobs per worker thread (a dask executor's cluster, a process
-        pool's workers; 16 assumed for an executor that does not tell), since such an
-        executor pickles the task with its captured arrays once per job.
+        pool's workers; 16 assumed for an executor that does not tell): few enough that
+        scheduling costs nothing (and a process pool, which pickles the task with its
+        captured arrays for every job, copies it a few times per worker), enough to
+        balance uneven workers.
 
     Raises
     ------

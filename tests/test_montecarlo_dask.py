@@ -12,9 +12,11 @@ import sys
 import numpy as np
 import pytest
 
-distributed = pytest.importorskip(
-    "distributed", reason="dask.distributed is not installed (pip install 'gfins_fmi[dask]'; "
-    "the test extra installs it)")
+try:
+    import distributed
+except ImportError as exc:
+    pytest.skip(f"dask.distributed is not importable ({exc}); pip install 'gfins_fmi[dask]' "
+                "(the test extra installs it)", allow_module_level=True)
 
 from gfins_fmi import error_report, montecarlo as mc, reproduce as R  # noqa: E402
 from gfins_fmi.cli import main  # noqa: E402

@@ -189,10 +189,9 @@ def vehicle_navigation(navigator: str = "gfnav_qin9", profile=None, *, step_s: f
         veh.update(gnss.fmu_parameters())
         if filter_config is None:
             from gfins_fmi.estimation.scenarios import TACTICAL
-            filter_config = FilterConfig(imu=imu_noise or TACTICAL,
+            filter_config = FilterConfig(imu=TACTICAL if imu_noise is None else imu_noise,
                                          gnss_lever_arm_m=tuple(gnss.lever_arm_m))
-        cfg = filter_config
-        nav.update(ins_gnss_fmu_parameters(cfg, InitialState(start)))
+        nav.update(ins_gnss_fmu_parameters(filter_config, InitialState(start)))
         hold_height = False
     elif gnss is not None or filter_config is not None:
         raise ValueError("gnss and filter_config are for navigator='ins_gnss'")

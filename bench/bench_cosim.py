@@ -119,6 +119,18 @@ def main() -> None:
         cosim.run_container(cont, args.seconds, h)
         dt = time.perf_counter() - t0
         print(f"  fmpy container FMU (FMI 2.0)      {dt:7.2f} s  {dt / n * 1e6:6.1f} us/step")
+        from gfins_fmi import osp
+        if osp.available() is None:     # OSP libcosim: wall and CPU (its steps run on threads)
+            for label, outputs in (("recording", system.outputs), ("no outputs", {})):
+                run_sys = cosim.System(system.components, system.connections, outputs,
+                                       system.step_s, system.stop_s)
+                c0, t0 = time.process_time(), time.perf_counter()
+                osp.run_libcosim(run_sys)
+                dt, cpu = time.perf_counter() - t0, time.process_time() - c0
+                print(f"  OSP libcosim, {label:11s}       {dt:7.2f} s  {dt / n * 1e6:6.1f} us/step "
+                      f"(CPU {cpu:.2f} s)")
+        else:
+            print(f"  OSP libcosim: {osp.available()}")
         if args.profile:
             print("where the Python master's time goes (cProfile, FMI 2.0, top 12 by own time):")
             pstats.Stats(pr).sort_stats("tottime").print_stats(12)

@@ -7,6 +7,10 @@ For each outage: the RMS over the runs of the horizontal position error at the o
 end, the python-control 1-sigma, and the filter's own 1-sigma there.
 
     python bench/study_outage_prediction.py [--runs 200] [--filter ekf] [--out docs/figures]
+        [--workers N | --scheduler ADDRESS [--workers N]]
+
+The runs go through gfins_fmi.montecarlo.run: N threads here, or a dask cluster (see
+docs/analysis.md, "Running on a cluster"); the figures do not depend on which.
 """
 from __future__ import annotations
 
@@ -15,6 +19,8 @@ import time
 
 import numpy as np
 
+from gfins_fmi import montecarlo
+from gfins_fmi.cli import executor_arguments
 from gfins_fmi.estimation import FilterConfig, InitialState, IntegratedNavigator
 from gfins_fmi.estimation.evaluation import navigation_errors, predict_outage_std
 from gfins_fmi.estimation.scenarios import TACTICAL, simulate_drive, town_drive
@@ -27,6 +33,8 @@ def main(argv=None):
     ap.add_argument("--filter", default="ekf")
     ap.add_argument("--outage-s", type=float, default=60.0)
     ap.add_argument("--out", default=None)
+    ap.add_argument("--progress", action="store_true", help="a progress bar")
+    executor_arguments(ap)
     a = ap.parse_args(argv)
     T, dt = 720.0, 0.01
     profile = town_drive(T)
@@ -39,18 +47,26 @@ def main(argv=None):
     # rows of the solution at the outage ends (the last IMU sample before the end)
     t_imu = truth.t_s[1:]
     k_end = np.searchsorted(t_imu, win[:, 1]) - 1
-    err_end = np.empty((a.runs, len(win), 2))
-    t0 = time.perf_counter()
-    for r in range(a.runs):
+
+    def drive_and_filter(r, smoother=False):
+        # fixed seed per run (the drive's errors: seed r), whatever executes it
         d = simulate_drive(profile, T, dt, imu=TACTICAL, gnss=rx, seed=r, truth=truth)
         init = InitialState(d.initial, position_std_m=(1.0, 1.0, 2.0), velocity_std_m_s=0.1,
                             attitude_std_rad=(0.005, 0.005, 0.02))
-        sol = IntegratedNavigator(cfg, init).run(d.imu, d.gnss, smoother=(r == 0))
-        e = navigation_errors(sol, d.truth)
-        err_end[r] = e.pos_enu_m[k_end, :2]
-        if r == 0:
-            ref_sol = sol
-    print(f"{a.runs} runs in {time.perf_counter() - t0:.1f} s")
+        return d, IntegratedNavigator(cfg, init).run(d.imu, d.gnss, smoother=smoother)
+
+    def one_run(r, _rng):
+        d, sol = drive_and_filter(r)
+        return dict(err=navigation_errors(sol, d.truth).pos_enu_m[k_end, :2])
+
+    t0 = time.perf_counter()
+    c0 = time.process_time()
+    with montecarlo.executor(a.scheduler, a.workers) as ex:
+        err_end = montecarlo.run(one_run, a.runs, executor=ex, progress=a.progress)["err"]
+    print(f"{a.runs} runs in {time.perf_counter() - t0:.1f} s (CPU of this process "
+          f"{time.process_time() - c0:.1f} s)")
+    # run 0 again, keeping the filter's covariance epochs (RTS smoother storage)
+    ref_sol = drive_and_filter(0, smoother=True)[1]
     ep = ref_sol.epochs
     n = ep["n_states"]
     iu = np.triu_indices(n)

@@ -96,6 +96,11 @@ class ArrayGeometry:
         object.__setattr__(self, "theta", t)
         object.__setattr__(self, "_c", c)
 
+    def __reduce__(self):
+        # pickled as its positions and directions (the C struct is rebuilt from them),
+        # so a Monte-Carlo task that captured a geometry can be shipped to a worker process
+        return (ArrayGeometry, (self.u_m, self.theta))
+
     @property
     def n_sensors(self) -> int:
         """Number of accelerometers N."""

@@ -231,9 +231,11 @@ def _reproduce(args) -> int:
     args.out.mkdir(parents=True, exist_ok=True)
     print("Reproduction of Qin, Xu, Li (seed 000), section 2: Monte Carlo of "
           f"{args.runs} runs (assumptions: gfins_fmi/reproduce.py, docs/reproductions/qin.md)")
-    res = R.run_qin(runs=args.runs, seed=args.seed, progress=True,
-                    drift_signs=args.drift_signs,
-                    scenario=R.QinScenario(gravity_m_s2=args.gravity))
+    from gfins_fmi.montecarlo import executor
+    with executor(args.scheduler, args.workers) as ex:
+        res = R.run_qin(runs=args.runs, seed=args.seed, progress=True,
+                        drift_signs=args.drift_signs,
+                        scenario=R.QinScenario(gravity_m_s2=args.gravity), executor=ex)
     table = R.qin_table(res)
     print("\nErrors at t = 60 s\n" + table)
     imp = R.improvement(res)
@@ -269,8 +271,11 @@ def _analyze(args) -> int:
     from gfins_fmi.error_report import write_report
     t0 = time.perf_counter()
     from gfins_fmi.error_report import CONFIGS
+    from gfins_fmi.montecarlo import executor
     configs = args.config or list(CONFIGS)
-    path = write_report(args.out, configs, runs=args.runs, seed=args.seed, progress=not args.quiet)
+    with executor(args.scheduler, args.workers) as ex:
+        path = write_report(args.out, configs, runs=args.runs, seed=args.seed, executor=ex,
+                            progress=not args.quiet)
     print(f"report -> {path} ({time.perf_counter() - t0:.1f} s)")
     return 0
 
@@ -353,6 +358,18 @@ def _solve9(args) -> int:
     np.savetxt(args.output, table, delimiter=",", header=header, comments="", fmt=fmt)
     print(f"{len(sol)} samples solved -> {args.output}; flags: {sol.flag_counts()}")
     return status
+
+
+def executor_arguments(p) -> None:
+    """--scheduler and --workers: where a Monte Carlo runs (gfins_fmi.montecarlo.executor);
+    shared by the commands and the bench studies."""
+    p.add_argument("--scheduler", metavar="ADDRESS", default=None,
+                   help="run the Monte-Carlo runs on a dask.distributed cluster: its "
+                        "scheduler's address, e.g. tcp://10.0.0.5:8786 (needs "
+                        "'gfins_fmi[dask]'; results equal a local run with the same seed)")
+    p.add_argument("--workers", type=_option_count(1), default=None,
+                   help="without --scheduler: threads on this machine (default: one per "
+                        "CPU); with it: wait for this many cluster workers")
 
 
 def _initial_state_args(p) -> None:
@@ -472,6 +489,7 @@ def main(argv: list[str] | None = None) -> int:
                    help="gravity of the fixed frame, m/s^2 (default 9.8; 0: gravity-free)")
     p.add_argument("--out", type=pathlib.Path, default=pathlib.Path("gfins_reproduce"),
                    help="folder for the figure and the table")
+    executor_arguments(p)
     p.set_defaults(func=_reproduce)
 
     p = parsers["analyze"] = sub.add_parser(
@@ -487,6 +505,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--out", type=pathlib.Path, default=pathlib.Path("gfins_analysis"),
                    help="folder for report.md and the figures")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
+    executor_arguments(p)
     p.set_defaults(func=_analyze)
 
     p = parsers["cosim"] = sub.add_parser(
@@ -519,7 +538,7 @@ def main(argv: list[str] | None = None) -> int:
     from gfins_fmi._lib import GfinsError
     try:
         return args.func(args)
-    except (ValueError, TypeError, OSError, GfinsError) as exc:
+    except (ValueError, TypeError, OSError, ImportError, GfinsError) as exc:
         print(f"gfins {args.command}: error: {exc}", file=sys.stderr)
         return 2
 

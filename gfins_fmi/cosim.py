@@ -145,6 +145,9 @@ def vehicle_navigation(navigator: str = "gfnav_qin9", profile=None, *, step_s: f
         Hold the navigator's height at the vehicle's (a ground vehicle): vertical_mode 1.
     """
     from gfins_fmi.vehicle import VehicleProfile
+    if navigator == "ins_gnss":
+        raise ValueError("the integrated navigator needs the aiding sensors: use "
+                         "cosim.vehicle_integrated_navigation(profile, gnss=..., config=...)")
     if navigator not in NAVIGATORS:
         raise ValueError(f"navigator must be one of {sorted(NAVIGATORS)}; got {navigator!r}")
     profile = profile or VehicleProfile.seed001(align_s=60.0)
@@ -543,9 +546,13 @@ class CoSimulation:
         return self.slaves[comp].get(var)
 
     def run(self, stop_s: float | None = None, step_s: float | None = None,
-            progress: bool = False) -> dict:
+            progress: bool = False, points=None) -> dict:
         """Step with a fixed step to ``stop_s`` and record ``system.outputs`` after the
         initialization and after every step.
+
+        ``points`` (s), optional: the communication points instead, starting at the
+        current time; step k goes from points[k] to points[k + 1] (e.g. another master's
+        clock: :func:`gfins_fmi.osp.communication_points`).
 
         Returns
         -------
@@ -561,6 +568,13 @@ class CoSimulation:
         h = self.system.step_s if step_s is None else step_s
         stop = self.system.stop_s if stop_s is None else stop_s
         n = int(round((stop - self.time_s) / h))
+        if points is not None:
+            points = np.asarray(points, dtype=float)
+            if points.ndim != 1 or points.size < 2 or points[0] != self.time_s \
+                    or not np.all(np.diff(points) > 0):
+                raise ValueError(f"points must be increasing communication points (s) from the "
+                                 f"current time {self.time_s!r} s")
+            n = points.size - 1
         # one get call per component, type and row: all its recorded variables together,
         # into one table per group, split into variables at the end
         plan = []   # (component, (vrs, count, type), table, [(name, start, stop)])
@@ -597,10 +611,15 @@ class CoSimulation:
         try:
             record(0)
             for k in range(n):
-                # communication points t0 + k h (computed, not accumulated)
-                self.time_s = t0 + k * h
-                self.step(h)
-                self.time_s = t0 + (k + 1) * h
+                # communication points t0 + k h (computed, not accumulated), or those given
+                if points is None:
+                    self.time_s = t0 + k * h
+                    self.step(h)
+                    self.time_s = t0 + (k + 1) * h
+                else:
+                    self.time_s = points[k]
+                    self.step(points[k + 1] - points[k])
+                    self.time_s = points[k + 1]
                 record(k + 1)
                 done = k + 1
                 if bar and k % 1000 == 999:
@@ -675,9 +694,11 @@ def _fmu_variables(model: str, fmi_version: int) -> dict:
 def write_ssp(system: System, path: str | pathlib.Path, name: str = "VehicleNavigation") -> pathlib.Path:
     """Write ``system`` as an SSP 1.0 file with the FMI 2.0 FMUs (scalar connections).
 
-    The archive holds SystemStructure.ssd (components, connectors, connections, a
-    system-level ParameterBinding, the default experiment), resources/<fmu>.fmu and
-    resources/parameters.ssv (the start values, named ``component.variable``).
+    The archive holds SystemStructure.ssd (components, connectors, connections, the
+    default experiment), resources/<fmu>.fmu and, per component, resources/<component>.ssv
+    (its start values, named by variable) bound to the component by a ParameterBinding —
+    the form both fmpy (through :func:`run_ssp`) and libcosim (which reads no
+    system-level binding; :func:`gfins_fmi.osp.run_libcosim_ssp`) apply.
     Connectors: every connected variable, the recorded outputs and the parameters set.
     """
     ET.register_namespace("ssd", _SSD)
@@ -687,11 +708,8 @@ def write_ssp(system: System, path: str | pathlib.Path, name: str = "VehicleNavi
     root = ET.Element(f"{{{_SSD}}}SystemStructureDescription", version="1.0", name=name)
     sysel = ET.SubElement(root, f"{{{_SSD}}}System", name=name,
                           description="gfins_fmi: vehicle FMU connected to a navigator FMU")
-    ET.SubElement(ET.SubElement(sysel, f"{{{_SSD}}}ParameterBindings"),
-                  f"{{{_SSD}}}ParameterBinding", source="resources/parameters.ssv")
     elements = ET.SubElement(sysel, f"{{{_SSD}}}Elements")
-    pset = ET.Element(f"{{{_SSV}}}ParameterSet", version="1.0", name=f"{name} start values")
-    params_el = ET.SubElement(pset, f"{{{_SSV}}}Parameters")
+    psets = {}
     for comp, (model, _) in system.components.items():
         variables = _fmu_variables(model, 2)
         el = ET.SubElement(elements, f"{{{_SSD}}}Component", name=comp,
@@ -718,12 +736,19 @@ def write_ssp(system: System, path: str | pathlib.Path, name: str = "VehicleNavi
             con = ET.SubElement(conns, f"{{{_SSD}}}Connector", name=cname, kind=kind)
             typ = variables[cname].type
             ET.SubElement(con, f"{{{_SSC}}}{'Integer' if typ == 'Integer' else 'Real'}")
+        if not params:
+            continue
+        ET.SubElement(ET.SubElement(el, f"{{{_SSD}}}ParameterBindings"),
+                      f"{{{_SSD}}}ParameterBinding", source=f"resources/{comp}.ssv")
+        pset = ET.Element(f"{{{_SSV}}}ParameterSet", version="1.0", name=f"{comp} start values")
+        params_el = ET.SubElement(pset, f"{{{_SSV}}}Parameters")
         for pname, value in params.items():
-            p = ET.SubElement(params_el, f"{{{_SSV}}}Parameter", name=f"{comp}.{pname}")
+            p = ET.SubElement(params_el, f"{{{_SSV}}}Parameter", name=pname)
             if variables[pname].type == "Integer":
                 ET.SubElement(p, f"{{{_SSV}}}Integer", value=str(int(value)))
             else:
                 ET.SubElement(p, f"{{{_SSV}}}Real", value=repr(float(value)))
+        psets[comp] = pset
     connections = ET.SubElement(sysel, f"{{{_SSD}}}Connections")
     for c in system.connections:
         for a, b in c.scalars():
@@ -734,7 +759,8 @@ def write_ssp(system: System, path: str | pathlib.Path, name: str = "VehicleNavi
     path.parent.mkdir(parents=True, exist_ok=True)
     with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as z:
         z.writestr("SystemStructure.ssd", ET.tostring(root, encoding="utf-8", xml_declaration=True))
-        z.writestr("resources/parameters.ssv", ET.tostring(pset, encoding="utf-8", xml_declaration=True))
+        for comp, pset in psets.items():
+            z.writestr(f"resources/{comp}.ssv", ET.tostring(pset, encoding="utf-8", xml_declaration=True))
         for model in {m for m, _ in system.components.values()}:
             z.write(fmu_path(model, 2), f"resources/{MODELS[model]}.fmu")
     return path
@@ -743,14 +769,21 @@ def write_ssp(system: System, path: str | pathlib.Path, name: str = "VehicleNavi
 def run_ssp(path: str | pathlib.Path, stop_s: float, step_s: float) -> np.ndarray:
     """Simulate an SSP written by :func:`write_ssp` with fmpy's SSP simulator.
 
-    fmpy applies a parameter set only when handed one, so the archive's
-    resources/parameters.ssv is read and passed. Returns fmpy's structured array: a
-    row per step, recorded *after* the step at ``time`` (so the vehicle's outputs in a
-    row describe ``time + step_s``, a navigator's the sample taken at ``time``).
+    fmpy parses the components' ParameterBindings but applies a parameter set only when
+    handed one: their values are passed as one set named ``component.variable``.
+    Returns fmpy's structured array: a row per step, recorded *after* the step at
+    ``time`` (so the vehicle's outputs in a row describe ``time + step_s``, a
+    navigator's the sample taken at ``time``).
     """
     from fmpy.ssp.simulation import simulate_ssp
-    from fmpy.ssp.ssd import read_ssv
-    params = read_ssv(str(path), resource="resources/parameters.ssv")
+    from fmpy.ssp.ssd import ParameterSet, read_ssd
+    params = ParameterSet(name="start values")
+    for comp in read_ssd(str(path)).system.elements:
+        for binding in comp.parameterBindings:
+            for pset in binding.parameterValues:
+                for p in pset.parameters:
+                    p.name = f"{comp.name}.{p.name}"
+                    params.parameters.append(p)
     return simulate_ssp(str(path), start_time=0.0, stop_time=stop_s, step_size=step_s,
                         parameter_set=params)
 

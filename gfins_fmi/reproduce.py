@@ -106,9 +106,14 @@ class QinResult:
 
 def run_qin(runs: int = 100, seed: int = 2008, scenario: QinScenario = QinScenario(),
             schemes=tuple(SCHEMES), progress: bool = True, decimate: int = 10,
-            drift_signs: str = "random") -> QinResult:
+            drift_signs: str = "random", executor=None) -> QinResult:
     """Monte Carlo of the experiment: every run draws new noise and, with
-    ``drift_signs="random"``, new drift signs (the same for every scheme in a run)."""
+    ``drift_signs="random"``, new drift signs (the same for every scheme in a run).
+
+    Run k draws from its own generator (``gfins_fmi.montecarlo.run``: spawned from
+    ``seed``), so the result does not depend on ``executor`` (default: a thread per CPU;
+    a dask cluster's through ``gfins_fmi.montecarlo.executor``)."""
+    from gfins_fmi import montecarlo as mc
     if drift_signs not in ("random", "equal"):
         raise ValueError("drift_signs must be 'random' or 'equal'")
     if isinstance(runs, bool) or not isinstance(runs, (int, np.integer)) or runs < 1:
@@ -116,35 +121,37 @@ def run_qin(runs: int = 100, seed: int = 2008, scenario: QinScenario = QinScenar
     tr = qin_truth(scenario)
     n = tr["t"].size
     keep = np.arange(0, n, decimate)
-    res = QinResult(tr["t"][keep], runs=runs)
-    rng = np.random.default_rng(seed)
     sigma = np.sqrt(scenario.noise_var_m2_s4)
     geoms = {name: layout(SCHEMES[name][0], scenario.lever_arm_m) for name in schemes}
-    exact = {name: None for name in schemes}
     from gfins_fmi.accel_array import forward_model
-    for name in schemes:
-        exact[name] = forward_model(geoms[name], tr["f"], tr["w"], np.zeros_like(tr["w"]))
-        res.att_deg[name] = np.empty((runs, keep.size, 3))
-        res.pos_m[name] = np.empty((runs, keep.size, 2))
-        res.rate_rms[name] = np.empty((runs, 3))
+    exact = {name: forward_model(geoms[name], tr["f"], tr["w"], np.zeros_like(tr["w"]))
+             for name in schemes}
     x0 = NavState(tr["q"][0], tr["vel"][0], 0.0, 0.0, 0.0, 0.0, tr["pos"][0])
-    iterator = range(runs)
-    if progress:
-        from tqdm import tqdm
-        iterator = tqdm(iterator, desc="Monte Carlo (Qin et al.)", unit="run")
-    for k in iterator:
+    q_keep, pos_keep, w_true = tr["q"][keep], tr["pos"][keep], tr["w"]
+
+    def task(k, rng):
         signs = rng.choice([-1.0, 1.0], size=12) if drift_signs == "random" else np.ones(12)
+        out = {}
         for name in schemes:
             ns = exact[name].shape[1]
             drift = scenario.drift_m_s2 * signs[:ns]   # sensor i of every layout: sign i
             A = exact[name] + drift + rng.normal(0.0, sigma, exact[name].shape)
-            nav = GyroFreeNavigator(geoms[name], x0, SCHEMES[name][1], tr["w"][0],
+            nav = GyroFreeNavigator(geoms[name], x0, SCHEMES[name][1], w_true[0],
                                     accel_noise_m_s2=sigma,
                                     sins=SinsConfig(earth="flat", flat_gravity_m_s2=scenario.gravity_m_s2))
             sol, rates = nav.run(A, scenario.dt_s)
-            res.att_deg[name][k] = np.degrees(attitude_error_rad(sol.q_bn[keep], tr["q"][keep]))
-            res.pos_m[name][k] = (sol.pos_m[keep] - tr["pos"][keep])[:, :2]
-            res.rate_rms[name][k] = np.sqrt(np.mean((rates.omega_rad_s - tr["w"]) ** 2, axis=0))
+            out[f"att {name}"] = np.degrees(attitude_error_rad(sol.q_bn[keep], q_keep))
+            out[f"pos {name}"] = (sol.pos_m[keep] - pos_keep)[:, :2]
+            out[f"rate {name}"] = np.sqrt(np.mean((rates.omega_rad_s - w_true) ** 2, axis=0))
+        return out
+
+    mc_out = mc.run(task, runs, seed=seed, executor=executor, progress=progress,
+                    desc="Monte Carlo (Qin et al.)")
+    res = QinResult(tr["t"][keep], runs=runs)
+    for name in schemes:
+        res.att_deg[name] = mc_out[f"att {name}"]
+        res.pos_m[name] = mc_out[f"pos {name}"]
+        res.rate_rms[name] = mc_out[f"rate {name}"]
     return res
 
 

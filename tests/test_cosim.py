@@ -173,6 +173,24 @@ def test_python_master_equals_direct_pipeline(navigator, version):
     assert np.max(np.abs(nav[1:] - r["vehicle.lat"][:-1, 0])) * 6.4e6 < 0.05
 
 
+@pytest.mark.parametrize("version", [2, 3])
+def test_integrated_navigator_takes_every_gnss_epoch_through_the_master(version):
+    """vehicle_integrated_navigation: the receiver's epochs reach the filter FMU through
+    the master's Int32 (gnss_valid) and Float64 connections in the step whose IMU
+    interval holds them: 5 Hz, 13.7 ms off the samples, 5 s -> 25 epochs, each a position
+    and a velocity update, none stale or rejected; the recorded Int32 outputs are the
+    counts. (tests/test_osp.py compares the same system with libcosim bit for bit.)"""
+    rx = gf.vehicle.GnssReceiver(rate_hz=5.0, offset_s=0.0137, lever_arm_m=(0.3, 1.1, 1.6))
+    system = cosim.vehicle_integrated_navigation(PROFILE, stop_s=5.0, gnss=rx)
+    with cosim.CoSimulation(system, fmi_version=version) as m:
+        m.initialize()
+        r = m.run()
+    assert r["vehicle.gnss_valid"].sum() == 25
+    assert r["navigator.n_updates"][-1, 0] == 50 and r["navigator.n_rejected"][-1, 0] == 0
+    with pytest.raises(ValueError, match="vehicle_integrated_navigation"):
+        cosim.vehicle_navigation("ins_gnss", PROFILE)
+
+
 def test_gauss_seidel_navigator_first_equals_jacobi():
     system = cosim.vehicle_navigation("gfnav_qin9", PROFILE, stop_s=4.0)
     out = []

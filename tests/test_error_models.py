@@ -70,9 +70,15 @@ def test_monte_carlo_results_do_not_depend_on_the_executor():
     a = mc.run(task, 20, seed=5)
     with cf.ThreadPoolExecutor(max_workers=1) as ex:
         b = mc.run(task, 20, seed=5, executor=ex)
-    assert np.array_equal(a["x"], b["x"])
+        c = mc.run(task, 20, seed=5, executor=ex, batch=7)     # 3 jobs of 7, 7, 6 runs
+    assert np.array_equal(a["x"], b["x"]) and np.array_equal(a["x"], c["x"])
+    with mc.executor(workers=3) as ex:                         # --workers 3: threads here
+        assert isinstance(ex, cf.ThreadPoolExecutor) and ex._max_workers == 3
+        assert np.array_equal(a["x"], mc.run(task, 20, seed=5, executor=ex)["x"])
     with pytest.raises(ValueError, match="n_runs must be an integer >= 1"):
         mc.run(task, 0)
+    with pytest.raises(ValueError, match="batch must be an integer >= 1"):
+        mc.run(task, 3, batch=0)
 
 
 @pytest.fixture(scope="module", params=["cube6", "qin9", "12"])

@@ -23,7 +23,7 @@ import numpy as np
 from gfins_fmi.sins import NavState, euler_to_quat
 
 __all__ = ["CoarseAlignment", "coarse_align", "heading_from_gnss", "AlignmentError", "StartingPoint",
-           "align_static_then_gnss"]
+           "align_static_then_gnss", "FineAlignment", "fine_align"]
 
 _OMEGA = 7.292115e-5
 
@@ -225,3 +225,67 @@ def align_static_then_gnss(imu, gnss, static_window_s: tuple, *, min_speed_m_s: 
     q = euler_to_quat(np.array([heading, al.euler_rad[1], al.euler_rad[2]]))
     nav0 = NavState(q, np.zeros(3), lat, lon, h, t1)
     return StartingPoint(nav0, np.array([al.tilt_std_rad, al.tilt_std_rad, hstd]), sensors, al, notes)
+
+
+@dataclass
+class FineAlignment:
+    """Result of :func:`fine_align`: the attitude at the end of the window (q_bn, euler),
+    its 1-sigma (east, north, up tilt/heading, rad), the sensor-bias estimates and their
+    1-sigma, and the filter's solution over the window."""
+    q_bn: np.ndarray
+    euler_rad: np.ndarray
+    attitude_std_rad: np.ndarray
+    sensors: np.ndarray
+    sensor_std: np.ndarray
+    solution: object
+
+
+def fine_align(imu, lat_rad: float, lon_rad: float, h_m: float, *, config, coarse: CoarseAlignment,
+               t0_s: Optional[float] = None, t1_s: Optional[float] = None, rate_hz: float = 10.0,
+               velocity_std_m_s: float = 1e-3, position_std_m: float = 1e-3,
+               heading_std_rad: Optional[float] = None, tilt_std_rad: float = np.radians(0.5),
+               gyro_bias_std_rad_s: Optional[float] = None,
+               accel_bias_std_m_s2: Optional[float] = None) -> FineAlignment:
+    """Fine alignment at rest: the integrated-navigation filter (``config``, e.g. EKF with
+    the IMU's noise model and random-constant biases) started from ``coarse`` and updated
+    with zero velocity and the known position at ``rate_hz`` over the window.
+
+    What it can reach (the physics of a static alignment): the horizontal accelerometer
+    biases are indistinguishable from tilt (level error -> bias / g) and the east gyro bias
+    from heading (heading error -> east bias / (Omega cos L)); the filter's attitude sigma
+    settles at those limits, its estimates of the other biases improve.
+    """
+    from gfins_fmi.estimation.ins_gnss import InitialState, IntegratedNavigator
+    from gfins_fmi.io.records import GnssRecord, ImuRecord
+    t = np.asarray(imu.t_s)
+    t0 = coarse.t_s[1] if t0_s is None else float(t0_s)
+    t1 = t[-1] if t1_s is None else float(t1_s)
+    sel = (t > t0) & (t <= t1)
+    if np.count_nonzero(sel) < 2:
+        raise AlignmentError(f"no IMU samples in the fine-alignment window ({t0}, {t1}] s")
+    if not np.isfinite(coarse.euler_rad[0]) and heading_std_rad is None:
+        raise AlignmentError("the coarse alignment has no heading: give heading_std_rad (and a "
+                             "heading through coarse.euler_rad) or gyrocompass first")
+    tg = np.arange(t0 + 1.0 / rate_hz, t1 + 1e-9, 1.0 / rate_hz)
+    m = len(tg)
+    zero = GnssRecord(t_s=tg, lat_rad=np.full(m, lat_rad), lon_rad=np.full(m, lon_rad),
+                      h_m=np.full(m, h_m), pos_std_m=np.full((m, 3), position_std_m),
+                      vel_enu_m_s=np.zeros((m, 3)), vel_std_m_s=np.full((m, 3), velocity_std_m_s),
+                      source="fine alignment: at rest at a known position")
+    # the coarse attitude errors ARE the biases seen through the same physics (tilt =
+    # -bias/g, heading = -east gyro bias/(W cos L)): starting the filter with the coarse
+    # sigmas as if independent of the bias sigmas would count that information twice and
+    # make it overconfident; it starts instead from a wide attitude sigma (tilt_std_rad,
+    # heading_std_rad) and learns the attitude from the window's data alone
+    nav0 = NavState(euler_to_quat(coarse.euler_rad), np.zeros(3), lat_rad, lon_rad, h_m, t0)
+    hstd = heading_std_rad if heading_std_rad is not None else max(10 * coarse.heading_std_rad, np.radians(1.0))
+    init = InitialState(nav0, position_std_m=max(position_std_m, 1e-3), velocity_std_m_s=0.01,
+                        attitude_std_rad=(tilt_std_rad, tilt_std_rad, hstd),
+                        gyro_bias_std_rad_s=gyro_bias_std_rad_s, accel_bias_std_m_s2=accel_bias_std_m_s2)
+    rec = ImuRecord(t_s=t[sel], gyro=np.asarray(imu.gyro)[sel], accel=np.asarray(imu.accel)[sel],
+                    kind=imu.kind, source=getattr(imu, "source", ""))
+    nav = IntegratedNavigator(config, init)
+    sol = nav.run(rec, zero, gnss_velocity=True)
+    P = nav.covariance
+    return FineAlignment(sol.q_bn[-1].copy(), sol.euler_rad[-1].copy(), sol.std[-1, 6:9].copy(),
+                         sol.sensors[-1].copy(), np.sqrt(np.diag(P)[9:15]), sol)

@@ -97,6 +97,7 @@ gf_status gf_biquad_run(gf_biquad *f, size_t n, const double *x, double *y, size
             return GF_ERR_NONFINITE_INPUT;
         }
         double *yk = y + nc * k;
+        int finite = 1;
         for (size_t c = 0; c < nc; ++c) {
             double v = xk[c];
             for (size_t s = 0; s < ns; ++s) {
@@ -106,9 +107,16 @@ gf_status gf_biquad_run(gf_biquad *f, size_t n, const double *x, double *y, size
                 const double out = q[0] * v + z[0];
                 z[0] = q[1] * v - q[4] * out + z[1];
                 z[1] = q[2] * v - q[5] * out;
+                finite &= isfinite(z[0]) & isfinite(z[1]);
                 v = out;
             }
             yk[c] = v;
+            finite &= isfinite(v);
+        }
+        if (!finite) { /* finite samples so large that the filter overflows (found by fuzzing) */
+            if (n_done)
+                *n_done = k;
+            return GF_ERR_OUT_OF_RANGE;
         }
     }
     if (n_done)

@@ -49,8 +49,10 @@ gf_status gf_biquad_set_state(gf_biquad *filter, const double *z, size_t n_z);
 
 /* Filters n samples of n_channels (x, y: n x n_channels, may be the same array).
  * A non-finite sample stops the run: *n_done = its row, earlier rows are filtered and
- * the state is the state after them. GF_ERR_BAD_SIZE when the filter's sizes are out
- * of range (a corrupted struct): nothing is read or written then. */
+ * the state is the state after them. GF_ERR_OUT_OF_RANGE: finite samples so large that
+ * the output or the state overflowed at row *n_done (earlier rows are filtered; the
+ * state is unusable: set it again, gf_biquad_set_state). GF_ERR_BAD_SIZE when the
+ * filter's sizes are out of range (a corrupted struct): nothing is read or written then. */
 gf_status gf_biquad_run(gf_biquad *filter, size_t n, const double *x, double *y, size_t *n_done);
 
 /* Checks a whole filter struct, e.g. one restored from saved bytes: sizes

@@ -43,7 +43,10 @@ typedef struct gf_earth {
  * zero transport rate). earth_rate_sign multiplies the Earth rate (+1 forward in
  * time, -1 for reverse navigation).
  * Errors: GF_ERR_NONFINITE_INPUT; GF_ERR_BAD_PARAMETER when |lat| >= 90 deg (the
- * ENU frame is singular at the poles) or h is below -a/2 (absurd). */
+ * ENU frame is singular at the poles) or h is below -a/2 or at or above a/3 (absurd:
+ * above a/3 the second-order height expansion of the gravity, NIMA TR8350.2 eq. 4-3,
+ * grows with height); GF_ERR_OUT_OF_RANGE when a finite velocity makes the transport
+ * rate overflow. */
 gf_status gf_earth_update(gf_earth *earth, double lat_rad, double h_m, const double *v_n_m_s,
                           double earth_rate_sign);
 

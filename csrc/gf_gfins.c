@@ -363,6 +363,10 @@ gf_status gf_gfins_init(gf_gfins_state *st, const gf_array_geometry *g, const gf
         if (status != GF_OK)
             return status;
     }
+    /* a finite but absurd noise std (1e308 m/s^2) overflows the covariances: the state
+     * would be refused when restored (found by fuzzing) */
+    if (!gf_all_finite(st->var_omega_dot, 9) || !gf_all_finite(st->R_W, 36))
+        return GF_ERR_BAD_PARAMETER;
     return GF_OK;
 }
 
@@ -523,7 +527,12 @@ static gf_status rate_step(const gf_gfins_state *st, const double *A, double dt,
         array_solve(s, A, r->w, x);
     gf_v3_copy(x, r->f);
     memcpy(r->W, x + 6, sizeof r->W);
-    if (!gf_all_finite(r->w, 3) || !gf_all_finite(r->f, 3))
+    /* every output and the state to commit (found by fuzzing: samples near 1e307 m/s^2
+     * overflowed w_dot and W with GF_OK) */
+    if (!gf_all_finite(r->w, 3) || !gf_all_finite(r->f, 3) || !gf_all_finite(r->wd, 3) ||
+        !gf_all_finite(r->W, 6) || !gf_all_finite(r->ref, 3) ||
+        (st->cfg.strategy == GF_RATE_FUSED &&
+         (!gf_all_finite(r->kf_x, 6) || !gf_all_finite(r->kf_P, 36))))
         return GF_ERR_DIVERGED;
     return GF_OK;
 }

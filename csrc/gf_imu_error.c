@@ -27,8 +27,10 @@ gf_status gf_imu_errors_check(const gf_imu_errors *e, int *bad)
     for (int k = 0; k < 3 && !field; ++k) {
         if (!(fabs(e->g_scale[k]) < 0.5)) field = 1;
         else if (!(fabs(e->a_scale[k]) < 0.5)) field = 3;
-        else if (!(fabs(e->a_k2_s2_m[k]) * 1000.0 < 0.1)) field = 5;
+        else if (!(fabs(e->a_k2_s2_m[k]) * GF_IMU_K2_RANGE_M_S2 < 0.1)) field = 5;
         else if (!(fabs(e->a_lever_m[k]) < 1.0)) field = 6;
+        else if (!(fabs(e->g_bias_rad_s[k]) < GF_IMU_MAX_GYRO_BIAS_RAD_S)) field = 8;
+        else if (!(fabs(e->a_bias_m_s2[k]) < GF_IMU_MAX_ACCEL_BIAS_M_S2)) field = 9;
     }
     for (int k = 0; k < 9 && !field; ++k) {
         const int diag = (k % 4) == 0;
@@ -47,7 +49,7 @@ gf_status gf_imu_errors_check(const gf_imu_errors *e, int *bad)
 
 /* Bias and scale of the three axes at temperature dt = T - T0. Returns 0 when the
  * model is outside its range of validity there (a scale factor not in (-0.5, 0.5), the
- * limit of gf_imu_errors_check, so that 1 + s >= 0.5; or a bias that overflowed). */
+ * limit of gf_imu_errors_check, so that 1 + s >= 0.5; or a bias beyond its limit). */
 static int at_temperature(const gf_imu_errors *e, double dt, double gb[3], double gs[3],
                           double ab[3], double as[3])
 {
@@ -66,7 +68,8 @@ static int at_temperature(const gf_imu_errors *e, double dt, double gb[3], doubl
             as[k] += e->a_scale_tc[3 * j + k] * p;
         }
     for (int k = 0; k < 3; ++k)
-        if (!(fabs(gs[k]) < 0.5) || !(fabs(as[k]) < 0.5) || !isfinite(gb[k]) || !isfinite(ab[k]))
+        if (!(fabs(gs[k]) < 0.5) || !(fabs(as[k]) < 0.5) ||
+            !(fabs(gb[k]) < GF_IMU_MAX_GYRO_BIAS_RAD_S) || !(fabs(ab[k]) < GF_IMU_MAX_ACCEL_BIAS_M_S2))
             return 0;
     return 1;
 }
@@ -134,9 +137,16 @@ gf_status gf_imu_apply(const gf_imu_errors *e, size_t n, const double *w, const 
             wo[i] = (1.0 + gs[i]) * t[i] + gb[i];
         one_plus_n(e->a_misalign_rad, fk, u);
         centripetal(wk, c);
+        int in_range = 1;
         for (int i = 0; i < 3; ++i) {
             const double ui = u[i] - e->a_lever_m[i] * c[i];
+            in_range &= fabs(ui) <= GF_IMU_K2_RANGE_M_S2;
             fo[i] = (1.0 + as[i]) * ui + e->a_k2_s2_m[i] * ui * ui + ab[i];
+        }
+        if (!in_range) {
+            if (n_done)
+                *n_done = k;
+            return GF_ERR_OUT_OF_RANGE;
         }
         if (!gf_all_finite(wo, 3) || !gf_all_finite(fo, 3)) { /* finite inputs, overflow */
             if (n_done)
@@ -185,12 +195,13 @@ gf_status gf_imu_compensate(const gf_imu_errors *e, size_t n, const double *w_ou
              * form without cancellation: u = -2 C / (B + sqrt(B^2 - 4 A C)) */
             const double A = e->a_k2_s2_m[i], B = 1.0 + as[i], C = ab[i] - fo[i];
             const double disc = B * B - 4.0 * A * C;
-            if (!(disc >= 0.0)) {
+            const double ui = -2.0 * C / (B + sqrt(disc));
+            if (!(disc >= 0.0) || !(fabs(ui) <= GF_IMU_K2_RANGE_M_S2)) {
                 if (n_done)
                     *n_done = k;
-                return GF_ERR_OUT_OF_RANGE; /* no real solution: beyond the K2 model */
+                return GF_ERR_OUT_OF_RANGE; /* no real solution, or beyond the K2 range */
             }
-            u[i] = -2.0 * C / (B + sqrt(disc)) + e->a_lever_m[i] * c[i];
+            u[i] = ui + e->a_lever_m[i] * c[i];
         }
         one_plus_n_solve(e->a_misalign_rad, u, fk);
         if (!gf_all_finite(wk, 3) || !gf_all_finite(fk, 3)) { /* finite inputs, overflow */

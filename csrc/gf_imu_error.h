@@ -14,9 +14,13 @@
  * dT = T - T0:  b(T) = b + sum_k c_k dT^(k+1)  (k < order), the same for s.
  * Range of validity: the model holds where every scale factor at the sample's
  * temperature stays in (-0.5, 0.5) (the limit gf_imu_errors_check puts on s at T0) and
- * the biases are finite. Beyond it 1 + s(T) may reach 0 and the compensation would
- * divide by it: both gf_imu_apply and gf_imu_compensate stop with GF_ERR_OUT_OF_RANGE
- * at such a sample, as they do when a result would overflow.
+ * the biases within their limits (GF_IMU_MAX_*_BIAS), and where the specific force u_i
+ * along each axis is within GF_IMU_K2_RANGE_M_S2 (where gf_imu_errors_check bounds
+ * |K2 u| < 0.1, so that a_i(u_i) is monotonic and the compensation's root unique;
+ * beyond it the quadratic folds back and apply has no inverse: found by fuzzing).
+ * Beyond it 1 + s(T) may reach 0 and the compensation would divide by it: both
+ * gf_imu_apply and gf_imu_compensate stop with GF_ERR_OUT_OF_RANGE at such a sample, as
+ * they do when a result would overflow.
  * Units: SI (rad/s, m/s^2, m, K or degC differences); the Python layer converts from
  * datasheet units.
  */
@@ -33,6 +37,12 @@ extern "C" {
 
 /* CDEF BEGIN */
 #define GF_IMU_TEMP_ORDER_MAX 4
+/* Bias limits (at every temperature): the navigators' absurd-sample limits
+ * (GF9_MAX_RATE_RAD_S, GF9_MAX_SPECIFIC_FORCE_M_S2); a larger bias swamps the signal, and
+ * one near 1e308 left compensate(apply(w)) far from w (found by fuzzing). */
+#define GF_IMU_MAX_GYRO_BIAS_RAD_S 50
+#define GF_IMU_MAX_ACCEL_BIAS_M_S2 1000
+#define GF_IMU_K2_RANGE_M_S2 1000
 
 typedef struct gf_imu_errors {
     double g_scale[3];                          /* s_g (1 = 100%) */
@@ -54,7 +64,8 @@ typedef struct gf_imu_errors {
 /* Checks a parameter set. Errors: GF_ERR_NONFINITE_INPUT; GF_ERR_BAD_PARAMETER with
  * *bad_field (may be NULL): 1 gyro scale (|s| >= 0.5), 2 gyro misalignment (|N| >= 0.1
  * rad or non-zero diagonal), 3 accel scale, 4 accel misalignment, 5 K2 (|K2 f| >= 0.1
- * at 1000 m/s^2), 6 lever arm (|r| >= 1 m), 7 temperature order. */
+ * at GF_IMU_K2_RANGE_M_S2), 6 lever arm (|r| >= 1 m), 7 temperature order, 8 gyro bias (|b| >=
+ * GF_IMU_MAX_GYRO_BIAS_RAD_S), 9 accel bias (|b| >= GF_IMU_MAX_ACCEL_BIAS_M_S2). */
 gf_status gf_imu_errors_check(const gf_imu_errors *e, int *bad_field);
 
 /* Simulation: true rates w (n x 3, rad/s) and specific force f (n x 3, m/s^2) -> sensor

@@ -135,12 +135,17 @@ static void lowpass(gf_rng *r, double y[3], double std, double a, int first)
 gf_status gf_imu_noise_run(gf_imu_noise_state *state, size_t n, double dt_s, double *gyro_rad_s,
                            double *accel_m_s2)
 {
+    gf_imu_noise_state *const out_state = state;
     if (!state || (n && (!gyro_rad_s || !accel_m_s2)))
         return GF_ERR_NULL_POINTER;
     if (!(dt_s > 0.0) || !isfinite(dt_s))
         return GF_ERR_BAD_TIME;
     if (params_bad_field(&state->p) >= 0) /* a state handed in corrupted */
         return GF_ERR_BAD_PARAMETER;
+    /* on a copy, committed when every sample is finite: absurd but finite parameters
+     * (stds near 1e300, dt near 1e-300) overflow, found by fuzzing */
+    gf_imu_noise_state work = *state;
+    state = &work;
     const gf_imu_noise *p = &state->p;
     gf_rng *r = &state->rng;
     const double g_white = p->gyro_arw_rad_sqrt_s / sqrt(dt_s);
@@ -165,8 +170,11 @@ gf_status gf_imu_noise_run(gf_imu_noise_state *state, size_t n, double dt_s, dou
             const double aw = a_white > 0.0 ? a_white * normal(r) : 0.0;
             gyro_rad_s[3 * k + i] = gw + state->gyro_gm[i] + state->gyro_rw[i] + state->gyro_band[i];
             accel_m_s2[3 * k + i] = aw + state->accel_gm[i] + state->accel_rw[i] + state->accel_band[i];
+            if (!isfinite(gyro_rad_s[3 * k + i]) || !isfinite(accel_m_s2[3 * k + i]))
+                return GF_ERR_OUT_OF_RANGE;
         }
     }
+    *out_state = work;
     return GF_OK;
 }
 

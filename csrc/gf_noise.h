@@ -70,7 +70,8 @@ gf_status gf_imu_noise_init(gf_imu_noise_state *state, const gf_imu_noise *param
 /* n samples of noise for sampling interval dt_s: gyro (n x 3, rad/s) and accel (n x 3,
  * m/s^2) to add to the sensor rates. Errors: GF_ERR_BAD_TIME (dt <= 0),
  * GF_ERR_BAD_PARAMETER (the state's parameters fail gf_imu_noise_init's checks: a
- * corrupted state). */
+ * corrupted state), GF_ERR_OUT_OF_RANGE (parameters so large for this dt that the noise
+ * overflows); the state is unchanged on error. */
 gf_status gf_imu_noise_run(gf_imu_noise_state *state, size_t n, double dt_s, double *gyro_rad_s,
                            double *accel_m_s2);
 /* CDEF END */

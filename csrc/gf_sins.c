@@ -31,6 +31,7 @@ static int config_is_valid(const gf_sins_config *c)
            (c->earth == GF_SINS_EARTH_WGS84 || c->earth == GF_SINS_EARTH_FLAT) &&
            c->flat_gravity_m_s2 >= 0.0 && isfinite(c->flat_gravity_m_s2) &&
            isfinite(c->hold_height_m) && c->hold_height_m > -0.5 * GF_WGS84_A_M &&
+           c->hold_height_m < GF_WGS84_A_M / 3.0 && /* gf_earth's range */
            c->baro_tau_s > 0.0 && isfinite(c->baro_tau_s) &&
            c->max_rate_rad_s > 0.0 && isfinite(c->max_rate_rad_s) &&
            c->max_specific_force_m_s2 > 0.0 && isfinite(c->max_specific_force_m_s2);
@@ -43,6 +44,23 @@ static void quat_axis(int axis, double angle_rad, double q[4])
     q[0] = cos(0.5 * angle_rad);
     q[1] = q[2] = q[3] = 0.0;
     q[1 + axis] = sin(0.5 * angle_rad);
+}
+
+/* A caller's attitude quaternion made unit: the norm of a tiny one (components near
+ * 1e-160, whose squares are denormal) is inexact, so the result is normalised again
+ * and must then be unit to round-off (found by fuzzing: gf_sins_set_navigation stored
+ * |q| - 1 = 7e-5 and the state was refused by gf_sins_state_check). 0: not
+ * normalisable. */
+static int q_normalize_given(const double q_in[4], double q[4])
+{
+    for (int pass = 0; pass < 2; ++pass) {
+        if (!gf_q_normalize(pass ? q : q_in, q))
+            return 0;
+        const double n2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
+        if (fabs(n2 - 1.0) <= 1e-12)
+            return 1;
+    }
+    return 0;
 }
 
 gf_status gf_euler_to_quat(const double *euler_rad, double *q_bn)
@@ -143,7 +161,7 @@ gf_status gf_sins_init(gf_sins_state *state, const gf_sins_config *cfg, const do
     if (st != GF_OK)
         return st;
     double q[4];
-    if (!gf_q_normalize(q_bn, q))
+    if (!q_normalize_given(q_bn, q))
         return GF_ERR_BAD_PARAMETER;
     memset(state, 0, sizeof *state);
     state->cfg = *cfg;
@@ -195,12 +213,16 @@ gf_status gf_sins_set_navigation(gf_sins_state *state, const double *q_bn,
     if (!gf_all_finite(q_bn, 4) || !gf_v3_isfinite(v_n_m_s) || !isfinite(lat_rad) ||
         !isfinite(lon_rad) || !isfinite(h_m))
         return GF_ERR_NONFINITE_INPUT;
+    /* the latitude limit of gf_sins_init and gf_sins_state_check (found by fuzzing: a
+     * latitude between it and 90 deg was stored, and the state refused on restore) */
+    if (state->cfg.earth == GF_SINS_EARTH_WGS84 && !(fabs(lat_rad) < GF_SINS_LAT_LIMIT_RAD))
+        return GF_ERR_BAD_PARAMETER;
     gf_earth e;
     const gf_status st = gf_earth_update(&e, lat_rad, h_m, NULL, 1.0);
     if (st != GF_OK)
         return st;
     double q[4];
-    if (!gf_q_normalize(q_bn, q))
+    if (!q_normalize_given(q_bn, q))
         return GF_ERR_BAD_PARAMETER;
     memcpy(state->q_bn, q, sizeof q);
     gf_v3_copy(v_n_m_s, state->v_n_m_s);
@@ -349,12 +371,16 @@ static gf_status sins_update(gf_sins_state *s, const double gyro[3], const doubl
         v_new[2] -= cfg->flat_gravity_m_s2 * T;
         q_from_rotvec_fast(phi, qb);
         gf_q_mul(s->q_bn, qb, q);
-        if (!gf_q_normalize(q, q) || !v3_finite(v_new))
-            return GF_ERR_DIVERGED;
+        double pos_new[3], a_new[3];
         for (int i = 0; i < 3; ++i) {
-            s->flat_pos_m[i] += 0.5 * T * (s->v_n_m_s[i] + v_new[i]);
-            s->a_n_m_s2[i] = (v_new[i] - s->v_n_m_s[i]) / T;
+            pos_new[i] = s->flat_pos_m[i] + 0.5 * T * (s->v_n_m_s[i] + v_new[i]);
+            a_new[i] = (v_new[i] - s->v_n_m_s[i]) / T;
         }
+        /* finite but absurd velocities can overflow the position (found by fuzzing) */
+        if (!gf_q_normalize(q, q) || !v3_finite(v_new) || !v3_finite(pos_new) || !v3_finite(a_new))
+            return GF_ERR_DIVERGED;
+        gf_v3_copy(pos_new, s->flat_pos_m);
+        gf_v3_copy(a_new, s->a_n_m_s2);
         memcpy(s->q_bn, q, sizeof q);
         gf_v3_copy(v_new, s->v_n_m_s);
         finish_update(s, gyro, accel, T);
@@ -427,7 +453,7 @@ static gf_status sins_update(gf_sins_state *s, const double gyro[3], const doubl
     const double lat_new = s->lat_rad + T * vN / (e.R_M_m + h_mid);
     double lon_new = s->lon_rad + T * vE / ((e.R_N_m + h_mid) * e.cos_lat);
     if (!(fabs(lat_new) < GF_SINS_LAT_LIMIT_RAD) || !(h_new > -0.5 * GF_WGS84_A_M) ||
-        !v3_finite(v_new) || !isfinite(lon_new))
+        !isfinite(h_new) || !v3_finite(v_new) || !isfinite(lon_new))
         return GF_ERR_DIVERGED;
     if (lon_new > GF_PI)
         lon_new -= 2.0 * GF_PI;
@@ -456,10 +482,14 @@ static gf_status sins_update(gf_sins_state *s, const double gyro[3], const doubl
         return GF_ERR_DIVERGED;
     }
 
-    /* commit */
+    /* commit (the acceleration checked first: finite but absurd velocities overflow it) */
     const double invT = 1.0 / T;
+    double a_new[3];
     for (int i = 0; i < 3; ++i)
-        s->a_n_m_s2[i] = (v_new[i] - s->v_n_m_s[i]) * invT;
+        a_new[i] = (v_new[i] - s->v_n_m_s[i]) * invT;
+    if (!v3_finite(a_new))
+        return GF_ERR_DIVERGED;
+    gf_v3_copy(a_new, s->a_n_m_s2);
     memcpy(s->q_bn, q, sizeof q);
     gf_v3_copy(v_new, s->v_n_m_s);
     s->lat_rad = lat_new;
@@ -477,7 +507,18 @@ static gf_status sins_update(gf_sins_state *s, const double gyro[3], const doubl
             s->cos_lat = cos(lat_new);
         }
     }
-    s->R_M_m = e.R_M_m; /* at the mid point: within 1e-9 relative of R_M(lat_new) */
+    /* R_M at the mid point is within 1e-9 relative of R_M(lat_new) for the usual half
+     * step (|d| ~ 1e-7 rad; |dR_M / dL| <= 0.01 R_M); a half step beyond 1e-5 rad (64 m:
+     * a long interval or a fast vehicle) takes R_M at lat_new, so that the state stays
+     * within gf_sins_state_check's 1e-6 (found by fuzzing: a GF_OK step at 1e5 m/s left
+     * R_M 4.4e-6 off and the state was refused on restore) */
+    if (fabs(lat_new - lat_mid) < 1e-5) {
+        s->R_M_m = e.R_M_m;
+    } else {
+        gf_earth e_new;
+        gf_earth_from_sincos(&e_new, s->sin_lat, s->cos_lat, h_new, NULL, 1.0);
+        s->R_M_m = e_new.R_M_m;
+    }
     s->baro_accel_m_s2 = b_new;
     finish_update(s, gyro, accel, T);
     return GF_OK;

@@ -154,8 +154,9 @@ gf_status gf_sins_set_flat_position(gf_sins_state *state, const double *pos_m);
  * of the latitude, the meridian radius); configuration, time, the previous-sample
  * memory and the mid-point acceleration are kept. For filters that correct the
  * mechanization (closed-loop feedback). Errors: GF_ERR_NONFINITE_INPUT;
- * GF_ERR_BAD_PARAMETER (|lat| >= 90 deg, quaternion not normalisable, height below
- * -a/2); the state is unchanged on error. */
+ * GF_ERR_BAD_PARAMETER (|lat| at or beyond the latitude limit with EARTH_WGS84,
+ * quaternion not normalisable, height outside gf_earth's range); the state is unchanged
+ * on error. */
 gf_status gf_sins_set_navigation(gf_sins_state *state, const double *q_bn,
                                  const double *v_n_m_s, double lat_rad, double lon_rad,
                                  double h_m);

@@ -31,7 +31,9 @@ _FIELDS = {1: "gyro_scale_ppm (|s| < 0.5 = 500000 ppm)",
            4: "accel_misalignment_arcsec (|N| < 20626 arcsec, zero diagonal)",
            5: "accel_k2_ug_g2 (|K2| * 1000 m/s^2 < 0.1)",
            6: "lever_arm_cm (|r| < 100 cm)",
-           7: "temperature order (at most 4 coefficients)"}
+           7: "temperature order (at most 4 coefficients)",
+           8: "gyro_bias_deg_h (|b| < 50 rad/s = 1.03e10 deg/h)",
+           9: "accel_bias_ug (|b| < 1000 m/s^2 = 1.02e8 ug)"}
 
 
 def _vec(name, value, shape):

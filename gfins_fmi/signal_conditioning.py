@@ -9,7 +9,8 @@ import pathlib
 
 import numpy as np
 
-from gfins_fmi._lib import NonFiniteInputError, as_positive_scalar, ffi, first_nonfinite, lib, ptr
+from gfins_fmi._lib import (NonFiniteInputError, SampleError, as_positive_scalar, ffi, first_nonfinite,
+                            lib, ptr)
 
 __all__ = ["design_cheby2", "BiquadFilter", "recommend_cutoff", "plot_spectrum"]
 
@@ -107,6 +108,12 @@ class BiquadFilter:
         y = np.empty_like(arr)
         done = ffi.new("size_t *")
         status = lib.gf_biquad_run(self._c, arr.shape[0], ptr(arr, arr.size), ptr(y, y.size), done)
+        if status == lib.GF_ERR_OUT_OF_RANGE:
+            k = int(done[0])
+            raise SampleError(f"x[{k}] = {arr[k].tolist()} overflows the filter (its output or "
+                              "state is beyond the double range): scale the record down; rows "
+                              "before it were filtered (see .partial)", int(status), k,
+                              y[:k, 0].copy() if one_d else y[:k].copy())
         if status != lib.GF_OK:
             k = int(done[0])
             col = first_nonfinite(arr, k)

@@ -272,22 +272,27 @@ class _Record:
         if not path.is_file():
             raise FileNotFoundError(f"{path}: no such file (a {cls.__name__} CSV was expected)")
         source, header_line, names = "", None, None
-        with open(path, encoding="utf-8") as f:
-            for i, line in enumerate(f):
-                text = line.strip()
-                if text.startswith("#"):
-                    body = text[1:].strip()
-                    if body.startswith("gfins_fmi "):
-                        kind = body.split()[1] if len(body.split()) > 1 else ""
-                        if kind != cls.__name__:
-                            raise FileFormatError(path, i + 1, f"the file holds a {kind}: read it "
-                                                  f"with {kind}.from_csv")
-                    elif body.startswith("source:"):
-                        source = body[len("source:"):].strip()
-                    continue
-                if text:
-                    header_line, names = i + 1, tuple(n.strip() for n in text.split(","))
-                    break
+        try:
+            with open(path, encoding="utf-8") as f:
+                lines = f.readlines()
+        except UnicodeDecodeError as exc:   # found by fuzzing: it escaped as is
+            raise FileFormatError(path, None, f"not a text file: a {cls.__name__} CSV is "
+                                  f"UTF-8 text ({exc.reason} at byte {exc.start})") from exc
+        for i, line in enumerate(lines):
+            text = line.strip()
+            if text.startswith("#"):
+                body = text[1:].strip()
+                if body.startswith("gfins_fmi "):
+                    kind = body.split()[1] if len(body.split()) > 1 else ""
+                    if kind != cls.__name__:
+                        raise FileFormatError(path, i + 1, f"the file holds a {kind}: read it "
+                                              f"with {kind}.from_csv")
+                elif body.startswith("source:"):
+                    source = body[len("source:"):].strip()
+                continue
+            if text:
+                header_line, names = i + 1, tuple(n.strip() for n in text.split(","))
+                break
         layouts = cls._csv_layouts()
         if names is None:
             raise FileFormatError(path, None, f"the file is empty: a {cls.__name__} CSV starts "

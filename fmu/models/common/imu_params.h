@@ -21,7 +21,8 @@ static inline const char *fmu_imu_errors_build(const FmuImuParams *p, gf_imu_err
     static const char *const field_names[] = {"a non-finite value", "gyro_scale (|s| < 0.5)",
         "gyro_misalign (|N| < 0.1 rad, zero diagonal)", "accel_scale (|s| < 0.5)",
         "accel_misalign (|N| < 0.1 rad, zero diagonal)", "accel_k2 (|K2| * 1000 m/s2 < 0.1)",
-        "lever_arm (|r| < 1 m)", "temperature order"};
+        "lever_arm (|r| < 1 m)", "temperature order", "gyro_bias (|b| < 50 rad/s)",
+        "accel_bias (|b| < 1000 m/s2)"};
     memset(e, 0, sizeof *e);
     memcpy(e->g_bias_rad_s, p->gyro_bias_rad_s, sizeof e->g_bias_rad_s);
     memcpy(e->g_scale, p->gyro_scale, sizeof e->g_scale);
@@ -33,7 +34,7 @@ static inline const char *fmu_imu_errors_build(const FmuImuParams *p, gf_imu_err
     memcpy(e->a_lever_m, p->lever_arm_m, sizeof e->a_lever_m);
     int bad = 0;
     if (gf_imu_errors_check(e, &bad) != GF_OK)
-        return field_names[bad >= 0 && bad <= 7 ? bad : 0];
+        return field_names[bad >= 0 && bad <= 9 ? bad : 0];
     return NULL;
 }
 

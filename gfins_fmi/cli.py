@@ -664,6 +664,11 @@ def main(argv: list[str] | None = None) -> int:
     except (ValueError, TypeError, OSError, GfinsError) as exc:
         print(f"gfins {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        # the record commands write beside the output's name and rename when complete
+        kept = f"; {args.output} left as it was" if getattr(args, "output", None) else ""
+        print(f"gfins {args.command}: interrupted{kept}", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":

@@ -16,7 +16,7 @@ import numpy as np
 
 from gfins_fmi.io.errors import FileFormatError, RecordError
 
-__all__ = ["read_table", "record_errors_at_lines", "diagnose"]
+__all__ = ["read_table", "record_errors_at_lines", "diagnose", "data_lines", "is_number"]
 
 
 def _split(line: str, delimiter: str | None) -> list[str]:
@@ -31,7 +31,7 @@ def is_number(text: str) -> bool:
     return True
 
 
-def _data_lines(lines: Iterable[str], comment: str | None, skip: int) -> Iterator[int]:
+def data_lines(lines: Iterable[str], comment: str | None, skip: int) -> Iterator[int]:
     """0-based indices (in ``lines``) of the data lines, as loadtxt counts them."""
     for i, line in enumerate(lines):
         if i < skip:
@@ -137,7 +137,7 @@ def read_table(path, n_columns: Sequence[int], what: str, *, delimiter: str | No
         raise diagnose(path, file_lines(), delimiter, comment, skip_lines, n_columns, what) from exc
 
     def line_of(row: int) -> int:
-        return next(itertools.islice(_data_lines(file_lines(), comment, skip_lines), row, None)) + 1
+        return next(itertools.islice(data_lines(file_lines(), comment, skip_lines), row, None)) + 1
 
     if table.shape[0] == 0:
         raise FileFormatError(path, None, f"no data lines: the file is empty (a {what} file "

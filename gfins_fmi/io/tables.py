@@ -71,6 +71,14 @@ def table_format(path) -> str:
     return "csv"
 
 
+def _format(path, format: str | None) -> str:
+    if format is None:
+        return table_format(path)
+    if format not in FORMATS:
+        raise ValueError(f"format must be one of {FORMATS}; got {format!r}")
+    return format
+
+
 def _chunk_rows(value) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
         raise ValueError(f"chunk_rows must be an integer >= 1; got {value!r}")
@@ -117,8 +125,8 @@ class _TextSource:
                 break
         if first is None:
             if names is not None:
-                raise FileFormatError(path, None, f"a header line ({','.join(names)}) and no data: "
-                                      f"a {what} holds at least one row")
+                raise FileFormatError(path, None, f"no data lines after the header line "
+                                      f"({','.join(names)}): a {what} holds at least one row")
             raise FileFormatError(path, None, f"no data lines: the file is empty (a {what} holds "
                                   "one row of numbers per line)")
         self.names, self.n_columns = names, len(first)
@@ -363,6 +371,8 @@ class TableReader:
     header_hint : str
         The end of the message when the first data line of a text file holds text
         (default: how to read it with this class).
+    format : {"csv", "npz", "parquet"}, optional
+        The format, whatever the file's name (default: from the name).
 
     Attributes
     ----------
@@ -381,12 +391,12 @@ class TableReader:
     """
 
     def __init__(self, path, *, header: bool = False, chunk_rows: int = DEFAULT_CHUNK_ROWS,
-                 what: str = "table", header_hint: str | None = None):
+                 what: str = "table", header_hint: str | None = None, format: str | None = None):
         self.path = pathlib.Path(path)
         self.chunk_rows = _chunk_rows(chunk_rows)
         if not self.path.is_file():
             raise FileNotFoundError(f"{self.path}: no such file (a {what} file was expected)")
-        self.format = table_format(self.path)
+        self.format = _format(self.path, format)
         if self.format == "csv":
             hint = header_hint or "if it is a line of column names, read it with header=True"
             self._src = _TextSource(self.path, header, what, hint)
@@ -571,6 +581,8 @@ class TableWriter:
     comments : sequence of str
         CSV: ``# `` lines before the header (one line each); Parquet: the file's
         metadata ``gfins_fmi.comments``; npz: not kept.
+    format : {"csv", "npz", "parquet"}, optional
+        The format, whatever the file's name (default: from the name).
 
     Use as a context manager: leaving the block without :meth:`commit` (an exception,
     Ctrl-C) deletes the temporary file and leaves the destination as it was::
@@ -582,7 +594,7 @@ class TableWriter:
     """
 
     def __init__(self, path, names: Sequence[str], dtypes: Sequence | None = None, *,
-                 comments: Sequence[str] = ()):
+                 comments: Sequence[str] = (), format: str | None = None):
         self.path = pathlib.Path(path)
         self.names = tuple(names)
         if not self.names or not all(isinstance(n, str) and n and n.replace("_", "a").isalnum()
@@ -593,7 +605,7 @@ class TableWriter:
         if len(self.dtypes) != len(self.names) or any(d.kind not in "iuf" for d in self.dtypes):
             raise ValueError(f"dtypes must give a numeric type per column ({len(self.names)}); "
                              f"got {dtypes!r}")
-        self.format = table_format(self.path)
+        self.format = _format(self.path, format)
         if self.path.is_dir():
             raise IsADirectoryError(f"{self.path} is a folder: give a file name for the output")
         self._tmp = _temp_beside(self.path)

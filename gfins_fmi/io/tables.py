@@ -26,10 +26,10 @@ anything else
     the same float64 (``0.1``, ``1e-7``, ``0.00002201446582700049``), so every value
     round-trips bit for bit.
 
-CSV parsing and formatting are polars' (Rust: its float formatter is Ryu): about
-65 ns a value to read and 50-70 ns to write on one core of the development machine,
-where numpy's ``loadtxt`` takes 300 ns and ``savetxt`` about 1 us (docs/benchmarks.md,
-"Record I/O"). When polars refuses a block of lines, the block is scanned in Python to
+CSV parsing and formatting are polars' (Rust; shortest round-trip digits): 70-100 ns
+a value to read and 45-70 ns to write on one core of the development machine, where
+numpy's ``loadtxt`` takes 300 ns and ``savetxt`` 900 ns (docs/io.md, "Why polars";
+docs/benchmarks.md, "Record I/O"). When polars refuses a block of lines, the block is scanned in Python to
 name the line at fault (:func:`gfins_fmi.io._text.diagnose`).
 """
 from __future__ import annotations

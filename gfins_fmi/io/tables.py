@@ -137,9 +137,9 @@ class _TextSource:
         self.position = 0
 
     def batches(self) -> Iterator[list[np.ndarray]]:
-        line, rows, rest = self._skip, 0, b""
+        offset, rows, rest = self._offset, 0, b""
         with open(self.path, "rb") as f:
-            f.seek(self._offset)
+            f.seek(offset)
             while True:
                 buf = f.read(_TEXT_BLOCK_BYTES)
                 data = rest + buf if rest else buf
@@ -152,17 +152,17 @@ class _TextSource:
                 else:
                     block, rest = data, b""
                 if block:
-                    cols = self._parse(block, line, rows)
-                    self.position = f.tell() - len(rest)
-                    line += block.count(b"\n")
+                    cols = self._parse(block, offset, rows)
+                    self.position = offset = f.tell() - len(rest)
                     if len(cols[0]):
                         rows += len(cols[0])
                         yield cols
                 if not buf:
                     break
 
-    def _parse(self, block: bytes, line: int, rows: int) -> list[np.ndarray]:
-        """The columns of a block of whole lines, the first of them line ``line + 1``."""
+    def _parse(self, block: bytes, offset: int, rows: int) -> list[np.ndarray]:
+        """The columns of a block of whole lines that starts at byte ``offset`` of the
+        file, its first data line row ``rows`` of the table."""
         import polars as pl
         k = self.n_columns
         text = block.translate(None, b" \t") if (b" " in block or b"\t" in block) else block
@@ -170,7 +170,7 @@ class _TextSource:
             df = pl.read_csv(text, has_header=False, schema=self._schema(), comment_prefix="#",
                              quote_char=None)
         except pl.exceptions.PolarsError as exc:
-            err = self._diagnose(block, line, rows)
+            err = self._diagnose(block, offset, rows)
             if err.line is None and not any(_data(x) for x in block.split(b"\n")):
                 return [np.empty(0)] * k          # comments and blank lines only
             raise (err if err.line is not None else FileFormatError(
@@ -180,7 +180,7 @@ class _TextSource:
             # leaves a null in a row with numbers (refused)
             blank = df.select(pl.all_horizontal(pl.all().is_null())).to_series()
             if k > 1 and (df.null_count().sum_horizontal().item() > k * int(blank.sum())):
-                raise self._diagnose(block, line, rows)
+                raise self._diagnose(block, offset, rows)
             df = df.filter(~blank)
         return [s.to_numpy() for s in df.get_columns()]
 
@@ -188,7 +188,13 @@ class _TextSource:
         import polars as pl
         return {f"c{j}": pl.Float64 for j in range(self.n_columns)}
 
-    def _diagnose(self, block: bytes, line: int, rows: int) -> FileFormatError:
+    def _diagnose(self, block: bytes, offset: int, rows: int) -> FileFormatError:
+        """The line at fault in a refused block (the lines before it are counted only
+        now: a good file is never scanned in Python)."""
+        line = 0
+        with open(self.path, "rb") as f:
+            while f.tell() < offset:
+                line += f.read(min(_TEXT_BLOCK_BYTES, offset - f.tell())).count(b"\n")
         lines = block.decode("utf-8", errors="replace").split("\n")
         # comment lines of another width are comments; one of k fields is a row to polars
         k = self.n_columns
@@ -227,7 +233,8 @@ class _ParquetSource:
     def __init__(self, path: pathlib.Path, chunk_rows: int):
         pa, pq = _pyarrow()
         try:
-            self._pf = pq.ParquetFile(path)
+            # no pre-buffering: it reads the whole file ahead (memory = file size)
+            self._pf = pq.ParquetFile(path, pre_buffer=False)
         except (pa.ArrowInvalid, OSError) as exc:
             raise FileFormatError(path, None, f"not a Parquet file ({exc})") from None
         schema = self._pf.schema_arrow
@@ -246,7 +253,7 @@ class _ParquetSource:
     def batches(self) -> Iterator[list[np.ndarray]]:
         rows = 0
         try:
-            for batch in self._pf.iter_batches(batch_size=self.chunk_rows):
+            for batch in self._pf.iter_batches(batch_size=self.chunk_rows, use_threads=False):
                 cols = []
                 for name, col in zip(self.names, batch.columns):
                     if col.null_count:

@@ -197,6 +197,8 @@ def _stream(args, reader, names, dtypes, solve, verb: str) -> tuple[int, int]:
             writer.write(cols)
             bar.update(reader.position - bar.n)
             bar.set_postfix_str(f"{writer.rows} samples")
+        else:
+            bar.update(reader.size - bar.n)     # trailing comment lines, if any
         if status and writer.rows == 0:
             kept = "left as it was" if args.output.exists() else "not written"
             print(f"error: {error}; no sample was {verb}: {args.output} {kept}", file=sys.stderr)

@@ -22,7 +22,6 @@ import subprocess
 import sys
 import time
 import warnings
-import zipfile
 
 import numpy as np
 import pytest

@@ -184,7 +184,7 @@ def _stream(args, reader, names, dtypes, solve, verb: str) -> tuple[int, int]:
     """
     from gfins_fmi.io.tables import TableWriter
     status, error = 0, None
-    with reader, TableWriter(args.output, names, dtypes) as writer, \
+    with reader, TableWriter(args.output, names, dtypes, rows=reader.n_rows) as writer, \
             _progress(args, reader, verb) as bar:
         for start, block in reader:
             try:

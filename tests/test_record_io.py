@@ -22,6 +22,7 @@ import subprocess
 import sys
 import time
 import warnings
+import zipfile
 
 import numpy as np
 import pytest
@@ -110,6 +111,33 @@ def test_tables_round_trip_bit_for_bit_in_chunks(fmt, values, tmp_path):
     assert np.array_equal(got[:, 4], flags)
     assert r.position == r.size                               # progress reaches its total
     assert [p.name for p in tmp_path.iterdir()] == [path.name]  # no temporary file left
+
+
+@pytest.mark.parametrize("planned", [None, 1000, 700, 1300])
+def test_npz_written_in_place_or_through_side_files(planned, values, tmp_path):
+    """With the row count known (a binary input) the npz columns are written in place
+    and the zip headers at the end; a count that turns out different (a partial output,
+    or more rows) falls back to side files. Either way zipfile finds every CRC right
+    and numpy reads the columns back bit for bit."""
+    path = tmp_path / "t.npz"
+    flags = np.arange(1000, dtype=np.uint8)
+    with TableWriter(path, ["a_s", "b", "c", "d", "flags"], [np.float64] * 4 + [np.uint8],
+                     rows=planned) as w:
+        for lo in range(0, 1000, 300):
+            w.write([values[lo:lo + 300, j] for j in range(4)] + [flags[lo:lo + 300]])
+        # side files from the start without a count, from the 701st row with 700; none
+        # yet with 1000 or 1300 (the short one is moved to side files at commit)
+        side = list(tmp_path.glob("*.partial.d"))
+        assert (side != []) == (planned is None or planned < 1000), side
+        w.commit()
+    with zipfile.ZipFile(path) as z:
+        assert z.testzip() is None and z.namelist() == ["a_s.npy", "b.npy", "c.npy", "d.npy",
+                                                        "flags.npy"]
+    with np.load(path) as z:
+        assert np.array_equal(np.column_stack([z["a_s"], z["b"], z["c"], z["d"]]), values,
+                              equal_nan=True)
+        assert z["flags"].dtype == np.uint8 and np.array_equal(z["flags"], flags)
+    assert [p.name for p in tmp_path.iterdir()] == ["t.npz"]
 
 
 def test_csv_text_conventions(tmp_path):

@@ -13,7 +13,8 @@ Formats, by the file name's suffix (:func:`table_format`):
 ``.npz``
     numpy's zip of ``.npy`` arrays: one 1-D array per column, named by the column
     (what this writer makes: ``np.load(path)["t_s"]``), or a single 2-D array (n, k).
-    Stored uncompressed and streamed member by member.
+    Stored uncompressed and streamed member by member; written in place when the row
+    count is known beforehand, otherwise through side files zipped at the end.
 ``.parquet``, ``.pq``
     Apache Parquet: named numeric columns, one row group per chunk. Needs pyarrow
     (the optional extra ``gfins_fmi[parquet]``).
@@ -38,7 +39,9 @@ import os
 import pathlib
 import secrets
 import shutil
+import struct
 import zipfile
+import zlib
 from typing import Iterator, Sequence
 
 import numpy as np
@@ -492,7 +495,7 @@ class _CsvSink:
     """CSV text: ``# `` comment lines, the header line, then each chunk formatted by
     polars (the shortest decimal that reads back as the same float64)."""
 
-    def __init__(self, tmp: pathlib.Path, names, dtypes, comments):
+    def __init__(self, tmp: pathlib.Path, names, dtypes, comments, rows=None):
         self.names, self.dtypes = names, dtypes
         self._file = open(tmp, "wb")
         head = "".join(f"# {' '.join(c.split())}\n" for c in comments) + ",".join(names) + "\n"
@@ -511,7 +514,7 @@ class _CsvSink:
 
 
 class _ParquetSink:
-    def __init__(self, tmp: pathlib.Path, names, dtypes, comments):
+    def __init__(self, tmp: pathlib.Path, names, dtypes, comments, rows=None):
         pa, pq = _pyarrow()
         self._pa = pa
         meta = {"gfins_fmi.comments": "\n".join(comments)} if comments else None
@@ -536,24 +539,135 @@ class _ParquetSink:
             pass
 
 
-class _NpzSink:
-    """Columns appended to raw side files; :meth:`close` puts them into the zip as
-    ``<name>.npy`` members (the row count is known only then)."""
+def _npy_head(dtype: np.dtype, rows: int) -> bytes:
+    """The ``.npy`` header of a 1-D array of ``rows`` values of ``dtype``."""
+    import io
+    fmt = np.lib.format
+    buf = io.BytesIO()
+    fmt.write_array_header_1_0(buf, {"descr": fmt.dtype_to_descr(dtype), "fortran_order": False,
+                                     "shape": (rows,)})
+    return buf.getvalue()
 
-    def __init__(self, tmp: pathlib.Path, names, dtypes, comments):
+
+class _ZipLayout:
+    """A stored (uncompressed) zip64 archive whose members' sizes are known before
+    their data (APPNOTE 6.3: local headers, data, central directory, zip64 end
+    records): the data can be written in place, column by column and chunk by chunk,
+    and the headers with their CRC-32 at the end."""
+
+    _LOCAL = struct.Struct("<4s2B4HL2L2H")
+    _CENTRAL = struct.Struct("<4s4B4HL2L5H2L")
+    _END64 = struct.Struct("<4sQ2H2L4Q")
+    _LOCATOR64 = struct.Struct("<4sLQL")
+    _END = struct.Struct("<4s4H2LH")
+    _DATE = (1 << 5) | 1                    # 1980-01-01 in DOS form, time 00:00
+
+    def __init__(self, names: list[str], sizes: list[int]):
+        self.names = [n.encode("utf-8") for n in names]
+        self.sizes = sizes
+        self.local, self.data = [], []
+        pos = 0
+        for name, size in zip(self.names, sizes):
+            self.local.append(pos)
+            pos += self._LOCAL.size + len(name) + 20
+            self.data.append(pos)
+            pos += size
+        self.end = pos
+
+    def headers(self, crcs: list[int]) -> list[tuple[int, bytes]]:
+        """(offset, bytes) of every local header and of the central directory."""
+        out = []
+        central = b""
+        for name, size, offset, crc in zip(self.names, self.sizes, self.local, crcs):
+            extra = struct.pack("<2H2Q", 1, 16, size, size)
+            out.append((offset, self._LOCAL.pack(b"PK\x03\x04", 45, 0, 0, 0, 0, self._DATE, crc,
+                                                  0xFFFFFFFF, 0xFFFFFFFF, len(name), len(extra))
+                        + name + extra))
+            extra = struct.pack("<2H3Q", 1, 24, size, size, offset)
+            central += (self._CENTRAL.pack(b"PK\x01\x02", 45, 3, 45, 0, 0, 0, 0, self._DATE, crc,
+                                           0xFFFFFFFF, 0xFFFFFFFF, len(name), len(extra), 0, 0, 0,
+                                           0o100644 << 16, 0xFFFFFFFF) + name + extra)
+        n = len(self.names)
+        end64 = self.end + len(central)
+        central += (self._END64.pack(b"PK\x06\x06", 44, 45, 45, 0, 0, n, n, len(central), self.end)
+                    + self._LOCATOR64.pack(b"PK\x06\x07", 0, end64, 1)
+                    + self._END.pack(b"PK\x05\x06", 0, 0, 0xFFFF, 0xFFFF, 0xFFFFFFFF, 0xFFFFFFFF, 0))
+        out.append((self.end, central))
+        return out
+
+
+def _pwrite(fd: int, data, offset: int) -> None:
+    view = memoryview(data).cast("B")
+    while view:
+        done = os.pwrite(fd, view, offset)
+        view, offset = view[done:], offset + done
+
+
+class _NpzSink:
+    """Columns as ``<name>.npy`` members of a stored zip. With the row count known
+    beforehand (``rows``), each column's data is written in place, its CRC-32 kept as
+    it goes, and the headers at :meth:`close`; otherwise (or when the count turns out
+    different: a partial output) the columns go to raw side files, zipped at
+    :meth:`close`."""
+
+    def __init__(self, tmp: pathlib.Path, names, dtypes, comments, rows: int | None = None):
         self.tmp = tmp
         self.side = pathlib.Path(str(tmp) + ".d")
-        self.side.mkdir()
         self.names, self.dtypes = list(names), [np.dtype(d) for d in dtypes]
-        self._files = [open(self.side / f"{j}.raw", "wb") for j in range(len(names))]
         self.rows = 0
+        self._files = None
+        self._fd = None
+        if rows:
+            self._planned = rows
+            self._heads = [_npy_head(d, rows) for d in self.dtypes]
+            self._zip = _ZipLayout([f"{n}.npy" for n in self.names],
+                                   [len(h) + rows * d.itemsize for h, d in zip(self._heads, self.dtypes)])
+            self._crcs = [zlib.crc32(h) for h in self._heads]
+            self._fd = os.open(tmp, os.O_WRONLY)
+        else:
+            self._to_side_files()
+
+    def _to_side_files(self) -> None:
+        """From here on, columns go to side files (those written in place are moved)."""
+        self.side.mkdir()
+        self._files = [open(self.side / f"{j}.raw", "wb") for j in range(len(self.names))]
+        if self._fd is not None:
+            os.close(self._fd)
+            self._fd = None
+            with open(self.tmp, "rb") as src:
+                for f, h, d, at in zip(self._files, self._heads, self.dtypes, self._zip.data):
+                    src.seek(at + len(h))
+                    left = self.rows * d.itemsize
+                    while left:
+                        piece = src.read(min(left, _COPY_BYTES))
+                        f.write(piece)
+                        left -= len(piece)
 
     def write(self, arrays) -> None:
-        for f, a in zip(self._files, arrays):
-            f.write(memoryview(np.ascontiguousarray(a)).cast("B"))
-        self.rows += len(arrays[0])
+        m = len(arrays[0])
+        if self._fd is not None and self.rows + m > self._planned:
+            self._to_side_files()
+        if self._fd is not None:
+            for j, (a, h, d, at) in enumerate(zip(arrays, self._heads, self.dtypes, self._zip.data)):
+                a = np.ascontiguousarray(a)
+                _pwrite(self._fd, a, at + len(h) + self.rows * d.itemsize)
+                self._crcs[j] = zlib.crc32(a, self._crcs[j])
+        else:
+            for f, a in zip(self._files, arrays):
+                f.write(memoryview(np.ascontiguousarray(a)).cast("B"))
+        self.rows += m
 
     def close(self) -> None:
+        if self._fd is not None and self.rows == self._planned:
+            for j, (h, at) in enumerate(zip(self._heads, self._zip.data)):
+                _pwrite(self._fd, h, at)
+            for offset, data in self._zip.headers(self._crcs):
+                _pwrite(self._fd, data, offset)
+            os.close(self._fd)
+            self._fd = None
+            return
+        if self._fd is not None:
+            self._to_side_files()
         for f in self._files:
             f.close()
         fmt = np.lib.format
@@ -567,7 +681,10 @@ class _NpzSink:
         shutil.rmtree(self.side)
 
     def abort(self) -> None:
-        for f in self._files:
+        if self._fd is not None:
+            os.close(self._fd)
+            self._fd = None
+        for f in self._files or ():
             f.close()
         shutil.rmtree(self.side, ignore_errors=True)
 
@@ -592,6 +709,9 @@ class TableWriter:
         metadata ``gfins_fmi.comments``; npz: not kept.
     format : {"csv", "npz", "parquet"}, optional
         The format, whatever the file's name (default: from the name).
+    rows : int, optional
+        The number of rows expected, when known (a binary input): an npz file is then
+        written in place, without side files (any other count is still written right).
 
     Use as a context manager: leaving the block without :meth:`commit` (an exception,
     Ctrl-C) deletes the temporary file and leaves the destination as it was::
@@ -603,7 +723,8 @@ class TableWriter:
     """
 
     def __init__(self, path, names: Sequence[str], dtypes: Sequence | None = None, *,
-                 comments: Sequence[str] = (), format: str | None = None):
+                 comments: Sequence[str] = (), format: str | None = None,
+                 rows: int | None = None):
         self.path = pathlib.Path(path)
         self.names = tuple(names)
         if not self.names or not all(isinstance(n, str) and n and n.replace("_", "a").isalnum()
@@ -619,7 +740,8 @@ class TableWriter:
             raise IsADirectoryError(f"{self.path} is a folder: give a file name for the output")
         self._tmp = _temp_beside(self.path)
         try:
-            self._sink = _SINKS[self.format](self._tmp, self.names, self.dtypes, list(comments))
+            self._sink = _SINKS[self.format](self._tmp, self.names, self.dtypes, list(comments),
+                                             rows)
         except BaseException:
             self._tmp.unlink(missing_ok=True)
             raise

@@ -203,6 +203,24 @@ def ptr(arr: np.ndarray, n: int | None = None, ctype: str = "double"):
     return ffi.from_buffer(f"{ctype}[]", arr)
 
 
+def done_before(k: int, start: int = 0, verb: str = "solved") -> str:
+    """How much of a record was done before a bad sample, for error messages: ``k``
+    samples of this call, the first of them sample ``start`` of the record."""
+    if k == 0:
+        return f"no sample was {verb} before it (.partial is empty)"
+    if k == 1:
+        return f"sample {start} was {verb} (see .partial)"
+    return f"samples {start}..{start + k - 1} were {verb} (see .partial)"
+
+
+def as_start_index(value) -> int:
+    """``start_index`` of the streaming solvers: an integer >= 0."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
+        raise ValueError(f"start_index must be an integer >= 0 (samples of the record before "
+                         f"this call's first); got {value!r}")
+    return int(value)
+
+
 def first_nonfinite(arr: np.ndarray, row: int) -> int:
     """Column of the first non-finite value in ``arr[row]``."""
     bad = np.flatnonzero(~np.isfinite(arr[row]))

@@ -21,8 +21,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from gfins_fmi._lib import (NonFiniteInputError, SampleError, as_positive_scalar, as_rows,
-                            as_vector3, check_status, ffi, first_nonfinite, lib, ptr,
-                            status_text)
+                            as_start_index, as_vector3, check_status, done_before, ffi,
+                            first_nonfinite, lib, ptr, status_text)
 
 __all__ = ["ArrayGeometry", "accel9_geometry", "forward_model", "Accel9Solution",
            "Accel9Solver", "solve_accel9", "FLAG_NEG_OMEGA_SQ", "FLAG_SIGN_UNKNOWN",
@@ -170,12 +170,12 @@ def forward_model(geometry: ArrayGeometry, f_m_s2, omega_rad_s, omega_dot_rad_s2
             col = first_nonfinite(arr, k)
             if col >= 0:
                 raise NonFiniteInputError(f"{name}[{k}, {col}] = {arr[k, col]} is not finite; "
-                                          f"rows 0..{k - 1} were computed (see .partial)",
+                                          + done_before(k, verb="computed"),
                                           k, col, A[:k].copy())
     if status == lib.GF_ERR_OUT_OF_RANGE:
         k = int(done[0])
         raise NonFiniteInputError(f"sample {k}: the outputs overflow (inputs too large for a "
-                                  f"double); rows 0..{k - 1} were computed (see .partial)",
+                                  "double); " + done_before(k, verb="computed"),
                                   k, -1, A[:k].copy())
     check_status(status, "forward model")
     return A
@@ -257,7 +257,7 @@ class Accel9Solver:
         """Samples solved so far."""
         return int(self._state.n_samples)
 
-    def solve(self, A_m_s2, dt_s: float) -> Accel9Solution:
+    def solve(self, A_m_s2, dt_s: float, *, start_index: int = 0) -> Accel9Solution:
         """Solve a record of accelerometer outputs in one C call.
 
         Parameters
@@ -266,6 +266,10 @@ class Accel9Solver:
             Outputs of accelerometers 1..9 (m/s^2), one row per sample.
         dt_s : float
             Sampling interval (s), > 0.
+        start_index : int
+            When a record is solved in pieces: the index of this piece's first sample
+            in the record. Error messages and the exceptions' ``index`` count from the
+            record's start; ``partial`` holds this call's samples before the bad one.
 
         Returns
         -------
@@ -283,6 +287,7 @@ class Accel9Solver:
         """
         A = as_rows("A_m_s2", A_m_s2, 9, "m/s^2")
         dt_s = as_positive_scalar("dt_s (sampling interval)", dt_s, "s")
+        s0 = as_start_index(start_index)
         n = A.shape[0]
         out = Accel9Solution(np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)),
                              np.empty((n, 3)), np.empty(n, dtype=np.uint8))
@@ -295,15 +300,15 @@ class Accel9Solver:
             k = int(done[0])
             col = first_nonfinite(A, k)
             raise NonFiniteInputError(
-                f"A_m_s2[{k}, {col}] = {A[k, col]} (accelerometer {col + 1}) is not finite; "
-                f"samples 0..{k - 1} were solved (see .partial)", k, col, out._head(k))
+                f"A_m_s2[{s0 + k}, {col}] = {A[k, col]} (accelerometer {col + 1}) is not finite; "
+                + done_before(k, s0), s0 + k, col, out._head(k))
         if status == lib.GF_ERR_OUT_OF_RANGE:
             k = int(done[0])
             raise SampleError(
-                f"sample {k} is beyond the physical limits |omega| <= {MAX_RATE_RAD_S:g} rad/s "
-                f"(measured or integrated over dt_s = {dt_s:g} s) and |f| <= "
-                f"{MAX_SPECIFIC_FORCE_M_S2:g} m/s^2 (A_m_s2[{k}] = {A[k].tolist()}); samples "
-                f"0..{k - 1} were solved (see .partial)", int(status), k, out._head(k))
+                f"sample {s0 + k} is beyond the physical limits |omega| <= {MAX_RATE_RAD_S:g} "
+                f"rad/s (measured or integrated over dt_s = {dt_s:g} s) and |f| <= "
+                f"{MAX_SPECIFIC_FORCE_M_S2:g} m/s^2 (A_m_s2[{s0 + k}] = {A[k].tolist()}); "
+                + done_before(k, s0), int(status), s0 + k, out._head(k))
         check_status(status, "gf9_solve")
         return out
 

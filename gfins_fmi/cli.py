@@ -66,65 +66,188 @@ def _option_vector3(what: str):
 _UNIFORM_RTOL = 1e-3
 
 
-def _time_column(t, source, fixed: bool, dt_option: float | None = None):
-    """Checks a record's time column (s): finite and strictly increasing; intervals
-    longer than 1.5 times the typical (median) one are gaps. ``fixed``: the solver
-    needs one sampling interval, so gaps and intervals off the typical one by more than
-    ``_UNIFORM_RTOL`` are errors, and ``dt_option`` (``--dt``) must agree with the column.
+class _TimeColumn:
+    """Checks a record's time column (s) as the record streams, chunk by chunk: finite
+    and strictly increasing (across chunks too); intervals longer than 1.5 times the
+    typical one are gaps. The typical interval is the median of the first chunk's
+    intervals (the whole record when it fits in one chunk). ``fixed``: the solver needs
+    one sampling interval, so gaps and intervals off the typical one by more than
+    ``_UNIFORM_RTOL`` are errors; the interval :attr:`dt` is the first chunk's mean
+    interval, or ``dt_option`` (``--dt``), which must agree with it.
 
-    Returns (dt_s, notes): the interval (``--dt`` if given, else from the column) and
-    the gaps to report (only when not ``fixed``). Raises ValueError naming the row
-    (data rows counted from 0).
+    :meth:`check` raises ValueError naming the row (data rows counted from 0); the gaps
+    of a record that may have them are reported by :meth:`notes`.
     """
-    import numpy as np
-    bad = np.flatnonzero(~np.isfinite(t))
-    if bad.size:
-        k = int(bad[0])
-        raise ValueError(f"{source}: row {k}: time {t[k]:g} s is not finite")
-    d = np.diff(t)
-    bad = np.flatnonzero(~(d > 0))
-    if bad.size:
-        k = int(bad[0]) + 1
-        raise ValueError(f"{source}: row {k}: time {t[k]:.10g} s does not increase "
-                         f"(previous {t[k - 1]:.10g} s); the time column must increase strictly")
-    if d.size == 0:
-        if dt_option is None and fixed:
-            raise ValueError(f"{source}: one sample: give --dt, the sampling interval")
-        return dt_option, []
-    typical = float(np.median(d))
-    gaps = np.flatnonzero(d > 1.5 * typical) + 1
-    notes = []
-    if gaps.size:
-        listed = "; ".join(f"row {k} (t = {t[k - 1]:.10g} -> {t[k]:.10g} s, "
-                           f"{round((t[k] - t[k - 1]) / typical)} intervals of {typical:g} s)"
-                           for k in gaps[:3])
-        more = f"; and {gaps.size - 3} more" if gaps.size > 3 else ""
-        text = (f"{gaps.size} gap{'s' if gaps.size > 1 else ''} in the time column: "
-                f"{listed}{more}")
-        if fixed:
-            raise ValueError(f"{source}: {text}: a fixed-interval solver cannot bridge "
-                             f"{'it' if gaps.size == 1 else 'them'}; split the record there")
-        notes.append(text)
-    if fixed:
+
+    def __init__(self, source, fixed: bool, dt_option: float | None = None):
+        self.source, self.fixed, self.dt_option = source, fixed, dt_option
+        self.dt = dt_option
+        self.typical = None
+        self._last = None
+        self._gaps: list[str] = []
+        self._n_gaps = 0
+
+    def _gap_text(self, n: int, listed: list[str]) -> str:
+        more = f"; and {n - len(listed)} more" if n > len(listed) else ""
+        return f"{n} gap{'s' if n > 1 else ''} in the time column: {'; '.join(listed)}{more}"
+
+    def check(self, t, start: int) -> None:
+        """Check the times ``t`` of the rows from ``start`` on."""
+        import numpy as np
+        source = self.source
+        bad = np.flatnonzero(~np.isfinite(t))
+        if bad.size:
+            k = int(bad[0])
+            raise ValueError(f"{source}: row {start + k}: time {t[k]:g} s is not finite")
+        # the interval from the previous chunk's last time is checked with this chunk's
+        tt, first = (t, start) if self._last is None else (np.r_[self._last, t], start - 1)
+        d = np.diff(tt)
+        bad = np.flatnonzero(~(d > 0))
+        if bad.size:
+            k = int(bad[0]) + 1
+            raise ValueError(f"{source}: row {first + k}: time {tt[k]:.10g} s does not increase "
+                             f"(previous {tt[k - 1]:.10g} s); the time column must increase strictly")
+        self._last = float(t[-1])
+        if self.typical is None:
+            if d.size == 0:       # a record of one sample
+                if self.dt_option is None and self.fixed:
+                    raise ValueError(f"{source}: one sample: give --dt, the sampling interval")
+                return
+            self.typical = float(np.median(d))
+        typical = self.typical
+        gaps = np.flatnonzero(d > 1.5 * typical) + 1
+        if gaps.size:
+            listed = [f"row {first + k} (t = {tt[k - 1]:.10g} -> {tt[k]:.10g} s, "
+                      f"{round((tt[k] - tt[k - 1]) / typical)} intervals of {typical:g} s)"
+                      for k in gaps[:3]]
+            if self.fixed:
+                raise ValueError(f"{source}: {self._gap_text(int(gaps.size), listed)}: a "
+                                 f"fixed-interval solver cannot bridge "
+                                 f"{'it' if gaps.size == 1 else 'them'}; split the record there")
+            self._gaps += listed[:3 - len(self._gaps)]
+            self._n_gaps += int(gaps.size)
+        if not self.fixed:
+            return
         off = np.flatnonzero(np.abs(d - typical) > _UNIFORM_RTOL * typical)
         if off.size:
             k = int(off[0]) + 1
-            raise ValueError(f"{source}: the time column is not uniform: row {k} (interval "
-                             f"{d[k - 1]:.6g} s against {typical:.6g} s); the solver needs a fixed "
-                             "sampling interval")
-        dt = float((t[-1] - t[0]) / (t.size - 1))
-        if dt_option is not None:
-            if abs(dt_option - dt) > _UNIFORM_RTOL * dt:
-                raise ValueError(f"{source}: --dt {dt_option:g} s disagrees with the time column "
-                                 f"(interval {dt:.6g} s)")
-            dt = dt_option
-        return dt, notes
-    return typical, notes
+            raise ValueError(f"{source}: the time column is not uniform: row {first + k} "
+                             f"(interval {d[k - 1]:.6g} s against {typical:.6g} s); the solver needs "
+                             "a fixed sampling interval")
+        if start == 0:
+            dt = float((t[-1] - t[0]) / (t.size - 1))
+            if self.dt_option is not None:
+                if abs(self.dt_option - dt) > _UNIFORM_RTOL * dt:
+                    raise ValueError(f"{source}: --dt {self.dt_option:g} s disagrees with the time "
+                                     f"column (interval {dt:.6g} s)")
+                dt = self.dt_option
+            self.dt = dt
+
+    def notes(self) -> list[str]:
+        """The gaps found (a record that may have them), as one line."""
+        return [self._gap_text(self._n_gaps, self._gaps)] if self._n_gaps else []
 
 
-def _read_csv(path, header: bool = False):
+#: what a CSV whose first line is a header is told
+_HEADER_HINT = "if it is a line of column names, give --header"
+#: the navigation solution's columns (position geodetic: the commands navigate on WGS-84)
+_NAV_COLUMNS = ("t_s", "lat_deg", "lon_deg", "h_m", "v_e_m_s", "v_n_m_s", "v_u_m_s",
+                "heading_deg", "pitch_deg", "roll_deg", "q0", "q1", "q2", "q3")
+#: progress bars by default from this input size on: 10^6 samples (binary), or about as
+#: many lines of text
+_PROGRESS_ROWS, _PROGRESS_BYTES = 1_000_000, 64 << 20
+
+
+class _Refused(Exception):
+    """The solver refused a sample: ``error`` (with ``.partial``) and the output
+    columns of the ``rows`` before it in the chunk."""
+
+    def __init__(self, error: Exception, columns: list, rows: int):
+        super().__init__(str(error))
+        self.error, self.columns, self.rows = error, columns, rows
+
+
+def _reader(args, what: str):
+    from gfins_fmi.io.tables import TableReader
+    return TableReader(args.input, header=args.header, chunk_rows=args.chunk, what=what,
+                       header_hint=_HEADER_HINT)
+
+
+def _stream(args, reader, names, dtypes, solve, verb: str) -> tuple[int, int]:
+    """Read, solve and write a record chunk by chunk: ``solve(start, block)`` gives the
+    output columns of the rows of ``block`` (the first is row ``start``) or raises
+    :class:`_Refused`. The output is written beside ``args.output`` and renamed into
+    place at the end; after a refused sample it holds the rows before it, and when
+    there is none, it is not written (an existing file stays as it was).
+
+    Returns (status, rows written): status 0, or 1 after a refused sample.
+    """
+    from gfins_fmi.io.tables import TableWriter
+    status, error = 0, None
+    with reader, TableWriter(args.output, names, dtypes, rows=reader.n_rows) as writer, \
+            _progress(args, reader, verb) as bar:
+        for start, block in reader:
+            try:
+                cols = solve(start, block)
+            except _Refused as refused:
+                if refused.rows:
+                    writer.write(refused.columns)
+                status, error = 1, refused.error
+                break
+            writer.write(cols)
+            bar.update(reader.position - bar.n)
+            bar.set_postfix_str(f"{writer.rows} samples")
+        else:
+            bar.update(reader.size - bar.n)     # trailing comment lines, if any
+        if status and writer.rows == 0:
+            kept = "left as it was" if args.output.exists() else "not written"
+            print(f"error: {error}; no sample was {verb}: {args.output} {kept}", file=sys.stderr)
+            writer.discard()
+            return status, 0
+        if status:
+            print(f"error: {error}; writing the {writer.rows} samples {verb} before it",
+                  file=sys.stderr)
+        writer.commit()
+    return status, writer.rows
+
+
+class _NoBar:
+    n = 0
+
+    def update(self, n) -> None:
+        pass
+
+    def set_postfix_str(self, text) -> None:
+        pass
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        pass
+
+
+def _progress(args, reader, verb: str):
+    """One bar over the input (bytes of text, rows of a binary table): it advances when
+    a chunk has been read, solved and written."""
+    big = reader.size >= (_PROGRESS_BYTES if reader.unit == "B" else _PROGRESS_ROWS)
+    if not (args.progress if args.progress is not None else big):
+        return _NoBar()
+    from tqdm import tqdm
+    text = reader.unit == "B"
+    return tqdm(total=reader.size, unit="B" if text else " samples", unit_scale=True,
+                unit_divisor=1024 if text else 1000, desc=f"read, {verb[:-1]}, write")
+
+
+def _nav_columns(sol) -> list:
+    """The columns of :data:`_NAV_COLUMNS` from a NavSolution: time, latitude and
+    longitude (deg), height (m), ENU velocity (m/s), Euler angles (deg), quaternion."""
     import numpy as np
-    return np.loadtxt(path, delimiter=",", ndmin=2, comments="#", skiprows=1 if header else 0)
+    deg = 180.0 / np.pi
+    e = sol.euler_rad * deg if len(sol) else np.empty((0, 3))
+    return ([sol.t_s, sol.lat_rad * deg, sol.lon_rad * deg, sol.h_m]
+            + [sol.v_n_m_s[:, j] for j in range(3)] + [e[:, j] for j in range(3)]
+            + [sol.q_bn[:, j] for j in range(4)])
 
 
 def _navigate(args) -> int:
@@ -132,60 +255,53 @@ def _navigate(args) -> int:
     from gfins_fmi import NavState, SinsConfig, Strapdown
     from gfins_fmi._lib import NonFiniteInputError
     from gfins_fmi.sins import SampleError
-    data = _read_csv(args.input, args.header)
-    if data.shape[1] not in (7, 8):
+    reader = _reader(args, "strapdown record")
+    if reader.n_columns not in (7, 8):
         raise ValueError(f"{args.input}: expected 7 or 8 columns (t, gyro x y z, accel x y z "
-                         f"[, h_ext]); found {data.shape[1]}")
-    t, gyro, accel = data[:, 0], data[:, 1:4], data[:, 4:7]
-    h_ext = data[:, 7] if data.shape[1] == 8 else None
-    if args.vertical == "baro" and h_ext is None:
+                         f"[, h_ext]); found {reader.n_columns}")
+    has_h = reader.n_columns == 8
+    if args.vertical == "baro" and not has_h:
         raise ValueError("--vertical baro needs the external height as an 8th column (h_ext, m)")
-    if args.input_kind == "increments" and len(t) < 2 and args.t0 is None:
-        raise ValueError("a record of one increment needs --t0 (the time its interval starts)")
-    _, notes = _time_column(t, args.input, fixed=False)
-    for note in notes:   # the navigator takes any intervals; a gap is worth knowing about
-        print(f"note: {note}", file=sys.stderr)
-    if args.input_kind == "increments":
-        # row k is the increment over (t_(k-1), t_k]; the navigator starts one interval
-        # before the first row unless --t0 says otherwise
-        t0 = args.t0 if args.t0 is not None else (t[0] - (t[1] - t[0]) if len(t) > 1 else t[0])
-    else:
-        t0 = args.t0 if args.t0 is not None else t[0]
+    times = _TimeColumn(args.input, fixed=False)
     deg = np.pi / 180
-    x0 = NavState.from_euler([args.heading0 * deg, args.pitch0 * deg, args.roll0 * deg], args.v0,
-                             args.lat0 * deg, args.lon0 * deg, args.h0, t0)
     cfg = SinsConfig(input=args.input_kind, coning=not args.no_coning, vertical=args.vertical,
                      baro_tau_s=args.baro_tau)
-    nav = Strapdown(x0, cfg)
-    status = 0
-    progress = args.progress if args.progress is not None else len(t) >= 1_000_000
-    try:
-        sol = nav.run(gyro, accel, t_s=t, h_ext_m=h_ext, progress=progress)
-    except (NonFiniteInputError, SampleError) as exc:
-        print(f"error: {exc}; writing the {len(exc.partial)} samples navigated before it",
-              file=sys.stderr)
-        sol, status = exc.partial, 1
-    _write_solution(args.output, sol)
+    nav = None
+
+    def solve(start, block):
+        nonlocal nav
+        t = block[:, 0]
+        times.check(t, start)
+        if nav is None:
+            if args.input_kind == "increments":
+                if len(t) < 2 and args.t0 is None:
+                    raise ValueError("a record of one increment needs --t0 (the time its "
+                                     "interval starts)")
+                # row k is the increment over (t_(k-1), t_k]; the navigator starts one
+                # interval before the first row unless --t0 says otherwise
+                t0 = args.t0 if args.t0 is not None else t[0] - (t[1] - t[0])
+            else:
+                t0 = args.t0 if args.t0 is not None else t[0]
+            x0 = NavState.from_euler([args.heading0 * deg, args.pitch0 * deg, args.roll0 * deg],
+                                     args.v0, args.lat0 * deg, args.lon0 * deg, args.h0, t0)
+            nav = Strapdown(x0, cfg)
+        try:
+            sol = nav.run(block[:, 1:4], block[:, 4:7], t_s=t,
+                          h_ext_m=block[:, 7] if has_h else None, start_index=start)
+        except (NonFiniteInputError, SampleError) as exc:
+            raise _Refused(exc, _nav_columns(exc.partial), len(exc.partial)) from None
+        return _nav_columns(sol)
+
+    status, rows = _stream(args, reader, _NAV_COLUMNS, None, solve, "navigated")
+    for note in times.notes():   # the navigator takes any intervals; a gap is worth knowing about
+        print(f"note: {note}", file=sys.stderr)
+    if rows:
+        print(f"{rows} samples navigated -> {args.output}")
     return status
 
 
-def _write_solution(path, sol, extra=None, extra_header=""):
-    """Navigation solution CSV at full precision (17 significant digits, every double
-    round-trips): time, position (deg, m; or m in a fixed frame), ENU velocity, Euler
-    angles (deg), quaternion [, extra columns]."""
-    import numpy as np
-    deg = np.pi / 180
-    e = sol.euler_rad / deg if len(sol) else np.empty((0, 3))
-    if sol.pos_m is not None:
-        pos, pos_header = sol.pos_m, "x_m,y_m,z_m"
-    else:
-        pos, pos_header = np.c_[sol.lat_rad / deg, sol.lon_rad / deg, sol.h_m], "lat_deg,lon_deg,h_m"
-    cols = [sol.t_s, pos, sol.v_n_m_s, e, sol.q_bn] + ([extra] if extra is not None else [])
-    table = np.column_stack(cols) if len(sol) else np.empty((0, 14 + (0 if extra is None else extra.shape[1])))
-    header = (f"t_s,{pos_header},v_e_m_s,v_n_m_s,v_u_m_s,heading_deg,pitch_deg,roll_deg,"
-              "q0,q1,q2,q3" + extra_header)
-    np.savetxt(path, table, delimiter=",", header=header, comments="", fmt="%.17g")
-    print(f"{len(sol)} samples navigated -> {path}")
+_RATE_COLUMNS = ("omega_x_rad_s", "omega_y_rad_s", "omega_z_rad_s", "f_x_m_s2", "f_y_m_s2",
+                 "f_z_m_s2", "flags")
 
 
 def _gfnav(args) -> int:
@@ -195,34 +311,45 @@ def _gfnav(args) -> int:
     from gfins_fmi.sins import SampleError
     g = layout(args.layout, args.lever_arm)
     n = g.n_sensors
-    data = _read_csv(args.input, args.header)
-    if data.shape[1] not in (n + 1, n + 2):
+    reader = _reader(args, "accelerometer-array record")
+    if reader.n_columns not in (n + 1, n + 2):
         raise ValueError(f"{args.input}: layout {args.layout} needs {n + 1} or {n + 2} columns "
-                         f"(t, A1..A{n} [, h_ext]); found {data.shape[1]}")
-    t, A = data[:, 0], data[:, 1:n + 1]
-    h_ext = data[:, n + 1] if data.shape[1] == n + 2 else None
-    if args.vertical == "baro" and h_ext is None:
+                         f"(t, A1..A{n} [, h_ext]); found {reader.n_columns}")
+    has_h = reader.n_columns == n + 2
+    if args.vertical == "baro" and not has_h:
         raise ValueError(f"--vertical baro needs the external height as column {n + 2}")
-    if len(t) < 2:
-        raise ValueError(f"{args.input}: the record needs at least two samples (the interval "
-                         "comes from its time column)")
-    dt, _ = _time_column(t, args.input, fixed=True)
+    times = _TimeColumn(args.input, fixed=True)
     deg = np.pi / 180
-    x0 = NavState.from_euler([args.heading0 * deg, args.pitch0 * deg, args.roll0 * deg], args.v0,
-                             args.lat0 * deg, args.lon0 * deg, args.h0, float(t[0]))
-    nav = GyroFreeNavigator(g, x0, args.strategy, args.omega_init, accel_noise_m_s2=args.accel_noise,
-                            sins=SinsConfig(vertical=args.vertical, baro_tau_s=args.baro_tau))
-    status = 0
-    try:
-        sol, rates = nav.run(A, dt, h_ext_m=h_ext)
-        extra = np.c_[rates.omega_rad_s, rates.f_m_s2, rates.flags]
-    except (NonFiniteInputError, SampleError) as exc:
-        print(f"error: {exc}; writing the {len(exc.partial)} samples navigated before it",
-              file=sys.stderr)
-        sol, status, extra = exc.partial, 1, None
-    _write_solution(args.output, sol, extra,
-                    ",omega_x_rad_s,omega_y_rad_s,omega_z_rad_s,f_x_m_s2,f_y_m_s2,f_z_m_s2,flags"
-                    if extra is not None else "")
+    nav = None
+
+    def columns(sol, rates):
+        return (_nav_columns(sol) + [rates.omega_rad_s[:, j] for j in range(3)]
+                + [rates.f_m_s2[:, j] for j in range(3)] + [rates.flags])
+
+    def solve(start, block):
+        nonlocal nav
+        t = block[:, 0]
+        if start == 0 and len(t) < 2:
+            raise ValueError(f"{args.input}: the record needs at least two samples (the "
+                             "interval comes from its time column)")
+        times.check(t, start)
+        if nav is None:
+            x0 = NavState.from_euler([args.heading0 * deg, args.pitch0 * deg, args.roll0 * deg],
+                                     args.v0, args.lat0 * deg, args.lon0 * deg, args.h0, float(t[0]))
+            nav = GyroFreeNavigator(g, x0, args.strategy, args.omega_init,
+                                    accel_noise_m_s2=args.accel_noise,
+                                    sins=SinsConfig(vertical=args.vertical, baro_tau_s=args.baro_tau))
+        try:
+            sol, rates = nav.run(block[:, 1:n + 1], times.dt,
+                                 h_ext_m=block[:, n + 1] if has_h else None, start_index=start)
+        except (NonFiniteInputError, SampleError) as exc:
+            raise _Refused(exc, columns(exc.partial, exc.partial_rates), len(exc.partial)) from None
+        return columns(sol, rates)
+
+    status, rows = _stream(args, reader, _NAV_COLUMNS + _RATE_COLUMNS,
+                           [np.float64] * (len(_NAV_COLUMNS) + 6) + [np.uint8], solve, "navigated")
+    if rows:
+        print(f"{rows} samples navigated -> {args.output}")
     return status
 
 
@@ -327,36 +454,50 @@ def _info(args) -> int:
     return 0
 
 
+_ACCEL9_COLUMNS = ("t_s", "f_x_m_s2", "f_y_m_s2", "f_z_m_s2", "omega_x_rad_s", "omega_y_rad_s",
+                   "omega_z_rad_s", "omega_dot_x_rad_s2", "omega_dot_y_rad_s2", "omega_dot_z_rad_s2",
+                   "omega_sq_x_rad2_s2", "omega_sq_y_rad2_s2", "omega_sq_z_rad2_s2", "flags")
+
+
 def _solve9(args) -> int:
     import numpy as np
-    from gfins_fmi import solve_accel9
+    from gfins_fmi import Accel9Solver
     from gfins_fmi._lib import NonFiniteInputError, SampleError
-    data = _read_csv(args.input)
-    if data.shape[1] not in (9, 10):
+    reader = _reader(args, "9-accelerometer record")
+    if reader.n_columns not in (9, 10):
         raise ValueError(f"{args.input}: expected 9 columns (A1..A9, m/s^2) or 10 (t, A1..A9); "
-                         f"found {data.shape[1]}")
-    if data.shape[1] == 10:   # a leading time column: the interval and the output times
-        t, A = data[:, 0], data[:, 1:]
-        dt, _ = _time_column(t, args.input, fixed=True, dt_option=args.dt)
-    else:
-        if args.dt is None:
-            raise ValueError(f"{args.input} has no time column: give --dt, the sampling interval")
-        A, dt = data, args.dt
-        t = np.arange(len(A)) * dt
-    try:
-        sol = solve_accel9(A, dt, args.lever_arm, args.omega_init)
-        status = 0
-    except (NonFiniteInputError, SampleError) as exc:
-        print(f"error: {exc}; writing the {exc.index} solved samples", file=sys.stderr)
-        sol, status = exc.partial, 1
-    table = np.column_stack([t[:len(sol)], sol.f_m_s2, sol.omega_rad_s, sol.omega_dot_rad_s2,
-                             sol.omega_sq_rad2_s2, sol.flags])
-    header = ("t_s,f_x_m_s2,f_y_m_s2,f_z_m_s2,omega_x_rad_s,omega_y_rad_s,omega_z_rad_s,"
-              "omega_dot_x_rad_s2,omega_dot_y_rad_s2,omega_dot_z_rad_s2,omega_sq_x_rad2_s2,"
-              "omega_sq_y_rad2_s2,omega_sq_z_rad2_s2,flags")
-    fmt = ["%.17g"] * 13 + ["%d"]
-    np.savetxt(args.output, table, delimiter=",", header=header, comments="", fmt=fmt)
-    print(f"{len(sol)} samples solved -> {args.output}; flags: {sol.flag_counts()}")
+                         f"found {reader.n_columns}")
+    timed = reader.n_columns == 10   # a leading time column: the interval and the output times
+    if not timed and args.dt is None:
+        raise ValueError(f"{args.input} has no time column: give --dt, the sampling interval")
+    times = _TimeColumn(args.input, fixed=True, dt_option=args.dt)
+    solver = Accel9Solver(args.lever_arm, args.omega_init)
+    flags: dict[str, int] = {}
+
+    def columns(t, sol):
+        for name, count in sol.flag_counts().items():
+            flags[name] = flags.get(name, 0) + count
+        return ([t[:len(sol)]] + [a[:, j] for a in (sol.f_m_s2, sol.omega_rad_s,
+                                                    sol.omega_dot_rad_s2, sol.omega_sq_rad2_s2)
+                                  for j in range(3)] + [sol.flags])
+
+    def solve(start, block):
+        if timed:
+            t, A = block[:, 0], block[:, 1:]
+            times.check(t, start)
+        else:
+            A = block
+            t = (start + np.arange(len(A))) * times.dt
+        try:
+            sol = solver.solve(A, times.dt, start_index=start)
+        except (NonFiniteInputError, SampleError) as exc:
+            raise _Refused(exc, columns(t, exc.partial), len(exc.partial)) from None
+        return columns(t, sol)
+
+    status, rows = _stream(args, reader, _ACCEL9_COLUMNS, [np.float64] * 13 + [np.uint8], solve,
+                           "solved")
+    if rows:
+        print(f"{rows} samples solved -> {args.output}; flags: {flags}")
     return status
 
 
@@ -370,6 +511,23 @@ def executor_arguments(p) -> None:
     p.add_argument("--workers", type=_option_count(1), default=None,
                    help="without --scheduler: threads on this machine (default: one per "
                         "CPU); with it: wait for this many cluster workers")
+
+
+def _record_args(p, what: str) -> None:
+    """Input, output and streaming options, shared by the record commands."""
+    p.add_argument("input", type=pathlib.Path,
+                   help=f"{what}: CSV text (comma-separated, '#' comments), .parquet or .npz")
+    p.add_argument("output", type=pathlib.Path,
+                   help="solution file: CSV text unless it ends in .parquet or .npz; written "
+                        "beside its name and renamed into place when complete")
+    p.add_argument("--header", action="store_true",
+                   help="the CSV's first line (after '#' comments) is a line of column names")
+    p.add_argument("--chunk", type=_option_count(2), default=1 << 18, metavar="SAMPLES",
+                   help="samples read, solved and written at a time (default 262144); memory "
+                        "grows with it")
+    p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                   help="progress bar over reading, solving and writing (default: on for "
+                        "inputs of 10^6 samples, or 64 MiB of text, or more)")
 
 
 def _initial_state_args(p) -> None:
@@ -429,10 +587,9 @@ def main(argv: list[str] | None = None) -> int:
     p.set_defaults(func=_demo, check=_check_demo)
 
     p = parsers["solve9"] = sub.add_parser(
-        "solve9", help="solve a CSV record of 9 accelerometer outputs (m/s^2; optional "
-        "leading time column) and write the solution CSV")
-    p.add_argument("input", type=pathlib.Path)
-    p.add_argument("output", type=pathlib.Path)
+        "solve9", help="solve a record of 9 accelerometer outputs (m/s^2; optional "
+        "leading time column) and write the solution (CSV, Parquet or npz)")
+    _record_args(p, "accelerometer outputs A1..A9 (m/s^2), optionally after a time column (s)")
     p.add_argument("--dt", type=seconds, default=None,
                    help="sampling interval, s (default: from the time column, which it must "
                         "agree with when both are given)")
@@ -443,27 +600,22 @@ def main(argv: list[str] | None = None) -> int:
     p.set_defaults(func=_solve9)
 
     p = parsers["navigate"] = sub.add_parser(
-        "navigate", help="strapdown navigation of a CSV record (t, gyro x y z, accel x y z "
-        "[, h_ext]) -> solution CSV")
-    p.add_argument("input", type=pathlib.Path)
-    p.add_argument("output", type=pathlib.Path)
+        "navigate", help="strapdown navigation of a record (t, gyro x y z, accel x y z "
+        "[, h_ext]) -> solution (CSV, Parquet or npz)")
+    _record_args(p, "t (s), gyro x y z, accel x y z [, h_ext (m)]")
     p.add_argument("--input-kind", choices=["increments", "rates"], default="increments",
                    help="increments: rad and m/s over (t_(k-1), t_k]; rates: rad/s and m/s^2 at t_k")
-    p.add_argument("--header", action="store_true", help="the CSV's first line is a header")
     _initial_state_args(p)
     p.add_argument("--t0", type=_option_real("s"), default=None,
                    help="time of the initial state, s (default: one interval before the first "
                         "increment, or the first rate sample)")
     p.add_argument("--no-coning", action="store_true", help="one-sample algorithm")
-    p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
-                   help="progress bar (default: on for records of 10^6 samples or more)")
     p.set_defaults(func=_navigate)
 
     p = parsers["gfnav"] = sub.add_parser(
-        "gfnav", help="gyro-free navigation of a CSV record of accelerometer-array outputs "
-        "(t, A1..AN [, h_ext]) at a fixed interval -> solution CSV")
-    p.add_argument("input", type=pathlib.Path)
-    p.add_argument("output", type=pathlib.Path)
+        "gfnav", help="gyro-free navigation of a record of accelerometer-array outputs "
+        "(t, A1..AN [, h_ext]) at a fixed interval -> solution (CSV, Parquet or npz)")
+    _record_args(p, "t (s), A1..AN (m/s^2) [, h_ext (m)]")
     p.add_argument("--layout", choices=["cube6", "qin9", "12"], required=True)
     p.add_argument("--lever-arm", type=lever_arm, required=True, help="lever arm l, m")
     p.add_argument("--strategy", choices=["integrate", "sqrt", "eigen", "fused"],
@@ -473,7 +625,6 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--omega-init", type=_option_vector3("x,y,z in rad/s"), default=[0.0, 0.0, 0.0],
                    help="rate at the first sample, rad/s, x,y,z (write --omega-init=-1,0,0 "
                         "when it starts with -)")
-    p.add_argument("--header", action="store_true", help="the CSV's first line is a header")
     _initial_state_args(p)
     p.set_defaults(func=_gfnav)
 
@@ -541,6 +692,11 @@ def main(argv: list[str] | None = None) -> int:
     except (ValueError, TypeError, OSError, ImportError, GfinsError) as exc:
         print(f"gfins {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        # the record commands write beside the output's name and rename when complete
+        kept = f"; {args.output} left as it was" if getattr(args, "output", None) else ""
+        print(f"gfins {args.command}: interrupted{kept}", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":

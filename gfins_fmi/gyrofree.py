@@ -16,8 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from gfins_fmi._lib import (NonFiniteInputError, SampleError, as_array, as_positive_scalar,
-                            as_rows, as_scalar, as_vector3, check_status, ffi, first_nonfinite,
-                            lib, ptr, status_text)
+                            as_rows, as_scalar, as_start_index, as_vector3, check_status,
+                            done_before, ffi, first_nonfinite, lib, ptr, status_text)
 from gfins_fmi.accel_array import ArrayGeometry, accel9_geometry
 from gfins_fmi.sins import NavSolution, NavState, SinsConfig
 
@@ -228,10 +228,9 @@ class RateSolver:
         if status == lib.GF_ERR_NONFINITE_INPUT:
             col = first_nonfinite(A, k)
             raise NonFiniteInputError(f"A_m_s2[{k}, {col}] = {A[k, col]} (accelerometer {col + 1}) "
-                                      f"is not finite; samples 0..{k - 1} are in .partial",
-                                      k, col, out._head(k))
+                                      f"is not finite; {done_before(k)}", k, col, out._head(k))
         if status != lib.GF_OK:
-            raise SampleError(f"sample {k}: {status_text(status)}; samples before it are in .partial",
+            raise SampleError(f"sample {k}: {status_text(status)}; {done_before(k)}",
                               int(status), k, out._head(k))
         return out
 
@@ -278,11 +277,35 @@ class GyroFreeNavigator:
             check_status(lib.gf_sins_set_flat_position(ffi.addressof(self._state, "nav"),
                                                        ptr(x0.pos_m, 3)), "flat position")
 
-    def run(self, A_m_s2, dt_s: float, h_ext_m=None) -> tuple[NavSolution, RateSolution]:
-        """Navigate a record (n, n_sensors); row k = state at sample k (row 0: t0)."""
+    def run(self, A_m_s2, dt_s: float, h_ext_m=None, *,
+            start_index: int = 0) -> tuple[NavSolution, RateSolution]:
+        """Navigate a record (n, n_sensors); row k = state at sample k (row 0: t0). Each
+        call continues the last.
+
+        Parameters
+        ----------
+        A_m_s2 : array_like (n, n_sensors)
+            Array outputs (m/s^2).
+        dt_s : float
+            Sampling interval (s).
+        h_ext_m : array_like (n,), optional
+            External height (m) for ``vertical="baro"`` (NaN where there is none).
+        start_index : int
+            When a record is navigated in pieces: the index of this piece's first
+            sample in the record, so that error messages and ``index`` count from the
+            record's start.
+
+        Raises
+        ------
+        NonFiniteInputError, SampleError
+            With ``index`` of the bad sample, ``partial`` (the navigation solution of
+            this call's samples before it) and ``partial_rates`` (their
+            :class:`RateSolution`: omega, f and flags; omega_dot and W are NaN).
+        """
         ns = self.geometry.n_sensors
         A = as_rows("A_m_s2", A_m_s2, ns, "m/s^2")
         dt_s = as_positive_scalar("dt_s (sampling interval)", dt_s, "s")
+        s0 = as_start_index(start_index)
         n = A.shape[0]
         he = None if h_ext_m is None else as_array("h_ext_m", h_ext_m, (n,), "m", finite=False)
         q, v, pos = np.empty((n, 4)), np.empty((n, 3)), np.empty((n, 3))
@@ -302,8 +325,11 @@ class GyroFreeNavigator:
             partial = sol._rows(slice(0, k))
             if status == lib.GF_ERR_NONFINITE_INPUT:
                 col = first_nonfinite(A, k)
-                raise NonFiniteInputError(f"A_m_s2[{k}, {col}] = {A[k, col]} is not finite; "
-                                          "the solution before it is in .partial", k, col, partial)
-            raise SampleError(f"sample {k}: {status_text(status)}; the solution before it is in "
-                              ".partial", int(status), k, partial)
+                exc = NonFiniteInputError(f"A_m_s2[{s0 + k}, {col}] = {A[k, col]} is not finite; "
+                                          + done_before(k, s0, "navigated"), s0 + k, col, partial)
+            else:
+                exc = SampleError(f"sample {s0 + k}: {status_text(status)}; "
+                                  + done_before(k, s0, "navigated"), int(status), s0 + k, partial)
+            exc.partial_rates = rates._head(k)
+            raise exc
         return sol, rates

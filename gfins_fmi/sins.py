@@ -16,7 +16,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from gfins_fmi._lib import (NonFiniteInputError, SampleError, as_array, as_rows, as_scalar,
-                            check_status, ffi, first_nonfinite, lib, ptr, status_text)
+                            as_start_index, check_status, done_before, ffi, first_nonfinite, lib,
+                            ptr, status_text)
 
 __all__ = ["SinsConfig", "NavState", "NavSolution", "Strapdown", "euler_to_quat",
            "quat_to_euler", "SampleError"]
@@ -283,7 +284,7 @@ class Strapdown:
         self._backward = not self._backward
 
     def run(self, gyro, accel, dt_s: float | None = None, t_s=None, h_ext_m=None,
-            progress: bool = False, chunk: int = 1_000_000) -> NavSolution:
+            progress: bool = False, chunk: int = 1_000_000, *, start_index: int = 0) -> NavSolution:
         """Navigate a record in one C call (or in chunks of ``chunk`` with a progress bar).
 
         Parameters
@@ -302,6 +303,10 @@ class Strapdown:
         chunk : int
             Samples per C call (default 10^6; the record is always cut into chunks of
             this size, which gives the same result as one call).
+        start_index : int
+            When a record is navigated in pieces (one call per piece, each continuing
+            the last): the index of this piece's first sample in the record, so that
+            error messages and the exceptions' ``index`` count from the record's start.
 
         For a backward run of increments with ``t_s``, interval 0 is taken to start at
         the navigator's initial time (its ``initial.t_s``).
@@ -309,8 +314,10 @@ class Strapdown:
         Raises
         ------
         NonFiniteInputError, SampleError
-            With ``index`` of the bad sample and ``partial``: the solution up to it.
+            With ``index`` of the bad sample and ``partial``: this call's solution up
+            to it.
         """
+        s0 = as_start_index(start_index)
         g = as_rows("gyro", gyro, 3, "rad or rad/s")
         a = as_rows("accel", accel, 3, "m/s or m/s^2")
         n = g.shape[0]
@@ -375,24 +382,25 @@ class Strapdown:
         if status != lib.GF_OK:
             good = slice(bad + 1, n) if self._backward else slice(0, bad)
             partial = sol._rows(good)
+            done = (done_before(len(partial), s0 + bad + 1, "navigated") if self._backward
+                    else done_before(len(partial), s0, "navigated"))
             if status == lib.GF_ERR_NONFINITE_INPUT:
                 for name, arr in (("gyro", g), ("accel", a)):
                     col = first_nonfinite(arr, bad)
                     if col >= 0:
-                        raise NonFiniteInputError(f"{name}[{bad}, {col}] = {arr[bad, col]} is not "
-                                                  f"finite; the solution before it is in .partial",
-                                                  bad, col, partial)
-                raise NonFiniteInputError(f"sample {bad}: time or external height is not finite",
-                                          bad, -1, partial)
+                        raise NonFiniteInputError(f"{name}[{s0 + bad}, {col}] = {arr[bad, col]} is "
+                                                  f"not finite; {done}", s0 + bad, col, partial)
+                raise NonFiniteInputError(f"sample {s0 + bad}: time or external height is not "
+                                          f"finite; {done}", s0 + bad, -1, partial)
             hints = {
-                lib.GF_ERR_OUT_OF_RANGE: (f"sample {bad} exceeds |w| <= {self.config.max_rate_rad_s} "
+                lib.GF_ERR_OUT_OF_RANGE: (f"sample {s0 + bad} exceeds |w| <= {self.config.max_rate_rad_s} "
                                           f"rad/s or |f| <= {self.config.max_specific_force_m_s2} m/s^2 "
                                           f"(gyro {g[bad].tolist()}, accel {a[bad].tolist()}; "
                                           f"input = {self.config.input!r})"),
-                lib.GF_ERR_BAD_TIME: f"sample {bad}: sample times must be strictly increasing",
-                lib.GF_ERR_DIVERGED: (f"sample {bad}: the navigation state left its domain "
+                lib.GF_ERR_BAD_TIME: f"sample {s0 + bad}: sample times must be strictly increasing",
+                lib.GF_ERR_DIVERGED: (f"sample {s0 + bad}: the navigation state left its domain "
                                       "(pole reached or absurd height)"),
             }
-            msg = hints.get(status, f"sample {bad}: {status_text(status)}")
-            raise SampleError(msg + "; the solution before it is in .partial", int(status), bad, partial)
+            msg = hints.get(status, f"sample {s0 + bad}: {status_text(status)}")
+            raise SampleError(f"{msg}; {done}", int(status), s0 + bad, partial)
         return sol

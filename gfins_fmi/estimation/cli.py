@@ -136,16 +136,18 @@ def _noise(args):
 def _write(path, sol, extra_note=""):
     import numpy as np
     from gfins_fmi.estimation import SENSOR_NAMES
+    from gfins_fmi.io.tables import TableWriter
     deg = 180.0 / np.pi
     e = sol.euler_rad * deg
     table = np.column_stack([sol.t_s, sol.lat_rad * deg, sol.lon_rad * deg, sol.h_m, sol.v_n_m_s, e,
                              sol.std[:, 0:6], sol.std[:, 6:9] * deg, sol.sensors])
-    header = ("t_s,lat_deg,lon_deg,h_m,v_e_m_s,v_n_m_s,v_u_m_s,heading_deg,pitch_deg,roll_deg,"
-              "std_v_e_m_s,std_v_n_m_s,std_v_u_m_s,std_e_m,std_n_m,std_u_m,std_att_e_deg,std_att_n_deg,"
-              "std_att_u_deg," + ",".join(SENSOR_NAMES))
-    tmp = pathlib.Path(str(path) + ".part")
-    np.savetxt(tmp, table, delimiter=",", header=header, comments="", fmt="%.17g")
-    tmp.replace(path)            # nothing half-written is left under the final name
+    names = ("t_s,lat_deg,lon_deg,h_m,v_e_m_s,v_n_m_s,v_u_m_s,heading_deg,pitch_deg,roll_deg,"
+             "std_v_e_m_s,std_v_n_m_s,std_v_u_m_s,std_e_m,std_n_m,std_u_m,std_att_e_deg,std_att_n_deg,"
+             "std_att_u_deg").split(",") + list(SENSOR_NAMES)
+    # written beside its name and renamed when complete: nothing half-written is left
+    with TableWriter(path, names) as w:
+        w.write([table[:, j] for j in range(table.shape[1])])
+        w.commit()
     print(f"{len(sol)} samples{extra_note} -> {path}")
 
 

@@ -7,22 +7,23 @@ why (a header where none belongs, a wrong column count, text in a number column)
 from __future__ import annotations
 
 import contextlib
+import itertools
 import pathlib
 import warnings
-from typing import Callable, Iterator, Sequence
+from typing import Callable, Iterable, Iterator, Sequence
 
 import numpy as np
 
 from gfins_fmi.io.errors import FileFormatError, RecordError
 
-__all__ = ["read_table", "record_errors_at_lines"]
+__all__ = ["read_table", "record_errors_at_lines", "diagnose", "data_lines", "is_number"]
 
 
 def _split(line: str, delimiter: str | None) -> list[str]:
     return [f.strip() for f in line.split(delimiter)] if delimiter else line.split()
 
 
-def _is_number(text: str) -> bool:
+def is_number(text: str) -> bool:
     try:
         float(text)
     except ValueError:
@@ -30,42 +31,59 @@ def _is_number(text: str) -> bool:
     return True
 
 
-def _data_lines(lines: Sequence[str], comment: str | None, skip: int) -> list[int]:
+def data_lines(lines: Iterable[str], comment: str | None, skip: int) -> Iterator[int]:
     """0-based indices (in ``lines``) of the data lines, as loadtxt counts them."""
-    out = []
     for i, line in enumerate(lines):
         if i < skip:
             continue
         body = line.split(comment, 1)[0] if comment else line
         if body.strip():
-            out.append(i)
-    return out
+            yield i
 
 
-def _diagnose(path: pathlib.Path, lines: Sequence[str], delimiter: str | None,
-              comment: str | None, skip: int, n_columns: Sequence[int], what: str) -> FileFormatError:
-    """Why loadtxt refused the file: the first line that is not a row of numbers of an
-    accepted width."""
-    expected = " or ".join(str(c) for c in n_columns)
+def diagnose(path: pathlib.Path, lines: Iterable[str], delimiter: str | None,
+             comment: str | None, skip: int, n_columns: Sequence[int] | None, what: str,
+             header_message: str | None = None, *, first_row: int = 0,
+             line_offset: int = 0) -> FileFormatError:
+    """Why a parser refused the file: the first line that is not a row of numbers of an
+    accepted width (``n_columns``; None: the width of the first data line). Its
+    ``line`` is None when every line is a row of numbers.
+
+    ``lines`` may be a lazy iterable (an open file), read once up to the bad line, or
+    a block of the file: its first line is line ``line_offset + 1`` of the file and
+    its first data line row ``first_row`` of the table. ``header_message`` is the
+    message when row 0 holds text (``{text}`` stands for the text; default: the format
+    has no header line, delete that line).
+    """
+    expected = " or ".join(str(c) for c in n_columns) if n_columns else None
     width = None
-    for i in _data_lines(lines, comment, skip):
-        body = lines[i].split(comment, 1)[0] if comment else lines[i]
-        fields = _split(body.strip(), delimiter)
-        text = [f for f in fields if not _is_number(f)]
+    row = first_row - 1
+    for i, line in enumerate(lines):
+        if i < skip:
+            continue
+        body = line.split(comment, 1)[0] if comment else line
+        body = body.strip()
+        if not body:
+            continue
+        row += 1
+        where = line_offset + i + 1
+        fields = _split(body, delimiter)
+        text = [f for f in fields if not is_number(f)]
         if text:
-            if width is None:
-                return FileFormatError(path, i + 1, f"{what} files have no header line, but the "
-                                       f"first line holds text ({text[0]!r}): delete that line")
-            return FileFormatError(path, i + 1, f"{text[0]!r} is not a number; every {what} "
-                                   f"field must be numeric")
-        if len(fields) not in n_columns:
-            return FileFormatError(path, i + 1, f"{len(fields)} columns where a {what} line has "
+            if row == 0 and len(text) == len(fields):
+                message = header_message or (f"{what} files have no header line, but the first "
+                                             "line holds text ({text}): delete that line")
+                return FileFormatError(path, where, message.replace("{text}", repr(text[0])))
+            bad = f"{text[0]!r} is not a number" if text[0] else "an empty field"
+            return FileFormatError(path, where, f"{bad}; every {what} field must be numeric")
+        if expected is not None and len(fields) not in n_columns:
+            return FileFormatError(path, where, f"{len(fields)} columns where a {what} line has "
                                    f"{expected} (a truncated or merged line, or another format)")
         if width is not None and len(fields) != width:
-            return FileFormatError(path, i + 1, f"{len(fields)} columns after {width} on the lines "
+            return FileFormatError(path, where, f"{len(fields)} columns after {width} on the lines "
                                    "before: every line must have the same columns")
         width = len(fields)
-    return FileFormatError(path, None, f"numpy could not read the file as a {what} table")
+    return FileFormatError(path, None, f"the file could not be read as a {what} table")
 
 
 def read_table(path, n_columns: Sequence[int], what: str, *, delimiter: str | None = None,
@@ -116,10 +134,10 @@ def read_table(path, n_columns: Sequence[int], what: str, *, delimiter: str | No
         raise FileFormatError(path, None, f"not a text file (a {what} file is text; "
                               "binary files need their own reader)") from exc
     except (ValueError, IndexError) as exc:
-        raise _diagnose(path, file_lines(), delimiter, comment, skip_lines, n_columns, what) from exc
+        raise diagnose(path, file_lines(), delimiter, comment, skip_lines, n_columns, what) from exc
 
     def line_of(row: int) -> int:
-        return _data_lines(file_lines(), comment, skip_lines)[row] + 1
+        return next(itertools.islice(data_lines(file_lines(), comment, skip_lines), row, None)) + 1
 
     if table.shape[0] == 0:
         raise FileFormatError(path, None, f"no data lines: the file is empty (a {what} file "

@@ -17,15 +17,16 @@ function can take a pointer to them as they are.
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
-import os
 import pathlib
 from dataclasses import dataclass
 from typing import ClassVar, Iterable, NamedTuple, Sequence
 
 import numpy as np
 
-from gfins_fmi.io._text import read_table, record_errors_at_lines
+from gfins_fmi.io._text import data_lines, record_errors_at_lines
+from gfins_fmi.io.tables import TableReader, TableWriter
 from gfins_fmi.io.errors import FileFormatError, RecordError
 
 __all__ = ["ImuRecord", "GnssRecord", "BaroRecord", "OdometerRecord", "TruthRecord",
@@ -246,23 +247,15 @@ class _Record:
         """Write the record as CSV: two comment lines (``# gfins_fmi <type>``,
         ``# source: ...``), a header line of column names that carry their units
         (``t_s,gyro_x_rad_s,...``), then one line per sample at full precision
-        (``%.17g``: reading it back gives the same float64 bit for bit). The file is
-        written beside its destination and renamed into place, so a failure never leaves
-        half a file."""
-        path = pathlib.Path(path)
+        (the shortest decimal that reads back as the same float64, bit for bit). The
+        file is written beside its destination and renamed into place, so a failure
+        never leaves half a file (:class:`~gfins_fmi.io.tables.TableWriter`)."""
         names, table = self._csv_table()
-        fmt = ["%d" if name == "quality" else "%.17g" for name in names]
-        header = (f"# gfins_fmi {type(self).__name__}\n# source: {' '.join(self.source.split())}\n"
-                  + ",".join(names))
-        tmp = path.with_name(path.name + ".partial")
-        try:
-            np.savetxt(tmp, table, fmt=fmt, delimiter=",", header=header, comments="",
-                       encoding="utf-8")
-            os.replace(tmp, path)
-        finally:
-            if tmp.exists():
-                tmp.unlink()
-        return path
+        dtypes = [np.int8 if name == "quality" else np.float64 for name in names]
+        comments = [f"gfins_fmi {type(self).__name__}", f"source: {self.source}"]
+        with TableWriter(path, names, dtypes, comments=comments, format="csv") as w:
+            w.write([table[:, j] for j in range(len(names))])
+            return w.commit()
 
     @classmethod
     def from_csv(cls, path):
@@ -301,8 +294,15 @@ class _Record:
             expected = "\n  ".join(",".join(layout) for layout in layouts)
             raise FileFormatError(path, header_line, f"the column names {','.join(names)!r} are "
                                   f"not a {cls.__name__} layout; expected one of\n  {expected}")
-        table, line_of = read_table(path, [len(names)], f"{cls.__name__} CSV", delimiter=",",
-                                    comment="#", skip_lines=header_line)
+        what = f"{cls.__name__} CSV"
+        reader = TableReader(path, header=True, what=what, format="csv",
+                             header_hint="a CSV of a record has one header line")
+        table = np.concatenate([block for _, block in reader])
+
+        def line_of(row: int) -> int:
+            with open(path, encoding="utf-8", errors="replace") as f:
+                return next(itertools.islice(data_lines(f, "#", header_line), row, None)) + 1
+
         with record_errors_at_lines(path, line_of):
             return cls._from_csv_table(names, table, source)
 

@@ -378,7 +378,8 @@ def test_interrupted_write_leaves_no_truncated_output(nav_record, tmp_path):
     proc = subprocess.Popen([sys.executable, "-c", "import sys; from gfins_fmi.cli import main; "
                              "sys.exit(main(sys.argv[1:]))", "navigate", str(src), str(dst), *init,
                              "--no-progress"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env,
+                            cwd=tmp_path)   # not the checkout: its gfins_fmi/ has no build
     deadline = time.monotonic() + 120
     while proc.poll() is None and time.monotonic() < deadline:
         if len(list(out.iterdir())) > 1 or dst.read_bytes() != b"old solution\n":

@@ -29,18 +29,6 @@ static void mat_mul(size_t r, size_t k, size_t c, const double *A, const double 
         }
 }
 
-/* C (r x c) = A (r x k) B^T, B (c x k), row-major */
-static void mat_mul_bt(size_t r, size_t k, size_t c, const double *A, const double *B, double *C)
-{
-    for (size_t i = 0; i < r; ++i)
-        for (size_t j = 0; j < c; ++j) {
-            double acc = 0.0;
-            for (size_t l = 0; l < k; ++l)
-                acc += A[i * k + l] * B[j * k + l];
-            C[i * c + j] = acc;
-        }
-}
-
 /* Symmetric within round-off (see gf_kalman.h): 1 and the symmetrised matrix in out
  * (n x n, may be A itself), or 0. Non-finite entries fail. */
 #define GF_KF_SYM_TOL 1e-9
@@ -136,6 +124,9 @@ gf_status gf_kalman_predict(gf_kalman *kf, const double *F, const double *Q, int
     return GF_OK;
 }
 
+static gf_status joseph_update(gf_kalman *kf, size_t m, const double *residual, const double *H,
+                               const double *R, double nis_max, double *nis, int *accepted);
+
 gf_status gf_kalman_update(gf_kalman *kf, size_t m, const double *residual, const double *H,
                            const double *R, double *nis)
 {
@@ -172,14 +163,49 @@ gf_status gf_kalman_update_gated(gf_kalman *kf, size_t m, const double *residual
             return st_r;
     }
     R = R_s;
-    /* PHt = P H^T (n x m), S = H P H^T + R (m x m) */
-    double PHt[NMAX * MMAX], S[MMAX * MMAX], L[MMAX * MMAX];
-    mat_mul_bt(n, n, m, kf->P, H, PHt);
+    return joseph_update(kf, m, residual, H, R, nis_max, nis, accepted);
+}
+
+/* The update after the checks (R symmetric positive definite). Every product is formed
+ * over contiguous rows (vectorised), skipping the zeros of H (measurement models are
+ * mostly zeros); each entry sees the same operations in the same order as the plain
+ * products:
+ *   HP = H P (m x n; = (P H^T)^T, P symmetric),  S = H (HP)^T + R,
+ *   K^T = S^-1 HP,  x += K r,
+ *   Joseph form (I - K H) P (I - K H)^T + K R K^T multiplied out in factors, O(n^2 m):
+ *   X = (I - K H) P = P - K HP,  P <- X + (K R - X H^T) K^T  (upper triangle, mirrored) */
+GF_VECTOR_CLONES
+static gf_status joseph_update(gf_kalman *kf, size_t m, const double *residual, const double *H,
+                               const double *R, double nis_max, double *nis, int *accepted)
+{
+    const size_t n = kf->n;
+    const double *P = kf->P;
+    /* the non-zeros of each row of H: hnz[k][0 .. hcount[k]) */
+    unsigned char hnz[MMAX][NMAX];
+    size_t hcount[MMAX];
+    for (size_t k = 0; k < m; ++k) {
+        hcount[k] = 0;
+        for (size_t l = 0; l < n; ++l)
+            if (H[k * n + l] != 0.0)
+                hnz[k][hcount[k]++] = (unsigned char)l;
+    }
+    double HP[MMAX * NMAX], S[MMAX * MMAX], L[MMAX * MMAX], Kt[MMAX * NMAX];
+    for (size_t k = 0; k < m; ++k) {
+        double *hp = HP + k * n;
+        for (size_t j = 0; j < n; ++j)
+            hp[j] = 0.0;
+        for (size_t q = 0; q < hcount[k]; ++q) {
+            const size_t l = hnz[k][q];
+            const double h = H[k * n + l];
+            for (size_t j = 0; j < n; ++j)
+                hp[j] += h * P[l * n + j];
+        }
+    }
     for (size_t i = 0; i < m; ++i)
         for (size_t j = 0; j < m; ++j) {
             double acc = R[i * m + j];
             for (size_t k = 0; k < n; ++k)
-                acc += H[i * n + k] * PHt[k * m + j];
+                acc += H[i * n + k] * HP[j * n + k];
             S[i * m + j] = acc;
         }
     for (size_t i = 0; i < m; ++i) /* symmetrise against round-off */
@@ -189,11 +215,7 @@ gf_status gf_kalman_update_gated(gf_kalman *kf, size_t m, const double *residual
     const gf_status st = gf_cholesky(m, L);
     if (st != GF_OK)
         return st;
-    /* K^T = S^-1 (P H^T)^T  (m x n) */
-    double Kt[MMAX * NMAX];
-    for (size_t i = 0; i < m; ++i)
-        for (size_t j = 0; j < n; ++j)
-            Kt[i * n + j] = PHt[j * m + i];
+    memcpy(Kt, HP, m * n * sizeof *Kt);
     gf_cholesky_solve(m, L, n, Kt);
     if (nis || nis_max > 0.0) {
         double y[MMAX];
@@ -215,54 +237,186 @@ gf_status gf_kalman_update_gated(gf_kalman *kf, size_t m, const double *residual
             acc += Kt[j * n + i] * residual[j];
         kf->x[i] += acc;
     }
-    /* Joseph form (I - K H) P (I - K H)^T + K R K^T, multiplied out in factors so that it
-     * costs O(n^2 m) instead of O(n^3):
-     *   X = (I - K H) P = P - K (H P),      H P = (P H^T)^T (P symmetric)
-     *   P <- X (I - K H)^T + K R K^T = X + (K R - X H^T) K^T */
     double X[NMAX * NMAX], D[NMAX * MMAX];
-    for (size_t i = 0; i < n; ++i)
-        for (size_t j = 0; j < n; ++j) {
-            double acc = kf->P[i * n + j];
-            for (size_t k = 0; k < m; ++k)
-                acc -= Kt[k * n + i] * PHt[j * m + k];
-            X[i * n + j] = acc;
+    for (size_t i = 0; i < n; ++i) {
+        double *xi = X + i * n;
+        for (size_t j = 0; j < n; ++j)
+            xi[j] = P[i * n + j];
+        for (size_t k = 0; k < m; ++k) {
+            const double kik = Kt[k * n + i], *hp = HP + k * n;
+            for (size_t j = 0; j < n; ++j)
+                xi[j] -= kik * hp[j];
         }
+    }
     for (size_t i = 0; i < n; ++i)
         for (size_t k = 0; k < m; ++k) {
             double kr = 0.0, xh = 0.0;
             for (size_t l = 0; l < m; ++l)
                 kr += Kt[l * n + i] * R[l * m + k];
             const double *hrow = H + k * n, *xrow = X + i * n;
-            for (size_t l = 0; l < n; ++l)
+            for (size_t q = 0; q < hcount[k]; ++q) {
+                const size_t l = hnz[k][q];
                 xh += xrow[l] * hrow[l];
+            }
             D[i * m + k] = kr - xh;
         }
-    for (size_t i = 0; i < n; ++i)
-        for (size_t j = i; j < n; ++j) {
-            double acc = X[i * n + j];
-            for (size_t k = 0; k < m; ++k)
-                acc += D[i * m + k] * Kt[k * n + j];
-            kf->P[i * n + j] = kf->P[j * n + i] = acc;
+    double *Pn = kf->P;
+    for (size_t i = 0; i < n; ++i) {
+        double row[NMAX];
+        for (size_t j = i; j < n; ++j)
+            row[j] = X[i * n + j];
+        for (size_t k = 0; k < m; ++k) {
+            const double dik = D[i * m + k], *kt = Kt + k * n;
+            for (size_t j = i; j < n; ++j)
+                row[j] += dik * kt[j];
         }
+        for (size_t j = i; j < n; ++j)
+            Pn[i * n + j] = Pn[j * n + i] = row[j];
+    }
     return GF_OK;
 }
 
 /* ---- structured predict ------------------------------------------------------------ */
 
-#define axpy4 gf_axpy4
 #define PADDED GF_PADDED
+#define SMAX GF_PADDED(NMAX)   /* largest row stride of the work matrices */
 
-/* The structured predict is a few thousand vectorisable multiply-adds: on x86-64 with
- * GCC it is compiled twice, for the baseline (SSE2) and for AVX2, and the loader picks
- * the one the processor runs (function multi-versioning). Both do the same IEEE
- * operations in the same order (no FMA: -ffp-contract=off), so their results are equal
- * bit for bit. */
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__linux__) && \
-    !defined(GF_NO_MULTIVERSION)
-#define GF_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define GF_VECTOR_CLONES
-#endif
+/* One row of (I + A) X over its first NB blocks of 4, accumulated in registers:
+ * out = in + sum over the set bits l of mask of a_row[l] X_l (X in rows of stride S). */
+static GF_ALWAYS_INLINE void phi_row(const size_t NB, const size_t S, const double *in,
+                                     const double *X, const double *a_row, uint64_t mask,
+                                     double *out)
+{
+    gf_v4 acc[SMAX / 4];
+    for (size_t k = 0; k < NB; ++k)
+        acc[k] = GF_V4_LOAD(in + 4 * k);
+    for (; mask; mask &= mask - 1) {
+        const size_t l = gf_lowest_bit(mask);
+        const double a = a_row[l], *x = X + l * S;
+        for (size_t k = 0; k < NB; ++k)
+            GF_V4_AXPY(acc[k], a, x + 4 * k);
+    }
+    for (size_t k = 0; k < NB; ++k)
+        GF_V4_STORE(out + 4 * k, acc[k]);
+}
+
+/* P <- Phi M Phi^T + D2 with Phi = I + A, M = P + D1, in two passes of row updates over
+ * rows padded to the stride S (a multiple of 4):
+ *   B = Phi M:    B_i = M_i + sum_l A_il M_l     (M symmetric: its row l is its column l)
+ *   P' = Phi B^T: P'_i = Bt_i + sum_l A_il Bt_l  (Bt = B^T, stored transposed as B is made)
+ * the sums over the non-zeros of row i of A (row_mask[i]). Only the lower triangle of P'
+ * is formed (row i up to column i, rounded up to a block of 4), then mirrored:
+ * navigation error models have their dense rows first (velocity, attitude) and their
+ * diagonal ones last (sensor errors), so the lower triangle costs about half of the
+ * full rows. Leaves the lower rows in L (n x S); returns 0 if a diagonal entry is not
+ * finite (a non-finite A or q reaches the diagonal: Inf * 0 = NaN). */
+static GF_ALWAYS_INLINE int predict_rows(const size_t S, size_t n, const double *P,
+                                         const double *A, size_t stride,
+                                         const uint64_t *row_mask, const double *q1,
+                                         const double *q2, double *L)
+{
+    double M[NMAX * SMAX], Bt[SMAX * SMAX], row[SMAX];
+    for (size_t i = 0; i < n; ++i) {
+        /* S entries from row i of P (stride n): the last ones are the next row's, or for
+         * the last row entries of the array beyond n x n ((n - 1) n + S <= NMAX^2); they
+         * fall in the padding, which is then zeroed */
+        double *m = M + i * S;
+        for (size_t k = 0; k < S; k += 4)
+            GF_V4_STORE(m + k, GF_V4_LOAD(P + i * n + k));
+        for (size_t j = n; j < S; ++j)
+            m[j] = 0.0;
+        if (q1)
+            m[i] += q1[i];
+    }
+    for (size_t i = 0; i < n; ++i) {
+        phi_row(S / 4, S, M + i * S, M, A + i * stride, row_mask[i], row);
+        for (size_t j = 0; j < S; ++j)
+            Bt[j * S + i] = row[j];
+    }
+    for (size_t j = 0; j < n; ++j)       /* the padding rows of B are zero */
+        for (size_t i = n; i < S; ++i)
+            Bt[j * S + i] = 0.0;
+    int finite = 1;
+    for (size_t i = 0; i < n; ++i) {
+        const double *in = Bt + i * S, *a = A + i * stride;
+        const uint64_t mask = row_mask[i];
+        double *out = L + i * S;
+        /* blocks of row i up to the diagonal: a compile-time count up to 6 (S = 24) */
+        switch (i / 4) {
+        case 0: phi_row(1, S, in, Bt, a, mask, out); break;
+        case 1: phi_row(2, S, in, Bt, a, mask, out); break;
+        case 2: phi_row(3, S, in, Bt, a, mask, out); break;
+        case 3: phi_row(4, S, in, Bt, a, mask, out); break;
+        case 4: phi_row(5, S, in, Bt, a, mask, out); break;
+        case 5: phi_row(6, S, in, Bt, a, mask, out); break;
+        default: phi_row(i / 4 + 1, S, in, Bt, a, mask, out); break;
+        }
+        if (q2)
+            out[i] += q2[i];
+        finite &= isfinite(out[i]) != 0;
+    }
+    return finite;
+}
+
+/* P (n x n, stride n) from the lower rows L (stride S): row i is a copy of the whole row
+ * i of L, whose entries past column i (up to S - n of them beyond the end of the row:
+ * into the next row, which is written next, or for the last row beyond n x n, within the
+ * array) are then overwritten from column i of L, four at a time. A whole row is a
+ * fixed-size copy. */
+static GF_ALWAYS_INLINE void write_symmetric(const size_t S, size_t n, const double *L, double *P)
+{
+    for (size_t i = 0; i < n; ++i) {
+        double *p = P + i * n;
+        const double *c = L + i;         /* column i of L */
+        for (size_t k = 0; k < S; k += 4)
+            GF_V4_STORE(p + k, GF_V4_LOAD(L + i * S + k));
+        size_t j = i + 1;
+        for (; j + 4 <= n; j += 4)
+            GF_V4_STORE(p + j, GF_V4_SET(c[j * S], c[(j + 1) * S], c[(j + 2) * S], c[(j + 3) * S]));
+        for (; j < n; ++j)
+            p[j] = c[j * S];
+    }
+}
+
+GF_VECTOR_CLONES
+gf_status gf_kalman_predict_masked(gf_kalman *kf, const double *A, size_t stride,
+                                   const uint64_t *row_mask, const double *q1, const double *q2)
+{
+    if (!kf || !A || !row_mask)
+        return GF_ERR_NULL_POINTER;
+    const size_t n = kf->n;
+    if (n == 0 || n > NMAX || stride < n)
+        return GF_ERR_BAD_SIZE;
+    uint64_t outside = 0;          /* mask bits at or above n */
+    for (size_t i = 0; i < n; ++i)
+        outside |= row_mask[i] >> n;
+    if (outside)
+        return GF_ERR_BAD_SIZE;
+    /* the stride as a compile-time constant for the navigation filter's sizes: 16 (its
+     * 15 states), 20 and 24 (16 .. 23 states); else the padded n */
+    const size_t s = PADDED(n);
+    double L[NMAX * SMAX];
+    int finite;
+    if (s == 16)
+        finite = predict_rows(16, n, kf->P, A, stride, row_mask, q1, q2, L);
+    else if (s == 20)
+        finite = predict_rows(20, n, kf->P, A, stride, row_mask, q1, q2, L);
+    else if (s == 24)
+        finite = predict_rows(24, n, kf->P, A, stride, row_mask, q1, q2, L);
+    else
+        finite = predict_rows(s, n, kf->P, A, stride, row_mask, q1, q2, L);
+    if (!finite)
+        return GF_ERR_NONFINITE_INPUT;     /* P unchanged */
+    if (s == 16)
+        write_symmetric(16, n, L, kf->P);
+    else if (s == 20)
+        write_symmetric(20, n, L, kf->P);
+    else if (s == 24)
+        write_symmetric(24, n, L, kf->P);
+    else
+        write_symmetric(s, n, L, kf->P);
+    return GF_OK;
+}
 
 gf_status gf_kalman_predict_sparse(gf_kalman *kf, const double *A, const double *q1,
                                    const double *q2)
@@ -272,25 +426,16 @@ gf_status gf_kalman_predict_sparse(gf_kalman *kf, const double *A, const double 
     const size_t n = kf->n;
     if (n == 0 || n > NMAX)
         return GF_ERR_BAD_SIZE;
-    /* the non-zeros of A, row by row (compressed sparse rows) */
-    unsigned char col[NMAX * NMAX];
-    double val[NMAX * NMAX];
-    size_t start[NMAX + 1], nnz = 0;
+    uint64_t mask[NMAX];
     for (size_t i = 0; i < n; ++i) {
-        start[i] = nnz;
-        for (size_t j = 0; j < n; ++j) {
-            const double a = A[i * n + j];
-            if (a != 0.0) {
-                col[nnz] = (unsigned char)j;
-                val[nnz++] = a;
-            }
-        }
+        mask[i] = 0;
+        for (size_t j = 0; j < n; ++j)
+            if (A[i * n + j] != 0.0)
+                mask[i] |= (uint64_t)1 << j;
     }
-    start[n] = nnz;
-    return gf_kalman_predict_csr(kf, start, col, val, q1, q2);
+    return gf_kalman_predict_masked(kf, A, n, mask, q1, q2);
 }
 
-GF_VECTOR_CLONES
 gf_status gf_kalman_predict_csr(gf_kalman *kf, const size_t *start, const unsigned char *col,
                                 const double *val, const double *q1, const double *q2)
 {
@@ -302,56 +447,19 @@ gf_status gf_kalman_predict_csr(gf_kalman *kf, const size_t *start, const unsign
     for (size_t i = 0; i < n; ++i)
         if (start[i + 1] < start[i] || start[i + 1] > NMAX * NMAX)
             return GF_ERR_BAD_SIZE;
-    for (size_t p = 0; p < start[n]; ++p)
-        if (col[p] >= n)
-            return GF_ERR_BAD_SIZE;
-    const size_t s = PADDED(n);   /* row stride of the work matrices */
-    /* (I + A) M (I + A)^T = M + G + G^T + G A^T with M = P + D1 (symmetric), G = A M:
-     * G row by row (vectorised axpys over rows padded to the stride), then the upper
-     * triangle, (G A^T)_ij = sum over the non-zeros A_jl of A_jl G_il */
-    double M[NMAX * NMAX], G[NMAX * NMAX];
+    /* A in rows of stride n (a repeated column adds up) and its structure */
+    double A[NMAX * NMAX] = {0};
+    uint64_t mask[NMAX];
     for (size_t i = 0; i < n; ++i) {
-        memcpy(M + i * s, kf->P + i * n, n * sizeof *M);
-        for (size_t j = n; j < s; ++j)
-            M[i * s + j] = 0.0;
-        if (q1)
-            M[i * s + i] += q1[i];
+        mask[i] = 0;
+        for (size_t p = start[i]; p < start[i + 1]; ++p) {
+            if (col[p] >= n)
+                return GF_ERR_BAD_SIZE;
+            A[i * n + col[p]] += val[p];
+            mask[i] |= (uint64_t)1 << col[p];
+        }
     }
-    memset(G, 0, n * s * sizeof *G);
-    for (size_t i = 0; i < n; ++i)
-        for (size_t p = start[i]; p < start[i + 1]; ++p)
-            axpy4(s, val[p], M + (size_t)col[p] * s, G + i * s);
-    /* the transpose of G, so that column j of P, (G A^T)_.j = sum_p A_jl G_.l, is a sum of
-     * rows of G^T: axpys again, over i = 0..j (rounded up to the padding) */
-    double Gt[NMAX * NMAX], Pc[NMAX * NMAX];
-    for (size_t i = 0; i < n; ++i)
-        for (size_t l = 0; l < n; ++l)
-            Gt[l * s + i] = G[i * s + l];
-    for (size_t l = 0; l < n; ++l)
-        for (size_t i = n; i < s; ++i)
-            Gt[l * s + i] = 0.0;
-    /* Pc row j = column j of the new P (entries 0..j used) */
-    for (size_t j = 0; j < n; ++j) {
-        double *pc = Pc + j * s;
-        const size_t len = PADDED(j + 1);
-        for (size_t i = 0; i < len; ++i)
-            pc[i] = M[j * s + i] + Gt[j * s + i] + G[j * s + i];   /* M_ij + G_ij + G_ji (M sym) */
-        for (size_t p = start[j]; p < start[j + 1]; ++p)
-            axpy4(len, val[p], Gt + (size_t)col[p] * s, pc);
-    }
-    /* a non-finite A or q reaches the diagonal (Inf * 0 = NaN): refuse, P unchanged */
-    int finite = 1;
-    for (size_t j = 0; j < n; ++j) {
-        if (q2)
-            Pc[j * s + j] += q2[j];
-        finite &= isfinite(Pc[j * s + j]) != 0;
-    }
-    if (!finite)
-        return GF_ERR_NONFINITE_INPUT;
-    for (size_t j = 0; j < n; ++j)
-        for (size_t i = 0; i <= j; ++i)
-            kf->P[i * n + j] = kf->P[j * n + i] = Pc[j * s + i];
-    return GF_OK;
+    return gf_kalman_predict_masked(kf, A, n, mask, q1, q2);
 }
 
 /* ---- unscented transform ------------------------------------------------------------ */

@@ -1462,14 +1462,12 @@ gf_status gf_ins_filter_check(const gf_ins_filter *f)
     return GF_OK;
 }
 
-gf_status gf_ins_step(gf_ins_filter *f, double t_s, const double *gyro, const double *accel,
-                      size_t n_meas, const gf_ins_meas *meas, gf_ins_epochs *epochs,
-                      gf_ins_log *log)
+/* gf_ins_step after its checks of the pointers and of the filter's layout (gf_ins_run
+ * makes them once for its whole record: nothing in a step changes the layout) */
+static gf_status ins_step(gf_ins_filter *f, double t_s, const double *gyro, const double *accel,
+                          size_t n_meas, const gf_ins_meas *meas, gf_ins_epochs *epochs,
+                          gf_ins_log *log)
 {
-    if (!f || !gyro || !accel || (n_meas && !meas))
-        return GF_ERR_NULL_POINTER;
-    if (!layout_is_valid(f))
-        return GF_ERR_BAD_PARAMETER;
     if (!isfinite(t_s) || !gf_all_finite(gyro, 3) || !gf_all_finite(accel, 3))
         return GF_ERR_NONFINITE_INPUT;
     const int rates = f->cfg.input == GF_SINS_INPUT_RATES;
@@ -1594,6 +1592,17 @@ gf_status gf_ins_step(gf_ins_filter *f, double t_s, const double *gyro, const do
     return GF_OK;
 }
 
+gf_status gf_ins_step(gf_ins_filter *f, double t_s, const double *gyro, const double *accel,
+                      size_t n_meas, const gf_ins_meas *meas, gf_ins_epochs *epochs,
+                      gf_ins_log *log)
+{
+    if (!f || !gyro || !accel || (n_meas && !meas))
+        return GF_ERR_NULL_POINTER;
+    if (!layout_is_valid(f))
+        return GF_ERR_BAD_PARAMETER;
+    return ins_step(f, t_s, gyro, accel, n_meas, meas, epochs, log);
+}
+
 static void write_output(const gf_ins_filter *f, const gf_ins_output *out, size_t k)
 {
     out->t_s[k] = f->t_s;
@@ -1625,13 +1634,15 @@ gf_status gf_ins_run(gf_ins_filter *f, size_t n, const double *t_s, const double
     for (size_t j = 1; j < n_meas; ++j)
         if (!(meas[j].t_s >= meas[j - 1].t_s))
             return GF_ERR_BAD_TIME;
+    if (!layout_is_valid(f))
+        return GF_ERR_BAD_PARAMETER;
     size_t j = 0, k = 0;
     gf_status st = GF_OK;
     for (; k < n; ++k) {
         size_t cnt = 0;
         while (j + cnt < n_meas && meas[j + cnt].t_s <= t_s[k] + GF_INS_TIME_EPS_S)
             ++cnt;
-        st = gf_ins_step(f, t_s[k], gyro + 3 * k, accel + 3 * k, cnt, meas + j, epochs, log);
+        st = ins_step(f, t_s[k], gyro + 3 * k, accel + 3 * k, cnt, meas + j, epochs, log);
         if (st != GF_OK)
             break;
         j += cnt;

@@ -9,12 +9,16 @@
 #define NMAX GF_KF_MAX_N
 #define MMAX GF_KF_MAX_M
 
+/* 1 if all n values are finite: x - x is 0 for finite x and NaN for NaN and +-Inf; a
+ * select of any NaN vectorises (also with SSE2 alone), unlike an early exit */
 static int gf_all_finite_n(const double *a, size_t n)
 {
-    for (size_t i = 0; i < n; ++i)
-        if (!isfinite(a[i]))
-            return 0;
-    return 1;
+    double nan_seen = 0.0;
+    for (size_t i = 0; i < n; ++i) {
+        const double d = a[i] - a[i];
+        nan_seen = d != d ? d : nan_seen;
+    }
+    return nan_seen == 0.0;
 }
 
 /* C (r x c) = A (r x k) B (k x c), row-major */
@@ -316,25 +320,25 @@ static GF_ALWAYS_INLINE int predict_rows(const size_t S, size_t n, const double 
                                          const double *q2, double *L)
 {
     double M[NMAX * SMAX], Bt[SMAX * SMAX], row[SMAX];
-    for (size_t i = 0; i < n; ++i) {
-        /* S entries from row i of P (stride n): the last ones are the next row's, or for
-         * the last row entries of the array beyond n x n ((n - 1) n + S <= NMAX^2); they
-         * fall in the padding, which is then zeroed */
-        double *m = M + i * S;
+    /* S entries from each row of P (stride n): the last ones are the next row's, or for
+     * the last row entries of the array beyond n x n ((n - 1) n + S <= NMAX^2); they fall
+     * in the padding, which is then zeroed */
+    for (size_t i = 0; i < n; ++i)
         for (size_t k = 0; k < S; k += 4)
-            GF_V4_STORE(m + k, GF_V4_LOAD(P + i * n + k));
-        for (size_t j = n; j < S; ++j)
-            m[j] = 0.0;
-        if (q1)
-            m[i] += q1[i];
-    }
+            GF_V4_STORE(M + i * S + k, GF_V4_LOAD(P + i * n + k));
+    for (size_t j = n; j < S; ++j)
+        for (size_t i = 0; i < n; ++i)
+            M[i * S + j] = 0.0;
+    if (q1)
+        for (size_t i = 0; i < n; ++i)
+            M[i * S + i] += q1[i];
     for (size_t i = 0; i < n; ++i) {
         phi_row(S / 4, S, M + i * S, M, A + i * stride, row_mask[i], row);
         for (size_t j = 0; j < S; ++j)
             Bt[j * S + i] = row[j];
     }
-    for (size_t j = 0; j < n; ++j)       /* the padding rows of B are zero */
-        for (size_t i = n; i < S; ++i)
+    for (size_t i = n; i < S; ++i)       /* the padding rows of B are zero */
+        for (size_t j = 0; j < n; ++j)
             Bt[j * S + i] = 0.0;
     int finite = 1;
     for (size_t i = 0; i < n; ++i) {
@@ -509,21 +513,23 @@ gf_status gf_ukf_sigma_points(const gf_kalman *kf, const gf_ukf_weights *w, doub
     return GF_OK;
 }
 
-/* mean (m values) of the 2n+1 points Y ((2n+1) x m) */
+/* mean (m values) of the 2n+1 points Y ((2n+1) x m): the points' rows summed in order */
 static void ukf_mean(const gf_ukf_weights *w, size_t m, const double *Y, double *mean)
 {
     const size_t np = 2 * w->n + 1;
-    for (size_t i = 0; i < m; ++i) {
-        double acc = 0.0;
-        for (size_t p = 1; p < np; ++p)
-            acc += Y[p * m + i];
-        mean[i] = w->wm0 * Y[i] + w->wi * acc;
-    }
+    double acc[NMAX];
+    for (size_t i = 0; i < m; ++i)
+        acc[i] = 0.0;
+    for (size_t p = 1; p < np; ++p)
+        for (size_t i = 0; i < m; ++i)
+            acc[i] += Y[p * m + i];
+    for (size_t i = 0; i < m; ++i)
+        mean[i] = w->wm0 * Y[i] + w->wi * acc[i];
 }
 
 /* C (ma x mb) = sum_p Wc_p (Ya_p - ma)(Yb_p - mb)^T */
 static void ukf_cross(const gf_ukf_weights *w, size_t ma, const double *Ya, const double *mean_a,
-                      size_t mb, const double *Yb, const double *mean_b, double *C)
+                      size_t mb, const double *Yb, const double *mean_b, double *restrict C)
 {
     const size_t np = 2 * w->n + 1;
     for (size_t i = 0; i < ma * mb; ++i)
@@ -543,6 +549,69 @@ static void ukf_cross(const gf_ukf_weights *w, size_t ma, const double *Ya, cons
     }
 }
 
+/* Row i of the upper triangle of sum_p Wc_p d_p d_p^T over NB blocks of 4 from column
+ * c0 (the block holding the diagonal), accumulated in registers over the points: the
+ * deviations d_p are the rows of D (stride S, padded with zeros). */
+static GF_ALWAYS_INLINE void cov_row(const size_t NB, const size_t S, const gf_ukf_weights *w,
+                                     size_t np, const double *D, size_t i, size_t c0, double *out)
+{
+    gf_v4 acc[SMAX / 4];
+    const double s0 = w->wc0 * D[i];
+    for (size_t k = 0; k < NB; ++k)
+        acc[k] = GF_V4_SCALE(s0, D + c0 + 4 * k);
+    for (size_t p = 1; p < np; ++p) {
+        const double *d = D + p * S;
+        const double s = w->wi * d[i];
+        for (size_t k = 0; k < NB; ++k)
+            GF_V4_AXPY(acc[k], s, d + c0 + 4 * k);
+    }
+    for (size_t k = 0; k < NB; ++k)
+        GF_V4_STORE(out + c0 + 4 * k, acc[k]);
+}
+
+static GF_ALWAYS_INLINE void cov_upper_rows(const size_t S, const gf_ukf_weights *w, size_t n,
+                                            const double *Y, const double *mean, double *C)
+{
+    const size_t np = 2 * n + 1;
+    double D[(2 * NMAX + 1) * SMAX];
+    for (size_t p = 0; p < np; ++p) {
+        for (size_t j = 0; j < n; ++j)
+            D[p * S + j] = Y[p * n + j] - mean[j];
+        for (size_t j = n; j < S; ++j)
+            D[p * S + j] = 0.0;
+    }
+    for (size_t i = 0; i < n; ++i) {
+        const size_t c0 = i / 4 * 4;
+        switch ((S - c0) / 4) {  /* blocks from the diagonal's: a compile-time count */
+        case 1: cov_row(1, S, w, np, D, i, c0, C + i * S); break;
+        case 2: cov_row(2, S, w, np, D, i, c0, C + i * S); break;
+        case 3: cov_row(3, S, w, np, D, i, c0, C + i * S); break;
+        case 4: cov_row(4, S, w, np, D, i, c0, C + i * S); break;
+        case 5: cov_row(5, S, w, np, D, i, c0, C + i * S); break;
+        case 6: cov_row(6, S, w, np, D, i, c0, C + i * S); break;
+        default: cov_row((S - c0) / 4, S, w, np, D, i, c0, C + i * S); break;
+        }
+    }
+}
+
+/* The upper triangle (j >= i) of C = sum_p Wc_p (Y_p - m)(Y_p - m)^T (n x n) in rows of
+ * stride PADDED(n) (entries left of the diagonal's block of 4 are not written); each
+ * entry is summed over the points in their order. */
+GF_VECTOR_CLONES
+static void ukf_cov_upper(const gf_ukf_weights *w, size_t n, const double *Y, const double *mean,
+                          double *C)
+{
+    const size_t s = PADDED(n);
+    if (s == 16)
+        cov_upper_rows(16, w, n, Y, mean, C);
+    else if (s == 20)
+        cov_upper_rows(20, w, n, Y, mean, C);
+    else if (s == 24)
+        cov_upper_rows(24, w, n, Y, mean, C);
+    else
+        cov_upper_rows(s, w, n, Y, mean, C);
+}
+
 gf_status gf_ukf_predict(gf_kalman *kf, const gf_ukf_weights *w, const double *Y,
                          const double *Q)
 {
@@ -553,18 +622,18 @@ gf_status gf_ukf_predict(gf_kalman *kf, const gf_ukf_weights *w, const double *Y
         return GF_ERR_BAD_SIZE;
     if (!gf_all_finite_n(Y, (2 * n + 1) * n) || (Q && !gf_all_finite_n(Q, n * n)))
         return GF_ERR_NONFINITE_INPUT;
-    double x[NMAX], P[NMAX * NMAX];
+    double x[NMAX], C[NMAX * SMAX];
     ukf_mean(w, n, Y, x);
-    ukf_cross(w, n, Y, x, n, Y, x, P);
+    ukf_cov_upper(w, n, Y, x, C);
+    const size_t s = PADDED(n);
     for (size_t i = 0; i < n; ++i)
         for (size_t j = i; j < n; ++j) {
-            double p = 0.5 * (P[i * n + j] + P[j * n + i]);
+            double p = C[i * s + j];
             if (Q)
                 p += 0.5 * (Q[i * n + j] + Q[j * n + i]);
-            P[i * n + j] = P[j * n + i] = p;
+            kf->P[i * n + j] = kf->P[j * n + i] = p;
         }
     memcpy(kf->x, x, n * sizeof *x);
-    memcpy(kf->P, P, n * n * sizeof *P);
     return GF_OK;
 }
 

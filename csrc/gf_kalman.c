@@ -8,6 +8,8 @@
 
 #define NMAX GF_KF_MAX_N
 #define MMAX GF_KF_MAX_M
+#define PADDED GF_PADDED
+#define SMAX GF_PADDED(NMAX)   /* largest row stride of the padded work matrices */
 
 /* 1 if all n values are finite: x - x is 0 for finite x and NaN for NaN and +-Inf; a
  * select of any NaN vectorises (also with SSE2 alone), unlike an early exit */
@@ -131,6 +133,21 @@ gf_status gf_kalman_predict(gf_kalman *kf, const double *F, const double *Q, int
 static gf_status joseph_update(gf_kalman *kf, size_t m, const double *residual, const double *H,
                                const double *R, double nis_max, double *nis, int *accepted);
 
+/* Row i of X + D K^T over NB blocks of 4 from column c0, accumulated in registers (x: row
+ * i of X, d: row i of D, Kt: K^T in rows of stride S) */
+static GF_ALWAYS_INLINE void xdk_row(const size_t NB, const size_t S, size_t m, const double *x,
+                                     const double *d, const double *Kt, size_t c0, double *out)
+{
+    gf_v4 acc[SMAX / 4];
+    for (size_t b = 0; b < NB; ++b)
+        acc[b] = GF_V4_LOAD(x + c0 + 4 * b);
+    for (size_t k = 0; k < m; ++k)
+        for (size_t b = 0; b < NB; ++b)
+            GF_V4_AXPY(acc[b], d[k], Kt + k * S + c0 + 4 * b);
+    for (size_t b = 0; b < NB; ++b)
+        GF_V4_STORE(out + c0 + 4 * b, acc[b]);
+}
+
 gf_status gf_kalman_update(gf_kalman *kf, size_t m, const double *residual, const double *H,
                            const double *R, double *nis)
 {
@@ -170,17 +187,15 @@ gf_status gf_kalman_update_gated(gf_kalman *kf, size_t m, const double *residual
     return joseph_update(kf, m, residual, H, R, nis_max, nis, accepted);
 }
 
-/* The update after the checks (R symmetric positive definite). Every product is formed
- * over contiguous rows (vectorised), skipping the zeros of H (measurement models are
- * mostly zeros); each entry sees the same operations in the same order as the plain
- * products:
- *   HP = H P (m x n; = (P H^T)^T, P symmetric),  S = H (HP)^T + R,
- *   K^T = S^-1 HP,  x += K r,
- *   Joseph form (I - K H) P (I - K H)^T + K R K^T multiplied out in factors, O(n^2 m):
- *   X = (I - K H) P = P - K HP,  P <- X + (K R - X H^T) K^T  (upper triangle, mirrored) */
-GF_VECTOR_CLONES
-static gf_status joseph_update(gf_kalman *kf, size_t m, const double *residual, const double *H,
-                               const double *R, double nis_max, double *nis, int *accepted)
+/* Joseph-form update in rows padded to the stride S (vector blocks of 4), see
+ * joseph_update. P's rows are read S entries at a time from their stride n (the entries
+ * past the row are the next row's, or beyond n x n within the array: they only reach the
+ * padding lanes, which are never stored into P except past its last row, where they are
+ * written back unchanged). */
+static GF_ALWAYS_INLINE gf_status joseph_rows(const size_t S, gf_kalman *kf, size_t m,
+                                              const double *residual, const double *H,
+                                              const double *R, double nis_max, double *nis,
+                                              int *accepted)
 {
     const size_t n = kf->n;
     const double *P = kf->P;
@@ -193,34 +208,43 @@ static gf_status joseph_update(gf_kalman *kf, size_t m, const double *residual, 
             if (H[k * n + l] != 0.0)
                 hnz[k][hcount[k]++] = (unsigned char)l;
     }
-    double HP[MMAX * NMAX], S[MMAX * MMAX], L[MMAX * MMAX], Kt[MMAX * NMAX];
+    /* HP = H P, padding zero */
+    double HP[MMAX * SMAX], S_[MMAX * MMAX], L[MMAX * MMAX], Kt[MMAX * SMAX];
     for (size_t k = 0; k < m; ++k) {
-        double *hp = HP + k * n;
-        for (size_t j = 0; j < n; ++j)
-            hp[j] = 0.0;
+        gf_v4 acc[SMAX / 4];
+        for (size_t b = 0; b < S / 4; ++b)
+            acc[b] = GF_V4_SET(0.0, 0.0, 0.0, 0.0);
         for (size_t q = 0; q < hcount[k]; ++q) {
             const size_t l = hnz[k][q];
             const double h = H[k * n + l];
-            for (size_t j = 0; j < n; ++j)
-                hp[j] += h * P[l * n + j];
+            for (size_t b = 0; b < S / 4; ++b)
+                GF_V4_AXPY(acc[b], h, P + l * n + 4 * b);
         }
+        for (size_t b = 0; b < S / 4; ++b)
+            GF_V4_STORE(HP + k * S + 4 * b, acc[b]);
+        for (size_t j = n; j < S; ++j)
+            HP[k * S + j] = 0.0;
     }
+    /* S = H (HP)^T + R */
     for (size_t i = 0; i < m; ++i)
         for (size_t j = 0; j < m; ++j) {
             double acc = R[i * m + j];
-            for (size_t k = 0; k < n; ++k)
-                acc += H[i * n + k] * HP[j * n + k];
-            S[i * m + j] = acc;
+            for (size_t q = 0; q < hcount[i]; ++q) {
+                const size_t k = hnz[i][q];
+                acc += H[i * n + k] * HP[j * S + k];
+            }
+            S_[i * m + j] = acc;
         }
     for (size_t i = 0; i < m; ++i) /* symmetrise against round-off */
         for (size_t j = i + 1; j < m; ++j)
-            S[i * m + j] = S[j * m + i] = 0.5 * (S[i * m + j] + S[j * m + i]);
-    memcpy(L, S, m * m * sizeof *S);
+            S_[i * m + j] = S_[j * m + i] = 0.5 * (S_[i * m + j] + S_[j * m + i]);
+    memcpy(L, S_, m * m * sizeof *S_);
     const gf_status st = gf_cholesky(m, L);
     if (st != GF_OK)
         return st;
-    memcpy(Kt, HP, m * n * sizeof *Kt);
-    gf_cholesky_solve(m, L, n, Kt);
+    /* K^T = S^-1 HP (m x S; the padding stays zero) */
+    memcpy(Kt, HP, m * S * sizeof *Kt);
+    gf_cholesky_solve(m, L, S, Kt);
     if (nis || nis_max > 0.0) {
         double y[MMAX];
         memcpy(y, residual, m * sizeof *y);
@@ -238,52 +262,101 @@ static gf_status joseph_update(gf_kalman *kf, size_t m, const double *residual, 
     for (size_t i = 0; i < n; ++i) {
         double acc = 0.0;
         for (size_t j = 0; j < m; ++j)
-            acc += Kt[j * n + i] * residual[j];
+            acc += Kt[j * S + i] * residual[j];
         kf->x[i] += acc;
     }
-    double X[NMAX * NMAX], D[NMAX * MMAX];
+    /* X = P - K HP */
+    double X[NMAX * SMAX], D[NMAX * MMAX];
     for (size_t i = 0; i < n; ++i) {
-        double *xi = X + i * n;
-        for (size_t j = 0; j < n; ++j)
-            xi[j] = P[i * n + j];
-        for (size_t k = 0; k < m; ++k) {
-            const double kik = Kt[k * n + i], *hp = HP + k * n;
-            for (size_t j = 0; j < n; ++j)
-                xi[j] -= kik * hp[j];
+        gf_v4 acc[SMAX / 4];
+        for (size_t b = 0; b < S / 4; ++b)
+            acc[b] = GF_V4_LOAD(P + i * n + 4 * b);
+        for (size_t k = 0; k < m; ++k)
+            for (size_t b = 0; b < S / 4; ++b)
+                GF_V4_AXPY(acc[b], -Kt[k * S + i], HP + k * S + 4 * b);
+        for (size_t b = 0; b < S / 4; ++b)
+            GF_V4_STORE(X + i * S + 4 * b, acc[b]);
+    }
+    /* D = K R - X H^T, as its columns D_.k = sum_l R_lk K_.l - sum_l H_kl X_.l over the
+     * rows' lanes; column l of X is P_l - sum_k HP_kl K_.k (P symmetric), the same
+     * operations as its entries in X's rows */
+    double Dt[MMAX * SMAX];
+    for (size_t k = 0; k < m; ++k) {
+        gf_v4 kr[SMAX / 4], xh[SMAX / 4];
+        for (size_t b = 0; b < S / 4; ++b)
+            kr[b] = xh[b] = GF_V4_SET(0.0, 0.0, 0.0, 0.0);
+        for (size_t l = 0; l < m; ++l)
+            for (size_t b = 0; b < S / 4; ++b)
+                GF_V4_AXPY(kr[b], R[l * m + k], Kt + l * S + 4 * b);
+        for (size_t q = 0; q < hcount[k]; ++q) {
+            const size_t l = hnz[k][q];
+            gf_v4 xl[SMAX / 4];          /* column l of X */
+            for (size_t b = 0; b < S / 4; ++b)
+                xl[b] = GF_V4_LOAD(P + l * n + 4 * b);
+            for (size_t j = 0; j < m; ++j)
+                for (size_t b = 0; b < S / 4; ++b)
+                    GF_V4_AXPY(xl[b], -HP[j * S + l], Kt + j * S + 4 * b);
+            for (size_t b = 0; b < S / 4; ++b)
+                GF_V4_AXPYV(xh[b], H[k * n + l], xl[b]);
         }
+        for (size_t b = 0; b < S / 4; ++b)
+            GF_V4_STORE(Dt + k * S + 4 * b, GF_V4_SUB(kr[b], xh[b]));
     }
     for (size_t i = 0; i < n; ++i)
-        for (size_t k = 0; k < m; ++k) {
-            double kr = 0.0, xh = 0.0;
-            for (size_t l = 0; l < m; ++l)
-                kr += Kt[l * n + i] * R[l * m + k];
-            const double *hrow = H + k * n, *xrow = X + i * n;
-            for (size_t q = 0; q < hcount[k]; ++q) {
-                const size_t l = hnz[k][q];
-                xh += xrow[l] * hrow[l];
-            }
-            D[i * m + k] = kr - xh;
-        }
-    double *Pn = kf->P;
+        for (size_t k = 0; k < m; ++k)
+            D[i * m + k] = Dt[k * S + i];
+    /* P = X + D K^T: the upper triangle (row i from the block holding the diagonal),
+     * then mirrored (the rows' padding and left-of-diagonal lanes are overwritten) */
+    double U[NMAX * SMAX];
     for (size_t i = 0; i < n; ++i) {
-        double row[NMAX];
-        for (size_t j = i; j < n; ++j)
-            row[j] = X[i * n + j];
-        for (size_t k = 0; k < m; ++k) {
-            const double dik = D[i * m + k], *kt = Kt + k * n;
-            for (size_t j = i; j < n; ++j)
-                row[j] += dik * kt[j];
+        const size_t c0 = i / 4 * 4;
+        switch ((S - c0) / 4) {  /* blocks from the diagonal's: a compile-time count */
+        case 1: xdk_row(1, S, m, X + i * S, D + i * m, Kt, c0, U + i * S); break;
+        case 2: xdk_row(2, S, m, X + i * S, D + i * m, Kt, c0, U + i * S); break;
+        case 3: xdk_row(3, S, m, X + i * S, D + i * m, Kt, c0, U + i * S); break;
+        case 4: xdk_row(4, S, m, X + i * S, D + i * m, Kt, c0, U + i * S); break;
+        case 5: xdk_row(5, S, m, X + i * S, D + i * m, Kt, c0, U + i * S); break;
+        case 6: xdk_row(6, S, m, X + i * S, D + i * m, Kt, c0, U + i * S); break;
+        default: xdk_row((S - c0) / 4, S, m, X + i * S, D + i * m, Kt, c0, U + i * S); break;
         }
-        for (size_t j = i; j < n; ++j)
-            Pn[i * n + j] = Pn[j * n + i] = row[j];
+    }
+    for (size_t i = 0; i < n; ++i) {
+        double *p = kf->P + i * n;
+        const size_t c0 = i / 4 * 4;
+        for (size_t k = c0; k < S; k += 4)
+            GF_V4_STORE(p + k, GF_V4_LOAD(U + i * S + k));
+        for (size_t j = 0; j < i; ++j)
+            p[j] = U[j * S + i];
     }
     return GF_OK;
 }
 
+/* The update after the checks (R symmetric positive definite). Every product is formed
+ * over rows padded to a multiple of 4 (vectorised), skipping the zeros of H
+ * (measurement models are mostly zeros); each entry sees the same operations in the
+ * same order as the plain products:
+ *   HP = H P (m x n; = (P H^T)^T, P symmetric),  S = H (HP)^T + R,
+ *   K^T = S^-1 HP,  x += K r,
+ *   Joseph form (I - K H) P (I - K H)^T + K R K^T multiplied out in factors, O(n^2 m):
+ *   X = (I - K H) P = P - K HP,  P <- X + (K R - X H^T) K^T  (upper triangle, mirrored) */
+GF_VECTOR_CLONES
+static gf_status joseph_update(gf_kalman *kf, size_t m, const double *residual, const double *H,
+                               const double *R, double nis_max, double *nis, int *accepted)
+{
+    const size_t s = PADDED(kf->n);
+    if (s == 8)
+        return joseph_rows(8, kf, m, residual, H, R, nis_max, nis, accepted);
+    if (s == 16)
+        return joseph_rows(16, kf, m, residual, H, R, nis_max, nis, accepted);
+    if (s == 20)
+        return joseph_rows(20, kf, m, residual, H, R, nis_max, nis, accepted);
+    if (s == 24)
+        return joseph_rows(24, kf, m, residual, H, R, nis_max, nis, accepted);
+    return joseph_rows(s, kf, m, residual, H, R, nis_max, nis, accepted);
+}
+
 /* ---- structured predict ------------------------------------------------------------ */
 
-#define PADDED GF_PADDED
-#define SMAX GF_PADDED(NMAX)   /* largest row stride of the work matrices */
 
 /* One row of (I + A) X over its first NB blocks of 4, accumulated in registers:
  * out = in + sum over the set bits l of mask of a_row[l] X_l (X in rows of stride S). */

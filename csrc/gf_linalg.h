@@ -33,6 +33,8 @@ typedef double gf_v4 __attribute__((vector_size(4 * sizeof(double)), aligned(siz
 #define GF_V4_SCALE(a, p) ((a) * GF_V4_LOAD(p))                 /* a * p[0..4) */
 #define GF_V4_SET(a, b, c, d) ((gf_v4){(a), (b), (c), (d)})
 #define GF_V4_AXPY(acc, a, p) ((acc) += (a) * GF_V4_LOAD(p))   /* acc += a * p[0..4) */
+#define GF_V4_AXPYV(acc, a, v) ((acc) += (a) * (v))             /* acc += a * v */
+#define GF_V4_SUB(u, v) ((u) - (v))
 #else
 typedef struct gf_v4 {
     double x[4];
@@ -62,8 +64,21 @@ static inline void gf_v4_axpy(gf_v4 *acc, double a, const double *p)
     for (int k = 0; k < 4; ++k)
         acc->x[k] += a * p[k];
 }
+static inline void gf_v4_axpyv(gf_v4 *acc, double a, gf_v4 v)
+{
+    for (int k = 0; k < 4; ++k)
+        acc->x[k] += a * v.x[k];
+}
+static inline gf_v4 gf_v4_sub(gf_v4 u, gf_v4 v)
+{
+    for (int k = 0; k < 4; ++k)
+        u.x[k] -= v.x[k];
+    return u;
+}
 #define GF_V4_LOAD(p) gf_v4_load(p)
 #define GF_V4_STORE(p, v) gf_v4_store((p), (v))
+#define GF_V4_AXPYV(acc, a, v) gf_v4_axpyv(&(acc), (a), (v))
+#define GF_V4_SUB(u, v) gf_v4_sub((u), (v))
 #define GF_V4_SCALE(a, p) gf_v4_scale((a), (p))
 #define GF_V4_SET(a, b, c, d) gf_v4_set((a), (b), (c), (d))
 #define GF_V4_AXPY(acc, a, p) gf_v4_axpy(&(acc), (a), (p))

@@ -4,7 +4,6 @@
 #include <math.h>
 #include <string.h>
 
-#include "gf_linalg.h"
 #include "gf_math.h"
 
 
@@ -279,10 +278,7 @@ static inline void finish_update(gf_sins_state *s, const double gyro[3], const d
 }
 
 /* One update of *s by one sample. All checks come before any write, so an error leaves
- * *s unchanged. dir = +1 forward, -1 backward (gyro already negated by the caller).
- * Compiled for AVX2 too (GF_VECTOR_CLONES): its three-operand instructions spare the
- * register copies of the baseline's two-operand SSE2 (the same IEEE operations). */
-GF_VECTOR_CLONES
+ * *s unchanged. dir = +1 forward, -1 backward (gyro already negated by the caller). */
 static gf_status sins_update(gf_sins_state *s, const double gyro[3], const double accel[3],
                              double dt_s, double h_ext_m)
 {

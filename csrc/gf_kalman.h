@@ -12,7 +12,10 @@
  * Also here, so that every filter shares them:
  *   - a structured predict, P <- (I + A)(P + D1)(I + A)^T + D2 (D diagonal), that skips
  *     the zeros of A = Phi - I (navigation error models are ~70% zeros): the trapezoidal
- *     rule for a diagonal continuous noise qc is D1 = D2 = qc T / 2;
+ *     rule for a diagonal continuous noise qc is D1 = D2 = qc T / 2. Its rows are padded
+ *     to a multiple of 4 and accumulated in vector registers; each entry is the same
+ *     sequence of IEEE operations in every compiled form (AVX2, SSE2, plain C), so the
+ *     results are equal bit for bit wherever the engine runs (tests/c/test_kalman.c);
  *   - the unscented transform of the sigma-point (unscented) Kalman filter with the
  *     scaled sigma points of seed 004 (section 2, eq. 25-38):
  *         lambda = alpha^2 (N + kappa) - N,  gamma = sqrt(N + lambda),

@@ -21,6 +21,7 @@
 
 #include "gf_kalman.h"
 #include "gf_linalg.h"
+#include "gf_ref.h"
 #include "gf_test.h"
 
 #define NMAX GF_KF_MAX_N
@@ -301,61 +302,17 @@ static void test_joseph(size_t n, size_t m)
     CHECK(bits_equal(kf.P, Pp, n * n) && bits_equal(kf.x, x, n),
           "update n = %zu m = %zu: bit for bit the plain factored products", n, m);
 
-    /* the textbook form, within round-off: K = P H^T S^-1 from an independent solve
-     * (Gauss-Jordan), P' = (I - KH) P (I - KH)^T + K R K^T; the terms are O(1) and the
-     * products have ~3 n terms: 1e3 n eps */
-    double S[MMAX * MMAX], Si[MMAX * MMAX], K[NMAX * MMAX], IKH[NMAX * NMAX];
-    for (size_t i = 0; i < m; ++i)
-        for (size_t j = 0; j < m; ++j) {
-            double acc = R[i * m + j];
-            for (size_t a = 0; a < n; ++a)
-                for (size_t b = 0; b < n; ++b)
-                    acc += H[i * n + a] * P[a * n + b] * H[j * n + b];
-            S[i * m + j] = acc;
-            Si[i * m + j] = i == j ? 1.0 : 0.0;
-        }
-    for (size_t c = 0; c < m; ++c) {   /* Gauss-Jordan on the SPD S (no pivoting needed) */
-        const double d = S[c * m + c];
-        for (size_t j = 0; j < m; ++j) {
-            S[c * m + j] /= d;
-            Si[c * m + j] /= d;
-        }
-        for (size_t i = 0; i < m; ++i)
-            if (i != c) {
-                const double f = S[i * m + c];
-                for (size_t j = 0; j < m; ++j) {
-                    S[i * m + j] -= f * S[c * m + j];
-                    Si[i * m + j] -= f * Si[c * m + j];
-                }
-            }
-    }
-    for (size_t i = 0; i < n; ++i)
-        for (size_t j = 0; j < m; ++j) {
-            double acc = 0.0;
-            for (size_t a = 0; a < n; ++a)
-                for (size_t k = 0; k < m; ++k)
-                    acc += P[i * n + a] * H[k * n + a] * Si[k * m + j];
-            K[i * m + j] = acc;
-        }
-    for (size_t i = 0; i < n; ++i)
-        for (size_t j = 0; j < n; ++j) {
-            double acc = i == j ? 1.0 : 0.0;
-            for (size_t k = 0; k < m; ++k)
-                acc -= K[i * m + k] * H[k * n + j];
-            IKH[i * n + j] = acc;
-        }
+    /* the textbook form (gf_ref.h), within round-off: the terms are O(1) and the products
+     * have ~3 n terms: 1e3 n eps */
+    double xr[NMAX] = {0}, Pr[NMAX * NMAX];
+    memcpy(Pr, P, n * n * sizeof *P);
+    ref_kalman_update(n, m, xr, Pr, r, H, R);
     double worst = 0.0;
-    for (size_t i = 0; i < n; ++i)
-        for (size_t j = 0; j < n; ++j) {
-            double acc = 0.0;
-            for (size_t a = 0; a < n; ++a)
-                for (size_t b = 0; b < n; ++b)
-                    acc += IKH[i * n + a] * P[a * n + b] * IKH[j * n + b];
-            for (size_t a = 0; a < m; ++a)
-                for (size_t b = 0; b < m; ++b)
-                    acc += K[i * m + a] * R[a * m + b] * K[j * m + b];
-            worst = fmax(worst, fabs(acc - kf.P[i * n + j]));
-        }
+    for (size_t i = 0; i < n; ++i) {
+        worst = fmax(worst, fabs(xr[i] - kf.x[i]));
+        for (size_t j = 0; j < n; ++j)
+            worst = fmax(worst, fabs(Pr[i * n + j] - kf.P[i * n + j]));
+    }
     CHECK(worst <= 1e3 * (double)n * EPS, "update n = %zu m = %zu: textbook Joseph form, "
                                            "max |diff| %.3g", n, m, worst);
 

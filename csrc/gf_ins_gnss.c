@@ -333,10 +333,11 @@ typedef struct earth_terms {
     double w_ie[3], w_en[3];
 } earth_terms;
 
-static void earth_terms_of(double lat, double h, const double v[3], earth_terms *e)
+static void earth_terms_of(double sin_lat, double cos_lat, double h, const double v[3],
+                           earth_terms *e)
 {
     gf_earth ea;
-    gf_earth_from_sincos(&ea, sin(lat), cos(lat), h, v, 1.0);
+    gf_earth_from_sincos(&ea, sin_lat, cos_lat, h, v, 1.0);
     e->sL = ea.sin_lat;
     e->cL = ea.cos_lat;
     e->tL = ea.tan_lat;
@@ -381,24 +382,39 @@ static void process_noise(const gf_ins_filter *f, double *q_diag)
         q_diag[f->idx_odo] = gm_intensity(nz->odo_scale_std, nz->odo_scale_tau_s);
 }
 
-/* F (n x n, zero-filled here) at attitude C, velocity v, position (lat, h), specific force
- * f_b and rate w_b (body); q_diag (n, may be NULL): process_noise(). */
-static void error_model(const gf_ins_filter *f, const gf_mat3 *C, const double v[3], double lat,
-                        double h, const double f_b[3], const double w_b[3], double *F,
+/* Entry (i, j) of F (row stride s), marked in the row masks (bit j of mask[i]): the
+ * model's structure (which entries it can make non-zero) comes out of the code that
+ * fills it, so the covariance propagation skips the rest without scanning F. */
+_Static_assert(GF_INS_MAX_STATES <= 64, "row masks of F are 64 bits");
+static inline double *f_entry(double *F, size_t s, uint64_t *mask, int i, int j)
+{
+    mask[i] |= (uint64_t)1 << j;
+    return F + (size_t)i * s + (size_t)j;
+}
+
+/* F (n x n in rows of stride s >= n, zero-filled here; mask (n) receives the rows'
+ * structure, see f_entry) at attitude C, velocity v, position (sin and cos of the
+ * latitude, h), specific force f_b and rate w_b (body); q_diag (n, may be NULL):
+ * process_noise(). Only entries that can be non-zero are written. */
+static void error_model(const gf_ins_filter *f, const gf_mat3 *C, const double v[3],
+                        double sin_lat, double cos_lat, double h, const double f_b[3],
+                        const double w_b[3], double *F, size_t s, uint64_t *mask,
                         double *q_diag)
 {
     const int n = f->n_states;
     const gf_ins_noise *nz = &f->cfg.noise;
-    memset(F, 0, (size_t)(n * n) * sizeof *F);
-#define FF(i, j) F[(i) * n + (j)]
+    memset(F, 0, (size_t)n * s * sizeof *F);
+    memset(mask, 0, (size_t)n * sizeof *mask);
+#define FF(i, j) (*f_entry(F, s, mask, (i), (j)))
     earth_terms e;
-    earth_terms_of(lat, h, v, &e);
+    earth_terms_of(sin_lat, cos_lat, h, v, &e);
     const double W = GF_WGS84_OMEGA_IE_RAD_S;
     const double vE = v[0], vN = v[1];
     double w_in[3], f_n[3];
     gf_v3_add(e.w_ie, e.w_en, w_in);
     gf_m3_mul_v3(C, f_b, f_n);
-    /* derivatives of w_ie and w_en (columns: dvE, dvN | dL, dh) */
+    /* derivatives of w_ie and w_en (columns: dvE, dvN | dL, dh); the entries listed as
+     * zero are not written below */
     const double dwie_dL[3] = {0.0, -W * e.sL, W * e.cL};
     const double dwen_dvE[3] = {0.0, 1.0 / e.RNh, e.tL / e.RNh};
     const double dwen_dvN[3] = {-1.0 / e.RMh, 0.0, 0.0};
@@ -406,12 +422,13 @@ static void error_model(const gf_ins_filter *f, const gf_mat3 *C, const double v
     const double dwen_dh[3] = {vN / (e.RMh * e.RMh), -vE / (e.RNh * e.RNh),
                                -vE * e.tL / (e.RNh * e.RNh)};
     /* attitude: phi' = -w_in x phi + d(w_in) - C dw_ib */
-    for (int i = 0; i < 3; ++i) {
-        FF(IA + i, IV + 0) = dwen_dvE[i];
-        FF(IA + i, IV + 1) = dwen_dvN[i];
-        FF(IA + i, IP + 0) = dwie_dL[i] + dwen_dL[i];
+    FF(IA + 1, IV + 0) = dwen_dvE[1];
+    FF(IA + 2, IV + 0) = dwen_dvE[2];
+    FF(IA + 0, IV + 1) = dwen_dvN[0];
+    FF(IA + 1, IP + 0) = dwie_dL[1] + dwen_dL[1];
+    FF(IA + 2, IP + 0) = dwie_dL[2] + dwen_dL[2];
+    for (int i = 0; i < 3; ++i)
         FF(IA + i, IP + 2) = dwen_dh[i];
-    }
     FF(IA + 0, IA + 1) = w_in[2];
     FF(IA + 0, IA + 2) = -w_in[1];
     FF(IA + 1, IA + 0) = -w_in[2];
@@ -467,17 +484,20 @@ static void error_model(const gf_ins_filter *f, const gf_mat3 *C, const double v
             if (f->idx_sa >= 0)
                 FF(IV + i, f->idx_sa + j) = C->m[i][j] * f_b[j];
         }
+    /* Gauss-Markov decay rates (none for random constants, tau = 0) */
     for (int i = 0; i < 3; ++i) {
-        FF(IBG + i, IBG + i) = gm_rate(nz->gyro_bias_tau_s);
-        FF(IBA + i, IBA + i) = gm_rate(nz->accel_bias_tau_s);
-        if (f->idx_sg >= 0) {
+        if (nz->gyro_bias_tau_s > 0.0)
+            FF(IBG + i, IBG + i) = gm_rate(nz->gyro_bias_tau_s);
+        if (nz->accel_bias_tau_s > 0.0)
+            FF(IBA + i, IBA + i) = gm_rate(nz->accel_bias_tau_s);
+        if (f->idx_sg >= 0 && nz->gyro_scale_tau_s > 0.0)
             FF(f->idx_sg + i, f->idx_sg + i) = gm_rate(nz->gyro_scale_tau_s);
+        if (f->idx_sa >= 0 && nz->accel_scale_tau_s > 0.0)
             FF(f->idx_sa + i, f->idx_sa + i) = gm_rate(nz->accel_scale_tau_s);
-        }
     }
-    if (f->idx_baro >= 0)
+    if (f->idx_baro >= 0 && nz->baro_bias_tau_s > 0.0)
         FF(f->idx_baro, f->idx_baro) = gm_rate(nz->baro_bias_tau_s);
-    if (f->idx_odo >= 0)
+    if (f->idx_odo >= 0 && nz->odo_scale_tau_s > 0.0)
         FF(f->idx_odo, f->idx_odo) = gm_rate(nz->odo_scale_tau_s);
 #undef FF
     if (q_diag)
@@ -497,7 +517,9 @@ gf_status gf_ins_error_model(const gf_ins_filter *f, const double *f_b_m_s2,
     gf_mat3 C;
     gf_q_to_dcm(f->nav.q_bn, &C);
     double qd[NMAX];
-    error_model(f, &C, f->nav.v_n_m_s, f->nav.lat_rad, f->nav.h_m, f_b_m_s2, w_ib_b_rad_s, F, qd);
+    uint64_t mask[NMAX];
+    error_model(f, &C, f->nav.v_n_m_s, f->nav.sin_lat, f->nav.cos_lat, f->nav.h_m, f_b_m_s2,
+                w_ib_b_rad_s, F, (size_t)n, mask, qd);
     /* noise inputs: accelerometer (3) -> dv through C, gyro (3) -> phi through -C, then
      * one per sensor-error state */
     if (G) {
@@ -618,58 +640,70 @@ static gf_status check_covariance(const gf_kalman *kf)
     return GF_OK;
 }
 
+/* A = F T + (F T)^2 / 2 (second_order) or F T, n rows of stride S (F's and A's), row by
+ * row in registers: F_i T, then + T^2/2 F_ik F_k over the non-zeros of row i of F; the
+ * structure of A (amask) is that of F and F^2. */
+static GF_ALWAYS_INLINE void transition_rows(const size_t S, int n, const double *F,
+                                             const uint64_t *fmask, double T,
+                                             int second_order, double *A, uint64_t *amask)
+{
+    const double h2 = 0.5 * T * T;
+    for (int i = 0; i < n; ++i) {
+        const double *fi = F + (size_t)i * S;
+        gf_v4 acc[GF_PADDED(NMAX) / 4];
+        for (size_t k = 0; k < S / 4; ++k)
+            acc[k] = GF_V4_SCALE(T, fi + 4 * k);
+        uint64_t mask = fmask[i];
+        if (second_order)
+            for (uint64_t m = fmask[i]; m; m &= m - 1) {
+                const size_t l = gf_lowest_bit(m);
+                const double a = h2 * fi[l], *fl = F + l * S;
+                for (size_t k = 0; k < S / 4; ++k)
+                    GF_V4_AXPY(acc[k], a, fl + 4 * k);
+                mask |= fmask[l];
+            }
+        for (size_t k = 0; k < S / 4; ++k)
+            GF_V4_STORE(A + (size_t)i * S + 4 * k, acc[k]);
+        amask[i] = mask;
+    }
+}
+
+/* the stride is GF_PADDED(n): 16, 20 or 24 for 15 .. 23 states */
+_Static_assert(GF_PADDED(GF_INS_BASE_STATES) == 16 && GF_PADDED(NMAX) == 24,
+               "transition() handles the strides 16, 20 and 24");
+GF_VECTOR_CLONES
+static void transition(size_t s, int n, const double *F, const uint64_t *fmask, double T,
+                       int second_order, double *A, uint64_t *amask)
+{
+    if (s == 16)
+        transition_rows(16, n, F, fmask, T, second_order, A, amask);
+    else if (s == 20)
+        transition_rows(20, n, F, fmask, T, second_order, A, amask);
+    else
+        transition_rows(24, n, F, fmask, T, second_order, A, amask);
+}
+
 static gf_status propagate_ekf(gf_ins_filter *f, gf_ins_epochs *ep)
 {
     const int n = f->n_states;
+    const size_t s = GF_PADDED((size_t)n);   /* row stride of F and A */
     const double T = f->acc_T_s;
     double fb[3], wb[3];
     gf_v3_scale(f->acc_dv_m_s, 1.0 / T, fb);
     gf_v3_scale(f->acc_dtheta_rad, 1.0 / T, wb);
     gf_mat3 C;
     gf_q_to_dcm(f->nav.q_bn, &C);
-    double F[NMAX * NMAX], qd[NMAX];
-    error_model(f, &C, f->nav.v_n_m_s, f->nav.lat_rad, f->nav.h_m, fb, wb, F, qd);
-    /* A = F T + (F T)^2 / 2 in rows padded to the stride s: F T, then for each non-zero
-     * F_ik the row axpy A_i += T^2/2 F_ik F_k; for intervals up to
-     * GF_INS_FIRST_ORDER_MAX_T_S the second-order term is dropped (see the header) */
-    const size_t s = GF_PADDED((size_t)n);
-    double Fp[NMAX * GF_PADDED(NMAX)], A[NMAX * GF_PADDED(NMAX)];
-    for (int i = 0; i < n; ++i) {
-        for (int j = 0; j < n; ++j) {
-            Fp[i * s + j] = F[i * n + j];
-            A[i * s + j] = F[i * n + j] * T;
-        }
-        for (size_t j = (size_t)n; j < s; ++j)
-            Fp[i * s + j] = A[i * s + j] = 0.0;
-    }
-    if (T > GF_INS_FIRST_ORDER_MAX_T_S) {
-        const double h2 = 0.5 * T * T;
-        for (int i = 0; i < n; ++i)
-            for (int k = 0; k < n; ++k) {
-                const double fik = Fp[i * s + k];
-                if (fik != 0.0)
-                    gf_axpy4(s, h2 * fik, Fp + k * s, A + i * s);
-            }
-    }
-    /* A's non-zeros for the engine's structured predict */
-    size_t start[NMAX + 1], nnz = 0;
-    unsigned char col[NMAX * NMAX];
-    double val[NMAX * NMAX];
-    for (int i = 0; i < n; ++i) {
-        start[i] = nnz;
-        for (int j = 0; j < n; ++j) {
-            const double a = A[i * s + j];
-            if (a != 0.0) {
-                col[nnz] = (unsigned char)j;
-                val[nnz++] = a;
-            }
-        }
-    }
-    start[n] = nnz;
+    double F[NMAX * GF_PADDED(NMAX)], A[NMAX * GF_PADDED(NMAX)], qd[NMAX];
+    uint64_t fmask[NMAX], amask[NMAX];
+    error_model(f, &C, f->nav.v_n_m_s, f->nav.sin_lat, f->nav.cos_lat, f->nav.h_m, fb, wb, F, s,
+                fmask, qd);
+    /* A = Phi - I = F T + (F T)^2 / 2; for intervals up to GF_INS_FIRST_ORDER_MAX_T_S the
+     * second-order term is dropped (see the header) */
+    transition(s, n, F, fmask, T, T > GF_INS_FIRST_ORDER_MAX_T_S, A, amask);
     double qh[NMAX];
     for (int i = 0; i < n; ++i)
         qh[i] = 0.5 * T * qd[i];
-    gf_status st = gf_kalman_predict_csr(&f->kf, start, col, val, qh, qh);
+    gf_status st = gf_kalman_predict_masked(&f->kf, A, s, amask, qh, qh);
     if (st != GF_OK)
         return st == GF_ERR_NONFINITE_INPUT ? GF_ERR_DIVERGED : st;
     st = check_covariance(&f->kf);
@@ -679,7 +713,7 @@ static gf_status propagate_ekf(gf_ins_filter *f, gf_ins_epochs *ep)
         double Phi[NMAX * NMAX];      /* Phi = I + A, dense n x n for the smoother */
         for (int i = 0; i < n; ++i)
             for (int j = 0; j < n; ++j)
-                Phi[i * n + j] = A[i * s + j] + (i == j ? 1.0 : 0.0);
+                Phi[i * n + j] = A[(size_t)i * s + (size_t)j] + (i == j ? 1.0 : 0.0);
         return epoch_open(f, ep, Phi);
     }
     return GF_OK;
@@ -1429,14 +1463,12 @@ gf_status gf_ins_filter_check(const gf_ins_filter *f)
     return GF_OK;
 }
 
-gf_status gf_ins_step(gf_ins_filter *f, double t_s, const double *gyro, const double *accel,
-                      size_t n_meas, const gf_ins_meas *meas, gf_ins_epochs *epochs,
-                      gf_ins_log *log)
+/* gf_ins_step after its checks of the pointers and of the filter's layout (gf_ins_run
+ * makes them once for its whole record: nothing in a step changes the layout) */
+static gf_status ins_step(gf_ins_filter *f, double t_s, const double *gyro, const double *accel,
+                          size_t n_meas, const gf_ins_meas *meas, gf_ins_epochs *epochs,
+                          gf_ins_log *log)
 {
-    if (!f || !gyro || !accel || (n_meas && !meas))
-        return GF_ERR_NULL_POINTER;
-    if (!layout_is_valid(f))
-        return GF_ERR_BAD_PARAMETER;
     if (!isfinite(t_s) || !gf_all_finite(gyro, 3) || !gf_all_finite(accel, 3))
         return GF_ERR_NONFINITE_INPUT;
     const int rates = f->cfg.input == GF_SINS_INPUT_RATES;
@@ -1561,6 +1593,17 @@ gf_status gf_ins_step(gf_ins_filter *f, double t_s, const double *gyro, const do
     return GF_OK;
 }
 
+gf_status gf_ins_step(gf_ins_filter *f, double t_s, const double *gyro, const double *accel,
+                      size_t n_meas, const gf_ins_meas *meas, gf_ins_epochs *epochs,
+                      gf_ins_log *log)
+{
+    if (!f || !gyro || !accel || (n_meas && !meas))
+        return GF_ERR_NULL_POINTER;
+    if (!layout_is_valid(f))
+        return GF_ERR_BAD_PARAMETER;
+    return ins_step(f, t_s, gyro, accel, n_meas, meas, epochs, log);
+}
+
 static void write_output(const gf_ins_filter *f, const gf_ins_output *out, size_t k)
 {
     out->t_s[k] = f->t_s;
@@ -1592,13 +1635,15 @@ gf_status gf_ins_run(gf_ins_filter *f, size_t n, const double *t_s, const double
     for (size_t j = 1; j < n_meas; ++j)
         if (!(meas[j].t_s >= meas[j - 1].t_s))
             return GF_ERR_BAD_TIME;
+    if (!layout_is_valid(f))
+        return GF_ERR_BAD_PARAMETER;
     size_t j = 0, k = 0;
     gf_status st = GF_OK;
     for (; k < n; ++k) {
         size_t cnt = 0;
         while (j + cnt < n_meas && meas[j + cnt].t_s <= t_s[k] + GF_INS_TIME_EPS_S)
             ++cnt;
-        st = gf_ins_step(f, t_s[k], gyro + 3 * k, accel + 3 * k, cnt, meas + j, epochs, log);
+        st = ins_step(f, t_s[k], gyro + 3 * k, accel + 3 * k, cnt, meas + j, epochs, log);
         if (st != GF_OK)
             break;
         j += cnt;

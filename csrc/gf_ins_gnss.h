@@ -36,7 +36,9 @@
  * sample): Phi = I + F T + (F T)^2 / 2 (second-order series, F at the end of the
  * interval with the mean specific force and rate of the interval), process noise by the
  * trapezoidal rule P <- Phi (P + Qc T/2) Phi^T + Qc T/2, Qc = G diag(q) G^T; the
- * propagation skips the zeros of Phi - I (gf_kalman_predict_sparse).
+ * propagation skips the zeros of Phi - I: the model code marks the entries of F it fills
+ * (F's structure, fixed by the configuration), A = Phi - I is formed over them and handed
+ * with its structure to gf_kalman_predict_masked.
  *
  * UKF: the same states; sigma points of the error state (seed 004 eq. 25-28) are turned
  * into full navigation hypotheses (v = v_nom - dv, p = p_nom - dp, q = q(phi) q_nom,

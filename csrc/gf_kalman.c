@@ -8,13 +8,19 @@
 
 #define NMAX GF_KF_MAX_N
 #define MMAX GF_KF_MAX_M
+#define PADDED GF_PADDED
+#define SMAX GF_PADDED(NMAX)   /* largest row stride of the padded work matrices */
 
+/* 1 if all n values are finite: x - x is 0 for finite x and NaN for NaN and +-Inf; a
+ * select of any NaN vectorises (also with SSE2 alone), unlike an early exit */
 static int gf_all_finite_n(const double *a, size_t n)
 {
-    for (size_t i = 0; i < n; ++i)
-        if (!isfinite(a[i]))
-            return 0;
-    return 1;
+    double nan_seen = 0.0;
+    for (size_t i = 0; i < n; ++i) {
+        const double d = a[i] - a[i];
+        nan_seen = d != d ? d : nan_seen;
+    }
+    return nan_seen == 0.0;
 }
 
 /* C (r x c) = A (r x k) B (k x c), row-major */
@@ -25,18 +31,6 @@ static void mat_mul(size_t r, size_t k, size_t c, const double *A, const double 
             double acc = 0.0;
             for (size_t l = 0; l < k; ++l)
                 acc += A[i * k + l] * B[l * c + j];
-            C[i * c + j] = acc;
-        }
-}
-
-/* C (r x c) = A (r x k) B^T, B (c x k), row-major */
-static void mat_mul_bt(size_t r, size_t k, size_t c, const double *A, const double *B, double *C)
-{
-    for (size_t i = 0; i < r; ++i)
-        for (size_t j = 0; j < c; ++j) {
-            double acc = 0.0;
-            for (size_t l = 0; l < k; ++l)
-                acc += A[i * k + l] * B[j * k + l];
             C[i * c + j] = acc;
         }
 }
@@ -136,6 +130,24 @@ gf_status gf_kalman_predict(gf_kalman *kf, const double *F, const double *Q, int
     return GF_OK;
 }
 
+static gf_status joseph_update(gf_kalman *kf, size_t m, const double *residual, const double *H,
+                               const double *R, double nis_max, double *nis, int *accepted);
+
+/* Row i of X + D K^T over NB blocks of 4 from column c0, accumulated in registers (x: row
+ * i of X, d: row i of D, Kt: K^T in rows of stride S) */
+static GF_ALWAYS_INLINE void xdk_row(const size_t NB, const size_t S, size_t m, const double *x,
+                                     const double *d, const double *Kt, size_t c0, double *out)
+{
+    gf_v4 acc[SMAX / 4];
+    for (size_t b = 0; b < NB; ++b)
+        acc[b] = GF_V4_LOAD(x + c0 + 4 * b);
+    for (size_t k = 0; k < m; ++k)
+        for (size_t b = 0; b < NB; ++b)
+            GF_V4_AXPY(acc[b], d[k], Kt + k * S + c0 + 4 * b);
+    for (size_t b = 0; b < NB; ++b)
+        GF_V4_STORE(out + c0 + 4 * b, acc[b]);
+}
+
 gf_status gf_kalman_update(gf_kalman *kf, size_t m, const double *residual, const double *H,
                            const double *R, double *nis)
 {
@@ -172,29 +184,67 @@ gf_status gf_kalman_update_gated(gf_kalman *kf, size_t m, const double *residual
             return st_r;
     }
     R = R_s;
-    /* PHt = P H^T (n x m), S = H P H^T + R (m x m) */
-    double PHt[NMAX * MMAX], S[MMAX * MMAX], L[MMAX * MMAX];
-    mat_mul_bt(n, n, m, kf->P, H, PHt);
+    return joseph_update(kf, m, residual, H, R, nis_max, nis, accepted);
+}
+
+/* Joseph-form update in rows padded to the stride S (vector blocks of 4), see
+ * joseph_update. P's rows are read S entries at a time from their stride n (the entries
+ * past the row are the next row's, or beyond n x n within the array: they only reach the
+ * padding lanes, which are never stored into P except past its last row, where they are
+ * written back unchanged). */
+static GF_ALWAYS_INLINE gf_status joseph_rows(const size_t S, gf_kalman *kf, size_t m,
+                                              const double *residual, const double *H,
+                                              const double *R, double nis_max, double *nis,
+                                              int *accepted)
+{
+    const size_t n = kf->n;
+    const double *P = kf->P;
+    /* the non-zeros of each row of H: hnz[k][0 .. hcount[k]) */
+    unsigned char hnz[MMAX][NMAX];
+    size_t hcount[MMAX];
+    for (size_t k = 0; k < m; ++k) {
+        hcount[k] = 0;
+        for (size_t l = 0; l < n; ++l)
+            if (H[k * n + l] != 0.0)
+                hnz[k][hcount[k]++] = (unsigned char)l;
+    }
+    /* HP = H P, padding zero */
+    double HP[MMAX * SMAX], S_[MMAX * MMAX], L[MMAX * MMAX], Kt[MMAX * SMAX];
+    for (size_t k = 0; k < m; ++k) {
+        gf_v4 acc[SMAX / 4];
+        for (size_t b = 0; b < S / 4; ++b)
+            acc[b] = GF_V4_SET(0.0, 0.0, 0.0, 0.0);
+        for (size_t q = 0; q < hcount[k]; ++q) {
+            const size_t l = hnz[k][q];
+            const double h = H[k * n + l];
+            for (size_t b = 0; b < S / 4; ++b)
+                GF_V4_AXPY(acc[b], h, P + l * n + 4 * b);
+        }
+        for (size_t b = 0; b < S / 4; ++b)
+            GF_V4_STORE(HP + k * S + 4 * b, acc[b]);
+        for (size_t j = n; j < S; ++j)
+            HP[k * S + j] = 0.0;
+    }
+    /* S = H (HP)^T + R */
     for (size_t i = 0; i < m; ++i)
         for (size_t j = 0; j < m; ++j) {
             double acc = R[i * m + j];
-            for (size_t k = 0; k < n; ++k)
-                acc += H[i * n + k] * PHt[k * m + j];
-            S[i * m + j] = acc;
+            for (size_t q = 0; q < hcount[i]; ++q) {
+                const size_t k = hnz[i][q];
+                acc += H[i * n + k] * HP[j * S + k];
+            }
+            S_[i * m + j] = acc;
         }
     for (size_t i = 0; i < m; ++i) /* symmetrise against round-off */
         for (size_t j = i + 1; j < m; ++j)
-            S[i * m + j] = S[j * m + i] = 0.5 * (S[i * m + j] + S[j * m + i]);
-    memcpy(L, S, m * m * sizeof *S);
+            S_[i * m + j] = S_[j * m + i] = 0.5 * (S_[i * m + j] + S_[j * m + i]);
+    memcpy(L, S_, m * m * sizeof *S_);
     const gf_status st = gf_cholesky(m, L);
     if (st != GF_OK)
         return st;
-    /* K^T = S^-1 (P H^T)^T  (m x n) */
-    double Kt[MMAX * NMAX];
-    for (size_t i = 0; i < m; ++i)
-        for (size_t j = 0; j < n; ++j)
-            Kt[i * n + j] = PHt[j * m + i];
-    gf_cholesky_solve(m, L, n, Kt);
+    /* K^T = S^-1 HP (m x S; the padding stays zero) */
+    memcpy(Kt, HP, m * S * sizeof *Kt);
+    gf_cholesky_solve(m, L, S, Kt);
     if (nis || nis_max > 0.0) {
         double y[MMAX];
         memcpy(y, residual, m * sizeof *y);
@@ -212,57 +262,238 @@ gf_status gf_kalman_update_gated(gf_kalman *kf, size_t m, const double *residual
     for (size_t i = 0; i < n; ++i) {
         double acc = 0.0;
         for (size_t j = 0; j < m; ++j)
-            acc += Kt[j * n + i] * residual[j];
+            acc += Kt[j * S + i] * residual[j];
         kf->x[i] += acc;
     }
-    /* Joseph form (I - K H) P (I - K H)^T + K R K^T, multiplied out in factors so that it
-     * costs O(n^2 m) instead of O(n^3):
-     *   X = (I - K H) P = P - K (H P),      H P = (P H^T)^T (P symmetric)
-     *   P <- X (I - K H)^T + K R K^T = X + (K R - X H^T) K^T */
-    double X[NMAX * NMAX], D[NMAX * MMAX];
-    for (size_t i = 0; i < n; ++i)
-        for (size_t j = 0; j < n; ++j) {
-            double acc = kf->P[i * n + j];
-            for (size_t k = 0; k < m; ++k)
-                acc -= Kt[k * n + i] * PHt[j * m + k];
-            X[i * n + j] = acc;
+    /* X = P - K HP */
+    double X[NMAX * SMAX], D[NMAX * MMAX];
+    for (size_t i = 0; i < n; ++i) {
+        gf_v4 acc[SMAX / 4];
+        for (size_t b = 0; b < S / 4; ++b)
+            acc[b] = GF_V4_LOAD(P + i * n + 4 * b);
+        for (size_t k = 0; k < m; ++k)
+            for (size_t b = 0; b < S / 4; ++b)
+                GF_V4_AXPY(acc[b], -Kt[k * S + i], HP + k * S + 4 * b);
+        for (size_t b = 0; b < S / 4; ++b)
+            GF_V4_STORE(X + i * S + 4 * b, acc[b]);
+    }
+    /* D = K R - X H^T, as its columns D_.k = sum_l R_lk K_.l - sum_l H_kl X_.l over the
+     * rows' lanes; column l of X is P_l - sum_k HP_kl K_.k (P symmetric), the same
+     * operations as its entries in X's rows */
+    double Dt[MMAX * SMAX];
+    for (size_t k = 0; k < m; ++k) {
+        gf_v4 kr[SMAX / 4], xh[SMAX / 4];
+        for (size_t b = 0; b < S / 4; ++b)
+            kr[b] = xh[b] = GF_V4_SET(0.0, 0.0, 0.0, 0.0);
+        for (size_t l = 0; l < m; ++l)
+            for (size_t b = 0; b < S / 4; ++b)
+                GF_V4_AXPY(kr[b], R[l * m + k], Kt + l * S + 4 * b);
+        for (size_t q = 0; q < hcount[k]; ++q) {
+            const size_t l = hnz[k][q];
+            gf_v4 xl[SMAX / 4];          /* column l of X */
+            for (size_t b = 0; b < S / 4; ++b)
+                xl[b] = GF_V4_LOAD(P + l * n + 4 * b);
+            for (size_t j = 0; j < m; ++j)
+                for (size_t b = 0; b < S / 4; ++b)
+                    GF_V4_AXPY(xl[b], -HP[j * S + l], Kt + j * S + 4 * b);
+            for (size_t b = 0; b < S / 4; ++b)
+                GF_V4_AXPYV(xh[b], H[k * n + l], xl[b]);
         }
+        for (size_t b = 0; b < S / 4; ++b)
+            GF_V4_STORE(Dt + k * S + 4 * b, GF_V4_SUB(kr[b], xh[b]));
+    }
     for (size_t i = 0; i < n; ++i)
-        for (size_t k = 0; k < m; ++k) {
-            double kr = 0.0, xh = 0.0;
-            for (size_t l = 0; l < m; ++l)
-                kr += Kt[l * n + i] * R[l * m + k];
-            const double *hrow = H + k * n, *xrow = X + i * n;
-            for (size_t l = 0; l < n; ++l)
-                xh += xrow[l] * hrow[l];
-            D[i * m + k] = kr - xh;
+        for (size_t k = 0; k < m; ++k)
+            D[i * m + k] = Dt[k * S + i];
+    /* P = X + D K^T: the upper triangle (row i from the block holding the diagonal),
+     * then mirrored (the rows' padding and left-of-diagonal lanes are overwritten) */
+    double U[NMAX * SMAX];
+    for (size_t i = 0; i < n; ++i) {
+        const size_t c0 = i / 4 * 4;
+        switch ((S - c0) / 4) {  /* blocks from the diagonal's: a compile-time count */
+        case 1: xdk_row(1, S, m, X + i * S, D + i * m, Kt, c0, U + i * S); break;
+        case 2: xdk_row(2, S, m, X + i * S, D + i * m, Kt, c0, U + i * S); break;
+        case 3: xdk_row(3, S, m, X + i * S, D + i * m, Kt, c0, U + i * S); break;
+        case 4: xdk_row(4, S, m, X + i * S, D + i * m, Kt, c0, U + i * S); break;
+        case 5: xdk_row(5, S, m, X + i * S, D + i * m, Kt, c0, U + i * S); break;
+        case 6: xdk_row(6, S, m, X + i * S, D + i * m, Kt, c0, U + i * S); break;
+        default: xdk_row((S - c0) / 4, S, m, X + i * S, D + i * m, Kt, c0, U + i * S); break;
         }
-    for (size_t i = 0; i < n; ++i)
-        for (size_t j = i; j < n; ++j) {
-            double acc = X[i * n + j];
-            for (size_t k = 0; k < m; ++k)
-                acc += D[i * m + k] * Kt[k * n + j];
-            kf->P[i * n + j] = kf->P[j * n + i] = acc;
-        }
+    }
+    for (size_t i = 0; i < n; ++i) {
+        double *p = kf->P + i * n;
+        const size_t c0 = i / 4 * 4;
+        for (size_t k = c0; k < S; k += 4)
+            GF_V4_STORE(p + k, GF_V4_LOAD(U + i * S + k));
+        for (size_t j = 0; j < i; ++j)
+            p[j] = U[j * S + i];
+    }
     return GF_OK;
+}
+
+/* The update after the checks (R symmetric positive definite). Every product is formed
+ * over rows padded to a multiple of 4 (vectorised), skipping the zeros of H
+ * (measurement models are mostly zeros); each entry sees the same operations in the
+ * same order as the plain products:
+ *   HP = H P (m x n; = (P H^T)^T, P symmetric),  S = H (HP)^T + R,
+ *   K^T = S^-1 HP,  x += K r,
+ *   Joseph form (I - K H) P (I - K H)^T + K R K^T multiplied out in factors, O(n^2 m):
+ *   X = (I - K H) P = P - K HP,  P <- X + (K R - X H^T) K^T  (upper triangle, mirrored) */
+GF_VECTOR_CLONES
+static gf_status joseph_update(gf_kalman *kf, size_t m, const double *residual, const double *H,
+                               const double *R, double nis_max, double *nis, int *accepted)
+{
+    const size_t s = PADDED(kf->n);
+    if (s == 8)
+        return joseph_rows(8, kf, m, residual, H, R, nis_max, nis, accepted);
+    if (s == 16)
+        return joseph_rows(16, kf, m, residual, H, R, nis_max, nis, accepted);
+    if (s == 20)
+        return joseph_rows(20, kf, m, residual, H, R, nis_max, nis, accepted);
+    if (s == 24)
+        return joseph_rows(24, kf, m, residual, H, R, nis_max, nis, accepted);
+    return joseph_rows(s, kf, m, residual, H, R, nis_max, nis, accepted);
 }
 
 /* ---- structured predict ------------------------------------------------------------ */
 
-#define axpy4 gf_axpy4
-#define PADDED GF_PADDED
 
-/* The structured predict is a few thousand vectorisable multiply-adds: on x86-64 with
- * GCC it is compiled twice, for the baseline (SSE2) and for AVX2, and the loader picks
- * the one the processor runs (function multi-versioning). Both do the same IEEE
- * operations in the same order (no FMA: -ffp-contract=off), so their results are equal
- * bit for bit. */
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__linux__) && \
-    !defined(GF_NO_MULTIVERSION)
-#define GF_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define GF_VECTOR_CLONES
-#endif
+/* One row of (I + A) X over its first NB blocks of 4, accumulated in registers:
+ * out = in + sum over the set bits l of mask of a_row[l] X_l (X in rows of stride S). */
+static GF_ALWAYS_INLINE void phi_row(const size_t NB, const size_t S, const double *in,
+                                     const double *X, const double *a_row, uint64_t mask,
+                                     double *out)
+{
+    gf_v4 acc[SMAX / 4];
+    for (size_t k = 0; k < NB; ++k)
+        acc[k] = GF_V4_LOAD(in + 4 * k);
+    for (; mask; mask &= mask - 1) {
+        const size_t l = gf_lowest_bit(mask);
+        const double a = a_row[l], *x = X + l * S;
+        for (size_t k = 0; k < NB; ++k)
+            GF_V4_AXPY(acc[k], a, x + 4 * k);
+    }
+    for (size_t k = 0; k < NB; ++k)
+        GF_V4_STORE(out + 4 * k, acc[k]);
+}
+
+/* P <- Phi M Phi^T + D2 with Phi = I + A, M = P + D1, in two passes of row updates over
+ * rows padded to the stride S (a multiple of 4):
+ *   B = Phi M:    B_i = M_i + sum_l A_il M_l     (M symmetric: its row l is its column l)
+ *   P' = Phi B^T: P'_i = Bt_i + sum_l A_il Bt_l  (Bt = B^T, stored transposed as B is made)
+ * the sums over the non-zeros of row i of A (row_mask[i]). Only the lower triangle of P'
+ * is formed (row i up to column i, rounded up to a block of 4), then mirrored:
+ * navigation error models have their dense rows first (velocity, attitude) and their
+ * diagonal ones last (sensor errors), so the lower triangle costs about half of the
+ * full rows. Leaves the lower rows in L (n x S); returns 0 if a diagonal entry is not
+ * finite (a non-finite A or q reaches the diagonal: Inf * 0 = NaN). */
+static GF_ALWAYS_INLINE int predict_rows(const size_t S, size_t n, const double *P,
+                                         const double *A, size_t stride,
+                                         const uint64_t *row_mask, const double *q1,
+                                         const double *q2, double *L)
+{
+    double M[NMAX * SMAX], Bt[SMAX * SMAX], row[SMAX];
+    /* S entries from each row of P (stride n): the last ones are the next row's, or for
+     * the last row entries of the array beyond n x n ((n - 1) n + S <= NMAX^2); they fall
+     * in the padding, which is then zeroed */
+    for (size_t i = 0; i < n; ++i)
+        for (size_t k = 0; k < S; k += 4)
+            GF_V4_STORE(M + i * S + k, GF_V4_LOAD(P + i * n + k));
+    for (size_t j = n; j < S; ++j)
+        for (size_t i = 0; i < n; ++i)
+            M[i * S + j] = 0.0;
+    if (q1)
+        for (size_t i = 0; i < n; ++i)
+            M[i * S + i] += q1[i];
+    for (size_t i = 0; i < n; ++i) {
+        phi_row(S / 4, S, M + i * S, M, A + i * stride, row_mask[i], row);
+        for (size_t j = 0; j < S; ++j)
+            Bt[j * S + i] = row[j];
+    }
+    for (size_t i = n; i < S; ++i)       /* the padding rows of B are zero */
+        for (size_t j = 0; j < n; ++j)
+            Bt[j * S + i] = 0.0;
+    int finite = 1;
+    for (size_t i = 0; i < n; ++i) {
+        const double *in = Bt + i * S, *a = A + i * stride;
+        const uint64_t mask = row_mask[i];
+        double *out = L + i * S;
+        /* blocks of row i up to the diagonal: a compile-time count up to 6 (S = 24) */
+        switch (i / 4) {
+        case 0: phi_row(1, S, in, Bt, a, mask, out); break;
+        case 1: phi_row(2, S, in, Bt, a, mask, out); break;
+        case 2: phi_row(3, S, in, Bt, a, mask, out); break;
+        case 3: phi_row(4, S, in, Bt, a, mask, out); break;
+        case 4: phi_row(5, S, in, Bt, a, mask, out); break;
+        case 5: phi_row(6, S, in, Bt, a, mask, out); break;
+        default: phi_row(i / 4 + 1, S, in, Bt, a, mask, out); break;
+        }
+        if (q2)
+            out[i] += q2[i];
+        finite &= isfinite(out[i]) != 0;
+    }
+    return finite;
+}
+
+/* P (n x n, stride n) from the lower rows L (stride S): row i is a copy of the whole row
+ * i of L, whose entries past column i (up to S - n of them beyond the end of the row:
+ * into the next row, which is written next, or for the last row beyond n x n, within the
+ * array) are then overwritten from column i of L, four at a time. A whole row is a
+ * fixed-size copy. */
+static GF_ALWAYS_INLINE void write_symmetric(const size_t S, size_t n, const double *L, double *P)
+{
+    for (size_t i = 0; i < n; ++i) {
+        double *p = P + i * n;
+        const double *c = L + i;         /* column i of L */
+        for (size_t k = 0; k < S; k += 4)
+            GF_V4_STORE(p + k, GF_V4_LOAD(L + i * S + k));
+        size_t j = i + 1;
+        for (; j + 4 <= n; j += 4)
+            GF_V4_STORE(p + j, GF_V4_SET(c[j * S], c[(j + 1) * S], c[(j + 2) * S], c[(j + 3) * S]));
+        for (; j < n; ++j)
+            p[j] = c[j * S];
+    }
+}
+
+GF_VECTOR_CLONES
+gf_status gf_kalman_predict_masked(gf_kalman *kf, const double *A, size_t stride,
+                                   const uint64_t *row_mask, const double *q1, const double *q2)
+{
+    if (!kf || !A || !row_mask)
+        return GF_ERR_NULL_POINTER;
+    const size_t n = kf->n;
+    if (n == 0 || n > NMAX || stride < n)
+        return GF_ERR_BAD_SIZE;
+    uint64_t outside = 0;          /* mask bits at or above n */
+    for (size_t i = 0; i < n; ++i)
+        outside |= row_mask[i] >> n;
+    if (outside)
+        return GF_ERR_BAD_SIZE;
+    /* the stride as a compile-time constant for the navigation filter's sizes: 16 (its
+     * 15 states), 20 and 24 (16 .. 23 states); else the padded n */
+    const size_t s = PADDED(n);
+    double L[NMAX * SMAX];
+    int finite;
+    if (s == 16)
+        finite = predict_rows(16, n, kf->P, A, stride, row_mask, q1, q2, L);
+    else if (s == 20)
+        finite = predict_rows(20, n, kf->P, A, stride, row_mask, q1, q2, L);
+    else if (s == 24)
+        finite = predict_rows(24, n, kf->P, A, stride, row_mask, q1, q2, L);
+    else
+        finite = predict_rows(s, n, kf->P, A, stride, row_mask, q1, q2, L);
+    if (!finite)
+        return GF_ERR_NONFINITE_INPUT;     /* P unchanged */
+    if (s == 16)
+        write_symmetric(16, n, L, kf->P);
+    else if (s == 20)
+        write_symmetric(20, n, L, kf->P);
+    else if (s == 24)
+        write_symmetric(24, n, L, kf->P);
+    else
+        write_symmetric(s, n, L, kf->P);
+    return GF_OK;
+}
 
 gf_status gf_kalman_predict_sparse(gf_kalman *kf, const double *A, const double *q1,
                                    const double *q2)
@@ -272,25 +503,16 @@ gf_status gf_kalman_predict_sparse(gf_kalman *kf, const double *A, const double 
     const size_t n = kf->n;
     if (n == 0 || n > NMAX)
         return GF_ERR_BAD_SIZE;
-    /* the non-zeros of A, row by row (compressed sparse rows) */
-    unsigned char col[NMAX * NMAX];
-    double val[NMAX * NMAX];
-    size_t start[NMAX + 1], nnz = 0;
+    uint64_t mask[NMAX];
     for (size_t i = 0; i < n; ++i) {
-        start[i] = nnz;
-        for (size_t j = 0; j < n; ++j) {
-            const double a = A[i * n + j];
-            if (a != 0.0) {
-                col[nnz] = (unsigned char)j;
-                val[nnz++] = a;
-            }
-        }
+        mask[i] = 0;
+        for (size_t j = 0; j < n; ++j)
+            if (A[i * n + j] != 0.0)
+                mask[i] |= (uint64_t)1 << j;
     }
-    start[n] = nnz;
-    return gf_kalman_predict_csr(kf, start, col, val, q1, q2);
+    return gf_kalman_predict_masked(kf, A, n, mask, q1, q2);
 }
 
-GF_VECTOR_CLONES
 gf_status gf_kalman_predict_csr(gf_kalman *kf, const size_t *start, const unsigned char *col,
                                 const double *val, const double *q1, const double *q2)
 {
@@ -302,56 +524,19 @@ gf_status gf_kalman_predict_csr(gf_kalman *kf, const size_t *start, const unsign
     for (size_t i = 0; i < n; ++i)
         if (start[i + 1] < start[i] || start[i + 1] > NMAX * NMAX)
             return GF_ERR_BAD_SIZE;
-    for (size_t p = 0; p < start[n]; ++p)
-        if (col[p] >= n)
-            return GF_ERR_BAD_SIZE;
-    const size_t s = PADDED(n);   /* row stride of the work matrices */
-    /* (I + A) M (I + A)^T = M + G + G^T + G A^T with M = P + D1 (symmetric), G = A M:
-     * G row by row (vectorised axpys over rows padded to the stride), then the upper
-     * triangle, (G A^T)_ij = sum over the non-zeros A_jl of A_jl G_il */
-    double M[NMAX * NMAX], G[NMAX * NMAX];
+    /* A in rows of stride n (a repeated column adds up) and its structure */
+    double A[NMAX * NMAX] = {0};
+    uint64_t mask[NMAX];
     for (size_t i = 0; i < n; ++i) {
-        memcpy(M + i * s, kf->P + i * n, n * sizeof *M);
-        for (size_t j = n; j < s; ++j)
-            M[i * s + j] = 0.0;
-        if (q1)
-            M[i * s + i] += q1[i];
+        mask[i] = 0;
+        for (size_t p = start[i]; p < start[i + 1]; ++p) {
+            if (col[p] >= n)
+                return GF_ERR_BAD_SIZE;
+            A[i * n + col[p]] += val[p];
+            mask[i] |= (uint64_t)1 << col[p];
+        }
     }
-    memset(G, 0, n * s * sizeof *G);
-    for (size_t i = 0; i < n; ++i)
-        for (size_t p = start[i]; p < start[i + 1]; ++p)
-            axpy4(s, val[p], M + (size_t)col[p] * s, G + i * s);
-    /* the transpose of G, so that column j of P, (G A^T)_.j = sum_p A_jl G_.l, is a sum of
-     * rows of G^T: axpys again, over i = 0..j (rounded up to the padding) */
-    double Gt[NMAX * NMAX], Pc[NMAX * NMAX];
-    for (size_t i = 0; i < n; ++i)
-        for (size_t l = 0; l < n; ++l)
-            Gt[l * s + i] = G[i * s + l];
-    for (size_t l = 0; l < n; ++l)
-        for (size_t i = n; i < s; ++i)
-            Gt[l * s + i] = 0.0;
-    /* Pc row j = column j of the new P (entries 0..j used) */
-    for (size_t j = 0; j < n; ++j) {
-        double *pc = Pc + j * s;
-        const size_t len = PADDED(j + 1);
-        for (size_t i = 0; i < len; ++i)
-            pc[i] = M[j * s + i] + Gt[j * s + i] + G[j * s + i];   /* M_ij + G_ij + G_ji (M sym) */
-        for (size_t p = start[j]; p < start[j + 1]; ++p)
-            axpy4(len, val[p], Gt + (size_t)col[p] * s, pc);
-    }
-    /* a non-finite A or q reaches the diagonal (Inf * 0 = NaN): refuse, P unchanged */
-    int finite = 1;
-    for (size_t j = 0; j < n; ++j) {
-        if (q2)
-            Pc[j * s + j] += q2[j];
-        finite &= isfinite(Pc[j * s + j]) != 0;
-    }
-    if (!finite)
-        return GF_ERR_NONFINITE_INPUT;
-    for (size_t j = 0; j < n; ++j)
-        for (size_t i = 0; i <= j; ++i)
-            kf->P[i * n + j] = kf->P[j * n + i] = Pc[j * s + i];
-    return GF_OK;
+    return gf_kalman_predict_masked(kf, A, n, mask, q1, q2);
 }
 
 /* ---- unscented transform ------------------------------------------------------------ */
@@ -401,21 +586,23 @@ gf_status gf_ukf_sigma_points(const gf_kalman *kf, const gf_ukf_weights *w, doub
     return GF_OK;
 }
 
-/* mean (m values) of the 2n+1 points Y ((2n+1) x m) */
+/* mean (m values) of the 2n+1 points Y ((2n+1) x m): the points' rows summed in order */
 static void ukf_mean(const gf_ukf_weights *w, size_t m, const double *Y, double *mean)
 {
     const size_t np = 2 * w->n + 1;
-    for (size_t i = 0; i < m; ++i) {
-        double acc = 0.0;
-        for (size_t p = 1; p < np; ++p)
-            acc += Y[p * m + i];
-        mean[i] = w->wm0 * Y[i] + w->wi * acc;
-    }
+    double acc[NMAX];
+    for (size_t i = 0; i < m; ++i)
+        acc[i] = 0.0;
+    for (size_t p = 1; p < np; ++p)
+        for (size_t i = 0; i < m; ++i)
+            acc[i] += Y[p * m + i];
+    for (size_t i = 0; i < m; ++i)
+        mean[i] = w->wm0 * Y[i] + w->wi * acc[i];
 }
 
 /* C (ma x mb) = sum_p Wc_p (Ya_p - ma)(Yb_p - mb)^T */
 static void ukf_cross(const gf_ukf_weights *w, size_t ma, const double *Ya, const double *mean_a,
-                      size_t mb, const double *Yb, const double *mean_b, double *C)
+                      size_t mb, const double *Yb, const double *mean_b, double *restrict C)
 {
     const size_t np = 2 * w->n + 1;
     for (size_t i = 0; i < ma * mb; ++i)
@@ -435,6 +622,69 @@ static void ukf_cross(const gf_ukf_weights *w, size_t ma, const double *Ya, cons
     }
 }
 
+/* Row i of the upper triangle of sum_p Wc_p d_p d_p^T over NB blocks of 4 from column
+ * c0 (the block holding the diagonal), accumulated in registers over the points: the
+ * deviations d_p are the rows of D (stride S, padded with zeros). */
+static GF_ALWAYS_INLINE void cov_row(const size_t NB, const size_t S, const gf_ukf_weights *w,
+                                     size_t np, const double *D, size_t i, size_t c0, double *out)
+{
+    gf_v4 acc[SMAX / 4];
+    const double s0 = w->wc0 * D[i];
+    for (size_t k = 0; k < NB; ++k)
+        acc[k] = GF_V4_SCALE(s0, D + c0 + 4 * k);
+    for (size_t p = 1; p < np; ++p) {
+        const double *d = D + p * S;
+        const double s = w->wi * d[i];
+        for (size_t k = 0; k < NB; ++k)
+            GF_V4_AXPY(acc[k], s, d + c0 + 4 * k);
+    }
+    for (size_t k = 0; k < NB; ++k)
+        GF_V4_STORE(out + c0 + 4 * k, acc[k]);
+}
+
+static GF_ALWAYS_INLINE void cov_upper_rows(const size_t S, const gf_ukf_weights *w, size_t n,
+                                            const double *Y, const double *mean, double *C)
+{
+    const size_t np = 2 * n + 1;
+    double D[(2 * NMAX + 1) * SMAX];
+    for (size_t p = 0; p < np; ++p) {
+        for (size_t j = 0; j < n; ++j)
+            D[p * S + j] = Y[p * n + j] - mean[j];
+        for (size_t j = n; j < S; ++j)
+            D[p * S + j] = 0.0;
+    }
+    for (size_t i = 0; i < n; ++i) {
+        const size_t c0 = i / 4 * 4;
+        switch ((S - c0) / 4) {  /* blocks from the diagonal's: a compile-time count */
+        case 1: cov_row(1, S, w, np, D, i, c0, C + i * S); break;
+        case 2: cov_row(2, S, w, np, D, i, c0, C + i * S); break;
+        case 3: cov_row(3, S, w, np, D, i, c0, C + i * S); break;
+        case 4: cov_row(4, S, w, np, D, i, c0, C + i * S); break;
+        case 5: cov_row(5, S, w, np, D, i, c0, C + i * S); break;
+        case 6: cov_row(6, S, w, np, D, i, c0, C + i * S); break;
+        default: cov_row((S - c0) / 4, S, w, np, D, i, c0, C + i * S); break;
+        }
+    }
+}
+
+/* The upper triangle (j >= i) of C = sum_p Wc_p (Y_p - m)(Y_p - m)^T (n x n) in rows of
+ * stride PADDED(n) (entries left of the diagonal's block of 4 are not written); each
+ * entry is summed over the points in their order. */
+GF_VECTOR_CLONES
+static void ukf_cov_upper(const gf_ukf_weights *w, size_t n, const double *Y, const double *mean,
+                          double *C)
+{
+    const size_t s = PADDED(n);
+    if (s == 16)
+        cov_upper_rows(16, w, n, Y, mean, C);
+    else if (s == 20)
+        cov_upper_rows(20, w, n, Y, mean, C);
+    else if (s == 24)
+        cov_upper_rows(24, w, n, Y, mean, C);
+    else
+        cov_upper_rows(s, w, n, Y, mean, C);
+}
+
 gf_status gf_ukf_predict(gf_kalman *kf, const gf_ukf_weights *w, const double *Y,
                          const double *Q)
 {
@@ -445,18 +695,18 @@ gf_status gf_ukf_predict(gf_kalman *kf, const gf_ukf_weights *w, const double *Y
         return GF_ERR_BAD_SIZE;
     if (!gf_all_finite_n(Y, (2 * n + 1) * n) || (Q && !gf_all_finite_n(Q, n * n)))
         return GF_ERR_NONFINITE_INPUT;
-    double x[NMAX], P[NMAX * NMAX];
+    double x[NMAX], C[NMAX * SMAX];
     ukf_mean(w, n, Y, x);
-    ukf_cross(w, n, Y, x, n, Y, x, P);
+    ukf_cov_upper(w, n, Y, x, C);
+    const size_t s = PADDED(n);
     for (size_t i = 0; i < n; ++i)
         for (size_t j = i; j < n; ++j) {
-            double p = 0.5 * (P[i * n + j] + P[j * n + i]);
+            double p = C[i * s + j];
             if (Q)
                 p += 0.5 * (Q[i * n + j] + Q[j * n + i]);
-            P[i * n + j] = P[j * n + i] = p;
+            kf->P[i * n + j] = kf->P[j * n + i] = p;
         }
     memcpy(kf->x, x, n * sizeof *x);
-    memcpy(kf->P, P, n * n * sizeof *P);
     return GF_OK;
 }
 

@@ -12,7 +12,10 @@
  * Also here, so that every filter shares them:
  *   - a structured predict, P <- (I + A)(P + D1)(I + A)^T + D2 (D diagonal), that skips
  *     the zeros of A = Phi - I (navigation error models are ~70% zeros): the trapezoidal
- *     rule for a diagonal continuous noise qc is D1 = D2 = qc T / 2;
+ *     rule for a diagonal continuous noise qc is D1 = D2 = qc T / 2. Its rows are padded
+ *     to a multiple of 4 and accumulated in vector registers; each entry is the same
+ *     sequence of IEEE operations in every compiled form (AVX2, SSE2, plain C), so the
+ *     results are equal bit for bit wherever the engine runs (tests/c/test_kalman.c);
  *   - the unscented transform of the sigma-point (unscented) Kalman filter with the
  *     scaled sigma points of seed 004 (section 2, eq. 25-38):
  *         lambda = alpha^2 (N + kappa) - N,  gamma = sqrt(N + lambda),
@@ -35,6 +38,7 @@
 #define GF_KALMAN_H
 
 #include <stddef.h>
+#include <stdint.h>
 
 #include "gf_status.h"
 
@@ -92,6 +96,13 @@ gf_status gf_kalman_predict_sparse(gf_kalman *kf, const double *A, const double 
  * and GF_ERR_BAD_SIZE for a bad row_start or column. */
 gf_status gf_kalman_predict_csr(gf_kalman *kf, const size_t *row_start, const unsigned char *col,
                                 const double *val, const double *q1, const double *q2);
+
+/* The same with A in rows of stride `stride` (>= n) and its structure as bit masks: bit
+ * j of row_mask[i] set = entry (i, j) is used; the others are taken as zero and not read
+ * (the form a filter with a fixed error-model structure builds directly). Errors as
+ * above; GF_ERR_BAD_SIZE for a stride below n or a mask bit at or above n. */
+gf_status gf_kalman_predict_masked(gf_kalman *kf, const double *A, size_t stride,
+                                   const uint64_t *row_mask, const double *q1, const double *q2);
 
 /* Scaled unscented transform (seed 004 eq. 25-28): sigma-point spread and weights. */
 typedef struct gf_ukf_weights {

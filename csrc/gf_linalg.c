@@ -111,21 +111,32 @@ gf_status gf_cholesky(size_t n, double *a)
     return GF_OK;
 }
 
+/* Substitution on whole rows of b (all k right-hand sides at once: contiguous, so the
+ * inner loops vectorise); each entry sees the same operations in the same order as a
+ * column-by-column substitution. */
 void gf_cholesky_solve(size_t n, const double *l, size_t k, double *b)
 {
-    for (size_t c = 0; c < k; ++c) {
-        for (size_t i = 0; i < n; ++i) { /* L y = b */
-            double x = b[i * k + c];
-            for (size_t j = 0; j < i; ++j)
-                x -= l[i * n + j] * b[j * k + c];
-            b[i * k + c] = x / l[i * n + i];
+    for (size_t i = 0; i < n; ++i) { /* L y = b */
+        double *bi = b + i * k;
+        for (size_t j = 0; j < i; ++j) {
+            const double lij = l[i * n + j], *bj = b + j * k;
+            for (size_t c = 0; c < k; ++c)
+                bi[c] -= lij * bj[c];
         }
-        for (size_t ii = n; ii-- > 0;) { /* L^T x = y */
-            double x = b[ii * k + c];
-            for (size_t j = ii + 1; j < n; ++j)
-                x -= l[j * n + ii] * b[j * k + c];
-            b[ii * k + c] = x / l[ii * n + ii];
+        const double d = l[i * n + i];
+        for (size_t c = 0; c < k; ++c)
+            bi[c] /= d;
+    }
+    for (size_t i = n; i-- > 0;) { /* L^T x = y */
+        double *bi = b + i * k;
+        for (size_t j = i + 1; j < n; ++j) {
+            const double lji = l[j * n + i], *bj = b + j * k;
+            for (size_t c = 0; c < k; ++c)
+                bi[c] -= lji * bj[c];
         }
+        const double d = l[i * n + i];
+        for (size_t c = 0; c < k; ++c)
+            bi[c] /= d;
     }
 }
 

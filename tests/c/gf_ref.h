@@ -5,6 +5,8 @@
 #define GF_REF_H
 
 #include <math.h>
+#include <stddef.h>
+#include <string.h>
 
 /* ---- independent reference: WGS-84 (NIMA TR8350.2 tables 3.1, 3.3) ------------------ */
 
@@ -117,6 +119,94 @@ static inline double quat_angle(const double p[4], const double q[4])
     const double y = -p[0] * q[2] + p[1] * q[3] + p[2] * q[0] - p[3] * q[1];
     const double z = -p[0] * q[3] - p[1] * q[2] + p[2] * q[1] + p[3] * q[0];
     return 2.0 * atan2(sqrt(x * x + y * y + z * z), fabs(w));
+}
+
+/* ---- independent reference: the Kalman update (textbook Joseph form) ---------------- */
+
+#define REF_KF_MAX 36   /* states and measurements */
+
+/* x += K r, P <- (I - K H) P (I - K H)^T + K R K^T with K = P H^T S^-1 from an explicit
+ * inverse of S = H P H^T + R (Gauss-Jordan with pivoting) */
+static inline void ref_kalman_update(size_t n, size_t m, double *x, double *P, const double *r,
+                                     const double *H, const double *R)
+{
+    double PHt[REF_KF_MAX * REF_KF_MAX], S[REF_KF_MAX * 2 * REF_KF_MAX];
+    double K[REF_KF_MAX * REF_KF_MAX], A[REF_KF_MAX * REF_KF_MAX];
+    for (size_t i = 0; i < n; ++i)
+        for (size_t j = 0; j < m; ++j) {
+            double acc = 0.0;
+            for (size_t k = 0; k < n; ++k)
+                acc += P[i * n + k] * H[j * n + k];
+            PHt[i * m + j] = acc;
+        }
+    const size_t w2 = 2 * m; /* [S | I] -> [I | S^-1] */
+    for (size_t i = 0; i < m; ++i)
+        for (size_t j = 0; j < m; ++j) {
+            double acc = R[i * m + j];
+            for (size_t k = 0; k < n; ++k)
+                acc += H[i * n + k] * PHt[k * m + j];
+            S[i * w2 + j] = acc;
+            S[i * w2 + m + j] = i == j ? 1.0 : 0.0;
+        }
+    for (size_t c = 0; c < m; ++c) {
+        size_t piv = c;
+        for (size_t i = c + 1; i < m; ++i)
+            if (fabs(S[i * w2 + c]) > fabs(S[piv * w2 + c]))
+                piv = i;
+        for (size_t j = 0; j < w2; ++j) {
+            const double t = S[c * w2 + j];
+            S[c * w2 + j] = S[piv * w2 + j];
+            S[piv * w2 + j] = t;
+        }
+        const double d = S[c * w2 + c];
+        for (size_t j = 0; j < w2; ++j)
+            S[c * w2 + j] /= d;
+        for (size_t i = 0; i < m; ++i)
+            if (i != c) {
+                const double f = S[i * w2 + c];
+                for (size_t j = 0; j < w2; ++j)
+                    S[i * w2 + j] -= f * S[c * w2 + j];
+            }
+    }
+    for (size_t i = 0; i < n; ++i)
+        for (size_t j = 0; j < m; ++j) {
+            double acc = 0.0;
+            for (size_t k = 0; k < m; ++k)
+                acc += PHt[i * m + k] * S[k * w2 + m + j];
+            K[i * m + j] = acc;
+        }
+    for (size_t i = 0; i < n; ++i) {
+        double acc = 0.0;
+        for (size_t j = 0; j < m; ++j)
+            acc += K[i * m + j] * r[j];
+        x[i] += acc;
+    }
+    for (size_t i = 0; i < n; ++i)
+        for (size_t j = 0; j < n; ++j) {
+            double acc = i == j ? 1.0 : 0.0;
+            for (size_t k = 0; k < m; ++k)
+                acc -= K[i * m + k] * H[k * n + j];
+            A[i * n + j] = acc;
+        }
+    double AP[REF_KF_MAX * REF_KF_MAX], Pn[REF_KF_MAX * REF_KF_MAX];
+    for (size_t i = 0; i < n; ++i)
+        for (size_t j = 0; j < n; ++j) {
+            double acc = 0.0;
+            for (size_t k = 0; k < n; ++k)
+                acc += A[i * n + k] * P[k * n + j];
+            AP[i * n + j] = acc;
+        }
+    for (size_t i = 0; i < n; ++i)
+        for (size_t j = 0; j < n; ++j) {
+            double acc = 0.0;
+            for (size_t k = 0; k < n; ++k)
+                acc += AP[i * n + k] * A[j * n + k];
+            for (size_t a = 0; a < m; ++a)
+                for (size_t b = 0; b < m; ++b)
+                    acc += K[i * m + a] * R[a * m + b] * K[j * m + b];
+            Pn[i * n + j] = acc;
+        }
+    memcpy(P, Pn, n * n * sizeof *P);
 }
 
 #endif /* GF_REF_H */

@@ -606,7 +606,86 @@ gf_status gf_gfnav_init(gf_gfnav_state *st, const gf_array_geometry *g, const gf
     gf_status status = gf_gfins_init(&st->rate, g, rc, omega_init, unobservable);
     if (status != GF_OK)
         return status;
+    st->integration = GF_GFNAV_HERMITE;
     return gf_sins_init(&st->nav, sc, q_bn, v_n, lat, lon, h, t0);
+}
+
+gf_status gf_gfnav_set_integration(gf_gfnav_state *st, int32_t integration)
+{
+    if (!st)
+        return GF_ERR_NULL_POINTER;
+    if (integration != GF_GFNAV_LINEAR && integration != GF_GFNAV_HERMITE)
+        return GF_ERR_BAD_PARAMETER;
+    st->integration = integration;
+    return GF_OK;
+}
+
+/* w(c T) of the cubic Hermite rate model (gf_gfins.h) */
+static void hermite_rate(const double w0[3], const double wd0[3], const double w1[3],
+                         const double wd1[3], double T, double c, double out[3])
+{
+    const double c2 = c * c, c3 = c2 * c;
+    const double h00 = 2.0 * c3 - 3.0 * c2 + 1.0, h10 = (c3 - 2.0 * c2 + c) * T;
+    const double h01 = 3.0 * c2 - 2.0 * c3, h11 = (c3 - c2) * T;
+    for (int i = 0; i < 3; ++i)
+        out[i] = h00 * w0[i] + h10 * wd0[i] + h01 * w1[i] + h11 * wd1[i];
+}
+
+/* the body-rate commutator [a, b] = b x a (gf_gfins.h) */
+static void commutator(const double a[3], const double b[3], double out[3])
+{
+    gf_v3_cross(b, a, out);
+}
+
+static void hermite_increments(const double w0[3], const double wd0[3], const double f0[3],
+                               const double w1[3], const double wd1[3], const double f1[3],
+                               double T, double phi[3], double dv_b[3])
+{
+    /* sixth-order Magnus series at the Gauss-Legendre nodes 1/2 -+ sqrt(15)/10, 1/2 */
+    const double d = 0.38729833462074168852; /* sqrt(15) / 10 */
+    double a1[3], a2[3], a3[3], B1[3], B2[3], B3[3], C1[3], C2[3], t1[3], t2[3];
+    hermite_rate(w0, wd0, w1, wd1, T, 0.5 - d, a1);
+    hermite_rate(w0, wd0, w1, wd1, T, 0.5, a2);
+    hermite_rate(w0, wd0, w1, wd1, T, 0.5 + d, a3);
+    const double k2 = 3.87298334620741688518 * T / 3.0, k3 = 10.0 * T / 3.0; /* sqrt(15) T / 3 */
+    for (int i = 0; i < 3; ++i) {
+        B1[i] = T * a2[i];
+        B2[i] = k2 * (a3[i] - a1[i]);
+        B3[i] = k3 * (a3[i] - 2.0 * a2[i] + a1[i]);
+    }
+    commutator(B1, B2, C1);
+    for (int i = 0; i < 3; ++i)
+        t1[i] = 2.0 * B3[i] + C1[i];
+    commutator(B1, t1, C2);
+    for (int i = 0; i < 3; ++i) {
+        C2[i] *= -1.0 / 60.0;
+        t1[i] = -20.0 * B1[i] - B3[i] + C1[i];
+        t2[i] = B2[i] + C2[i];
+    }
+    commutator(t1, t2, C1);
+    for (int i = 0; i < 3; ++i)
+        phi[i] = B1[i] + B3[i] / 12.0 + C1[i] / 240.0;
+    /* specific force in the body frame at the start: trapezoid of h(t) = R(t) f(t) */
+    double q[4], h1[3];
+    gf_q_from_rotvec_fast(phi, q);
+    gf_q_rotate(q, f1, h1);
+    for (int i = 0; i < 3; ++i)
+        dv_b[i] = 0.5 * T * (f0[i] + h1[i]);
+}
+
+gf_status gf_hermite_increments(const double *w0, const double *wd0, const double *f0,
+                                const double *w1, const double *wd1, const double *f1, double T,
+                                double *phi, double *dv_b)
+{
+    if (!w0 || !wd0 || !f0 || !w1 || !wd1 || !f1 || !phi || !dv_b)
+        return GF_ERR_NULL_POINTER;
+    if (!(T > 0.0 && isfinite(T)))
+        return GF_ERR_BAD_TIME;
+    if (!gf_v3_isfinite(w0) || !gf_v3_isfinite(wd0) || !gf_v3_isfinite(f0) ||
+        !gf_v3_isfinite(w1) || !gf_v3_isfinite(wd1) || !gf_v3_isfinite(f1))
+        return GF_ERR_NONFINITE_INPUT;
+    hermite_increments(w0, wd0, f0, w1, wd1, f1, T, phi, dv_b);
+    return GF_OK;
 }
 
 gf_status gf_gfnav_run(gf_gfnav_state *st, size_t n, const double *A, double dt,
@@ -619,6 +698,8 @@ gf_status gf_gfnav_run(gf_gfnav_state *st, size_t n, const double *A, double dt,
         return GF_ERR_NULL_POINTER;
     if (!rate_state_valid(&st->rate))
         return GF_ERR_BAD_SIZE;
+    if (st->integration != GF_GFNAV_LINEAR && st->integration != GF_GFNAV_HERMITE)
+        return GF_ERR_BAD_PARAMETER;
     if (!(dt > 0.0 && isfinite(dt)))
         return GF_ERR_BAD_TIME;
     const size_t ns = st->rate.solver.n_sensors;
@@ -630,7 +711,21 @@ gf_status gf_gfnav_run(gf_gfnav_state *st, size_t n, const double *A, double dt,
         if (status != GF_OK)
             break;
         gf_sins_state nav = st->nav;
-        status = gf_sins_step(&nav, r.w, r.f, dt, h_ext ? h_ext[k] : NAN);
+        const double he = h_ext ? h_ext[k] : NAN;
+        if (st->integration == GF_GFNAV_HERMITE && nav.have_prev) {
+            /* the rate's derivative at both ends: w_dot, less the fused filter's bias */
+            double wd0[3], wd1[3], phi[3], dv_b[3];
+            gf_v3_copy(st->rate.omega_dot_rad_s2, wd0);
+            gf_v3_copy(r.wd, wd1);
+            if (st->rate.cfg.strategy == GF_RATE_FUSED) {
+                gf_v3_sub(wd0, st->rate.kf.x + 3, wd0);
+                gf_v3_sub(wd1, r.kf_x + 3, wd1);
+            }
+            hermite_increments(nav.prev_gyro, wd0, nav.prev_accel, r.w, wd1, r.f, dt, phi, dv_b);
+            status = gf_sins_step_compensated(&nav, phi, dv_b, r.w, r.f, dt, he);
+        } else {
+            status = gf_sins_step(&nav, r.w, r.f, dt, he);
+        }
         if (status != GF_OK)
             break;
         rate_commit(&st->rate, &r);

@@ -231,25 +231,6 @@ gf_status gf_sins_reverse(gf_sins_state *state)
 
 /* ---- the update -------------------------------------------------------------------- */
 
-/* Quaternion of a rotation vector without trig for |phi| < 0.1 rad (the usual size of
- * one update): Taylor series of cos(a/2) and sin(a/2)/a to a^10, whose remainder is
- * below 1e-19 there. */
-static inline void q_from_rotvec_fast(const double phi[3], double q[4])
-{
-    const double a2 = gf_v3_dot(phi, phi);
-    if (a2 < 1e-2) {
-        const double x = 0.25 * a2; /* (a/2)^2 */
-        const double c = 1.0 - x * (1.0 / 2 - x * (1.0 / 24 - x * (1.0 / 720 - x * (1.0 / 40320 - x / 3628800.0))));
-        const double s = 0.5 * (1.0 - x * (1.0 / 6 - x * (1.0 / 120 - x * (1.0 / 5040 - x * (1.0 / 362880 - x / 39916800.0)))));
-        q[0] = c;
-        q[1] = s * phi[0];
-        q[2] = s * phi[1];
-        q[3] = s * phi[2];
-    } else {
-        gf_q_from_rotvec(phi, q);
-    }
-}
-
 static inline int v3_finite(const double a[3])
 {
     return gf_all_finite(a, 3);
@@ -276,6 +257,9 @@ static inline void finish_update(gf_sins_state *s, const double gyro[3], const d
     s->time_s += s->earth_rate_sign > 0 ? T : -T;
     s->n_samples += 1;
 }
+
+static gf_status nav_update(gf_sins_state *s, const double phi[3], const double dv_b[3], double T,
+                            double h_ext_m);
 
 /* One update of *s by one sample. All checks come before any write, so an error leaves
  * *s unchanged. dir = +1 forward, -1 backward (gyro already negated by the caller). */
@@ -340,14 +324,28 @@ static gf_status sins_update(gf_sins_state *s, const double gyro[3], const doubl
     gf_v3_cross(dth, dv, t1);
     for (int i = 0; i < 3; ++i)
         dv_b[i] = dv[i] + 0.5 * t1[i] + scul[i];
+    const gf_status status = nav_update(s, phi, dv_b, T, h_ext_m);
+    if (status == GF_OK)
+        finish_update(s, gyro, accel, T);
+    return status;
+}
 
+/* The navigation update of one interval from its compensated increments: rotation
+ * vector phi (body at the start -> body at the end, coning included) and velocity
+ * increment dv_b (specific force integrated over the interval in the body frame at its
+ * start, rotation and sculling included). Checks before writes: an error leaves *s
+ * unchanged; the caller records the sample (finish_update) on GF_OK. */
+static gf_status nav_update(gf_sins_state *s, const double phi[3], const double dv_b[3], double T,
+                            double h_ext_m)
+{
+    const gf_sins_config *cfg = &s->cfg;
     if (cfg->earth == GF_SINS_EARTH_FLAT) {
         /* fixed frame: v' = C f + g, r' = v, q' = q w/2, g = [0, 0, -flat_gravity] */
         double dvn[3], v_new[3], qb[4], q[4];
         gf_q_rotate(s->q_bn, dv_b, dvn);
         gf_v3_add(s->v_n_m_s, dvn, v_new);
         v_new[2] -= cfg->flat_gravity_m_s2 * T;
-        q_from_rotvec_fast(phi, qb);
+        gf_q_from_rotvec_fast(phi, qb);
         gf_q_mul(s->q_bn, qb, q);
         if (!gf_q_normalize(q, q) || !v3_finite(v_new))
             return GF_ERR_DIVERGED;
@@ -357,7 +355,6 @@ static gf_status sins_update(gf_sins_state *s, const double gyro[3], const doubl
         }
         memcpy(s->q_bn, q, sizeof q);
         gf_v3_copy(v_new, s->v_n_m_s);
-        finish_update(s, gyro, accel, T);
         return GF_OK;
     }
 
@@ -442,8 +439,8 @@ static gf_status sins_update(gf_sins_state *s, const double gyro[3], const doubl
     /* attitude */
     double qn[4], qb[4], q[4], zneg[3];
     gf_v3_scale(zeta, -1.0, zneg);
-    q_from_rotvec_fast(zneg, qn);
-    q_from_rotvec_fast(phi, qb);
+    gf_q_from_rotvec_fast(zneg, qn);
+    gf_q_from_rotvec_fast(phi, qb);
     gf_q_mul(qn, s->q_bn, q);
     gf_q_mul(q, qb, q);
     /* products of unit quaternions have |q|^2 = 1 + O(eps): one Newton step of
@@ -479,7 +476,6 @@ static gf_status sins_update(gf_sins_state *s, const double gyro[3], const doubl
     }
     s->R_M_m = e.R_M_m; /* at the mid point: within 1e-9 relative of R_M(lat_new) */
     s->baro_accel_m_s2 = b_new;
-    finish_update(s, gyro, accel, T);
     return GF_OK;
 }
 
@@ -531,6 +527,33 @@ gf_status gf_sins_step(gf_sins_state *state, const double *gyro, const double *a
         return sins_update(state, g, accel, dt_s, h_ext_m);
     }
     return sins_update(state, gyro, accel, dt_s, h_ext_m);
+}
+
+gf_status gf_sins_step_compensated(gf_sins_state *state, const double *phi, const double *dv_b,
+                                   const double *rate, const double *f, double dt_s,
+                                   double h_ext_m)
+{
+    if (!state || !phi || !dv_b || !rate || !f)
+        return GF_ERR_NULL_POINTER;
+    if (!state_is_valid(state))
+        return GF_ERR_BAD_PARAMETER;
+    const gf_sins_config *cfg = &state->cfg;
+    if (cfg->input != GF_SINS_INPUT_RATES || !state->have_prev || state->earth_rate_sign < 0)
+        return GF_ERR_BAD_PARAMETER;
+    if (!v3_finite(phi) || !v3_finite(dv_b) || !v3_finite(rate) || !v3_finite(f) ||
+        isinf(h_ext_m))
+        return GF_ERR_NONFINITE_INPUT;
+    if (!(dt_s > 0.0 && isfinite(dt_s)))
+        return GF_ERR_BAD_TIME;
+    const double wmax = cfg->max_rate_rad_s, fmax_ = cfg->max_specific_force_m_s2;
+    const double wmax_T = wmax * dt_s, fmax_T = fmax_ * dt_s;
+    if (!(gf_v3_dot(rate, rate) <= wmax * wmax) || !(gf_v3_dot(f, f) <= fmax_ * fmax_) ||
+        !(gf_v3_dot(phi, phi) <= wmax_T * wmax_T) || !(gf_v3_dot(dv_b, dv_b) <= fmax_T * fmax_T))
+        return GF_ERR_OUT_OF_RANGE;
+    const gf_status status = nav_update(state, phi, dv_b, dt_s, h_ext_m);
+    if (status == GF_OK)
+        finish_update(state, rate, f, dt_s);
+    return status;
 }
 
 gf_status gf_sins_run(gf_sins_state *state, size_t n, const double *gyro, const double *accel,

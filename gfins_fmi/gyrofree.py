@@ -21,7 +21,7 @@ from gfins_fmi._lib import (NonFiniteInputError, SampleError, as_array, as_posit
 from gfins_fmi.accel_array import ArrayGeometry, accel9_geometry
 from gfins_fmi.sins import NavSolution, NavState, SinsConfig
 
-__all__ = ["UNKNOWNS", "STRATEGIES", "layout", "GeometryReport", "geometry_report",
+__all__ = ["UNKNOWNS", "STRATEGIES", "INTEGRATIONS", "hermite_increments", "layout", "GeometryReport", "geometry_report",
            "RateSolution", "RateSolver", "GyroFreeNavigator"]
 
 #: names of the 12 unknowns of one sample, in the order of the C core
@@ -165,6 +165,32 @@ def _rate_config(strategy, accel_noise_m_s2, bias_walk, init_std, init_bias_std)
     return c
 
 
+#: attitude/velocity integration of the navigator over a sampling interval
+INTEGRATIONS = {"linear": lib.GF_GFNAV_LINEAR, "hermite": lib.GF_GFNAV_HERMITE}
+
+
+def hermite_increments(w0_rad_s, w_dot0_rad_s2, f0_m_s2, w1_rad_s, w_dot1_rad_s2, f1_m_s2,
+                       T_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """Rotation vector (rad) and body velocity increment (m/s) of one interval of length
+    ``T_s`` under the cubic Hermite rate model through (w, w_dot) at both ends: what the
+    navigator integrates (``integration="hermite"``; equations in csrc/gf_gfins.h).
+
+    Returns
+    -------
+    phi_rad : (3,) rotation from the body frame at the start to the body frame at the end
+    dv_b_m_s : (3,) specific force integrated over the interval, body frame at the start
+    """
+    vecs = [as_vector3(name, v, unit) for name, v, unit in (
+        ("w0_rad_s", w0_rad_s, "rad/s"), ("w_dot0_rad_s2", w_dot0_rad_s2, "rad/s^2"),
+        ("f0_m_s2", f0_m_s2, "m/s^2"), ("w1_rad_s", w1_rad_s, "rad/s"),
+        ("w_dot1_rad_s2", w_dot1_rad_s2, "rad/s^2"), ("f1_m_s2", f1_m_s2, "m/s^2"))]
+    T_s = as_positive_scalar("T_s (interval)", T_s, "s")
+    phi, dv = np.empty(3), np.empty(3)
+    check_status(lib.gf_hermite_increments(*(ptr(v, 3) for v in vecs), T_s, ptr(phi, 3),
+                                           ptr(dv, 3)), "gf_hermite_increments")
+    return phi, dv
+
+
 #: what each rate strategy needs the array to estimate, and the named layouts that do
 _NEEDS = {"sqrt": ("the diagonal of w w^T (W_diag)", {"W_diag"}),
           "fused": ("the diagonal of w w^T (W_diag)", {"W_diag"}),
@@ -253,12 +279,20 @@ class GyroFreeNavigator:
         Mechanization options; ``input`` is forced to ``"rates"``.
     bias_walk_rad_s2_sqrt_s, init_std_rad_s, init_bias_std_rad_s2 : float
         Fused filter tuning, as :class:`RateSolver`.
+    integration : {"hermite", "linear"}
+        Attitude and velocity over a sampling interval: ``"hermite"`` (default) models
+        the rate as the cubic through w and w_dot at both ends (sixth-order Magnus
+        rotation vector) and integrates the specific force in the interval's start
+        frame; ``"linear"`` feeds the rates to the mechanization, which takes them as
+        linear between samples (second order, two-sample coning and sculling). See
+        ``gf_hermite_increments`` in csrc/gf_gfins.h.
     """
 
     def __init__(self, geometry: ArrayGeometry, initial: NavState, strategy: str = "integrate",
                  omega_init_rad_s=(0.0, 0.0, 0.0), accel_noise_m_s2: float = 1e-4,
                  sins: SinsConfig | None = None, *, bias_walk_rad_s2_sqrt_s: float = 1e-6,
-                 init_std_rad_s: float = 1e-2, init_bias_std_rad_s2: float = 1e-3):
+                 init_std_rad_s: float = 1e-2, init_bias_std_rad_s2: float = 1e-3,
+                 integration: str = "hermite"):
         _solver_c(geometry)
         self.geometry = geometry
         cfg = _rate_config(strategy, accel_noise_m_s2, bias_walk_rad_s2_sqrt_s, init_std_rad_s,
@@ -277,6 +311,11 @@ class GyroFreeNavigator:
         if self._flat:
             check_status(lib.gf_sins_set_flat_position(ffi.addressof(self._state, "nav"),
                                                        ptr(x0.pos_m, 3)), "flat position")
+        if integration not in INTEGRATIONS:
+            raise ValueError(f"integration must be one of {sorted(INTEGRATIONS)}; got {integration!r}")
+        self.integration = integration
+        check_status(lib.gf_gfnav_set_integration(self._state, INTEGRATIONS[integration]),
+                     "gf_gfnav_set_integration")
 
     def run(self, A_m_s2, dt_s: float, h_ext_m=None) -> tuple[NavSolution, RateSolution]:
         """Navigate a record (n, n_sensors); row k = state at sample k (row 0: t0)."""

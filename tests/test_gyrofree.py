@@ -123,10 +123,12 @@ def test_unsolvable_geometries_name_what_is_unobservable():
 
 
 def test_strategy_needs_what_the_array_measures():
-    with pytest.raises(ValueError, match="'sqrt' needs an array that measures the diagonal"):
+    with pytest.raises(ValueError, match="'sqrt' needs an array with at least 3 observed product"):
         gf.RateSolver(gf.layout("cube6", L), "sqrt")
-    with pytest.raises(ValueError, match="'eigen' needs an array that measures all"):
+    with pytest.raises(ValueError, match=r"'eigen' needs an array with all of w w\^T observed"):
         gf.RateSolver(gf.layout("qin9", L), "eigen")
+    with pytest.raises(ValueError, match="'fused' needs an array with at least one observed"):
+        gf.RateSolver(gf.layout("cube6", L), "fused")
     with pytest.raises(ValueError, match="strategy must be one of"):
         gf.RateSolver(gf.layout("qin9", L), "magic")
 
@@ -265,11 +267,12 @@ def test_strategy_message_suggests_only_layouts_that_measure_what_it_needs():
     with pytest.raises(ValueError) as exc:
         gf.GyroFreeNavigator(gf.layout("qin9", L), x0, "eigen")
     text = str(exc.value)
-    assert "'eigen' needs an array that measures all of w w^T" in text
-    assert "such as '12'" in text and "'qin9'" not in text and "initial state" not in text
+    assert "'eigen' needs an array with all of w w^T observed" in text
+    assert "layouts that serve 'eigen': '12'" in text and "initial state" not in text
+    assert "Strategies that navigate it: 'fused', 'sqrt'" in text
     with pytest.raises(ValueError) as exc:
         gf.GyroFreeNavigator(gf.layout("cube6", L), x0, "sqrt")
-    assert "such as 'qin9' or '12'" in str(exc.value)
+    assert "layouts that serve 'sqrt': 'qin9' or '12'" in str(exc.value)
 
 
 # ---- attitude and velocity integration from array data ----------------------------------

@@ -230,6 +230,7 @@ gf_status gf_array_solver_init(gf_array_solver *s, const gf_array_geometry *g,
             for (size_t c = 0; c < k; ++c)
                 acc += V[r * k + c] / sv[c] * U[i * k + c];
             s->pinv[r * NS + i] = acc;
+            s->pinv_t[i * GF_X_N + r] = acc;
         }
     /* K_pred = pinv H_p B_c B_c^T (n_est x 6) */
     if (n_conf > 0) {
@@ -315,17 +316,18 @@ static int solver_valid(const gf_array_solver *s)
            s->n_conf <= 6 - s->n_obs && s->n_est == 6 + s->n_obs;
 }
 
-/* pinv A (n_est rows) on a solver already checked (solver_valid) */
+/* y = pinv A (12 entries, zero beyond n_est) on a solver already checked (solver_valid):
+ * one axpy of 12 per output, which the compiler vectorises */
 static void array_linear(const gf_array_solver *s, const double *A, double *y)
 {
     const size_t m = s->n_sensors;
-    for (size_t r = 0; r < s->n_est; ++r) {
-        const double *row = s->pinv + r * NS;
-        double acc = 0.0;
-        for (size_t i = 0; i < m; ++i)
-            acc += row[i] * A[i];
-        y[r] = acc;
+    double acc[GF_X_N] = {0};
+    for (size_t i = 0; i < m; ++i) {
+        const double a = A[i], *row = s->pinv_t + i * GF_X_N;
+        for (int r = 0; r < GF_X_N; ++r)
+            acc[r] += a * row[r];
     }
+    memcpy(y, acc, sizeof acc);
 }
 
 /* x (12) from y = pinv A and the rate w: f, w_dot and the observed combinations less
@@ -480,6 +482,8 @@ gf_status gf_gfins_state_check(const gf_gfins_state *st)
     for (size_t r = 0; r < s->n_est; ++r)
         if (!gf_all_finite(s->pinv + r * NS, s->n_sensors))
             return GF_ERR_NONFINITE_INPUT;
+    if (!gf_all_finite(s->pinv_t, s->n_sensors * GF_X_N))
+        return GF_ERR_NONFINITE_INPUT;
     if (!gf_all_finite(st->omega_rad_s, 3) || !gf_all_finite(st->omega_ref_rad_s, 3) ||
         !gf_all_finite(st->omega_dot_rad_s2, 3) || !gf_all_finite(st->R_W, 36) ||
         !gf_all_finite(st->var_omega_dot, 9) || !gf_all_finite(st->frame, 9) ||
@@ -682,7 +686,7 @@ gf_status gf_gfins_init(gf_gfins_state *st, const gf_array_geometry *g, const gf
 
 /* Pending results of one rate step (committed only if the whole sample succeeds). */
 typedef struct rate_step_result {
-    double f[3], w[3], wd[3], W[6], ref[3];
+    double f[3], w[3], wd[3], ref[3], y[GF_X_N];
     double kf_x[6], kf_P[36];
     uint8_t flags;
 } rate_step_result;
@@ -874,7 +878,7 @@ static gf_status rate_step(const gf_gfins_state *st, const double *A, double dt,
     const int first = st->n_samples == 0;
     if (!first && !(dt > 0.0 && isfinite(dt)))
         return GF_ERR_BAD_TIME;
-    double pred[3], y[GF_X_N], x[GF_X_N], z[6], p_pred[6];
+    double pred[3], y[GF_X_N], z[6], p_pred[6];
     if (first)
         gf_v3_copy(st->omega_rad_s, pred);
     else
@@ -987,13 +991,29 @@ static gf_status rate_step(const gf_gfins_state *st, const double *A, double dt,
     default:
         return GF_ERR_BAD_PARAMETER;
     }
-    /* f (and the products reported) with the confounded products of the final rate */
-    array_finish(s, y, r->w, x);
-    gf_v3_copy(x, r->f);
-    memcpy(r->W, x + 6, sizeof r->W);
+    /* f with the confounded products of the final rate (the products W are formed only
+     * when a caller asks for them: rate_products) */
+    gf_v3_copy(y, r->f);
+    if (s->n_conf) {
+        double p[6], kf[3];
+        products_on(r->w, p);
+        kpred_times(s, 0, 3, p, kf);
+        for (int k = 0; k < 3; ++k)
+            r->f[k] -= kf[k];
+    }
+    memcpy(r->y, y, s->n_est * sizeof(double));
     if (!gf_all_finite(r->w, 3) || !gf_all_finite(r->f, 3))
         return GF_ERR_DIVERGED;
     return GF_OK;
+}
+
+/* the products W (as in x) of a step's result: observed from the outputs, the rest from
+ * the final rate */
+static void rate_products(const gf_array_solver *s, const rate_step_result *r, double W[6])
+{
+    double x[GF_X_N];
+    array_finish(s, r->y, r->w, x);
+    memcpy(W, x + 6, 6 * sizeof(double));
 }
 
 static void rate_commit(gf_gfins_state *st, const rate_step_result *r)
@@ -1023,7 +1043,7 @@ gf_status gf_gfins_step(gf_gfins_state *st, const double *A, double dt, double *
     if (f) gf_v3_copy(r.f, f);
     if (w) gf_v3_copy(r.w, w);
     if (wd) gf_v3_copy(r.wd, wd);
-    if (W) memcpy(W, r.W, sizeof r.W);
+    if (W) rate_products(&st->solver, &r, W);
     if (flags) *flags = r.flags;
     return GF_OK;
 }
@@ -1052,7 +1072,7 @@ gf_status gf_gfins_run(gf_gfins_state *st, size_t n, const double *A, double dt,
         gf_v3_copy(r.w, w + 3 * k);
         gf_v3_copy(r.wd, wd + 3 * k);
         if (W)
-            memcpy(W + 6 * k, r.W, sizeof r.W);
+            rate_products(&st->solver, &r, W + 6 * k);
         flags[k] = r.flags;
     }
     if (n_done)
@@ -1088,53 +1108,43 @@ gf_status gf_gfnav_set_integration(gf_gfnav_state *st, int32_t integration)
     return GF_OK;
 }
 
-/* w(c T) of the cubic Hermite rate model (gf_gfins.h) */
-static void hermite_rate(const double w0[3], const double wd0[3], const double w1[3],
-                         const double wd1[3], double T, double c, double out[3])
-{
-    const double c2 = c * c, c3 = c2 * c;
-    const double h00 = 2.0 * c3 - 3.0 * c2 + 1.0, h10 = (c3 - 2.0 * c2 + c) * T;
-    const double h01 = 3.0 * c2 - 2.0 * c3, h11 = (c3 - c2) * T;
-    for (int i = 0; i < 3; ++i)
-        out[i] = h00 * w0[i] + h10 * wd0[i] + h01 * w1[i] + h11 * wd1[i];
-}
-
 /* the body-rate commutator [a, b] = b x a (gf_gfins.h) */
 static void commutator(const double a[3], const double b[3], double out[3])
 {
     gf_v3_cross(b, a, out);
 }
 
+/* The increments of gf_gfins.h, and the quaternion q(phi) of the rotation. With
+ * m = (w0 + w1)/2, D = w1 - w0 and u = tau - 1/2, the Hermite rate is
+ *   w = m + (3u/2 - 2u^3) D + T [(1/8 - u^2/2)(w_dot0 - w_dot1) + (u^3 - u/4)(w_dot0 + w_dot1)],
+ * so at the nodes u = 0, +-sqrt(15)/10 the Magnus terms reduce to
+ *   B1 = T (m + T (w_dot0 - w_dot1) / 8),
+ *   B2 = T (6 D / 5 - T (w_dot0 + w_dot1) / 10),
+ *   B3 = -T^2 (w_dot0 - w_dot1) / 2. */
 static void hermite_increments(const double w0[3], const double wd0[3], const double f0[3],
                                const double w1[3], const double wd1[3], const double f1[3],
-                               double T, double phi[3], double dv_b[3])
+                               double T, double phi[3], double dv_b[3], double q[4])
 {
-    /* sixth-order Magnus series at the Gauss-Legendre nodes 1/2 -+ sqrt(15)/10, 1/2 */
-    const double d = 0.38729833462074168852; /* sqrt(15) / 10 */
-    double a1[3], a2[3], a3[3], B1[3], B2[3], B3[3], C1[3], C2[3], t1[3], t2[3];
-    hermite_rate(w0, wd0, w1, wd1, T, 0.5 - d, a1);
-    hermite_rate(w0, wd0, w1, wd1, T, 0.5, a2);
-    hermite_rate(w0, wd0, w1, wd1, T, 0.5 + d, a3);
-    const double k2 = 3.87298334620741688518 * T / 3.0, k3 = 10.0 * T / 3.0; /* sqrt(15) T / 3 */
+    double B1[3], B2[3], B3[3], C1[3], C2[3], t1[3], t2[3];
     for (int i = 0; i < 3; ++i) {
-        B1[i] = T * a2[i];
-        B2[i] = k2 * (a3[i] - a1[i]);
-        B3[i] = k3 * (a3[i] - 2.0 * a2[i] + a1[i]);
+        const double dd = wd0[i] - wd1[i], sd = wd0[i] + wd1[i];
+        B1[i] = T * (0.5 * (w0[i] + w1[i]) + 0.125 * T * dd);
+        B2[i] = T * (1.2 * (w1[i] - w0[i]) - 0.1 * T * sd);
+        B3[i] = -0.5 * T * T * dd;
     }
     commutator(B1, B2, C1);
     for (int i = 0; i < 3; ++i)
         t1[i] = 2.0 * B3[i] + C1[i];
     commutator(B1, t1, C2);
     for (int i = 0; i < 3; ++i) {
-        C2[i] *= -1.0 / 60.0;
         t1[i] = -20.0 * B1[i] - B3[i] + C1[i];
-        t2[i] = B2[i] + C2[i];
+        t2[i] = B2[i] - C2[i] / 60.0;
     }
     commutator(t1, t2, C1);
     for (int i = 0; i < 3; ++i)
         phi[i] = B1[i] + B3[i] / 12.0 + C1[i] / 240.0;
     /* specific force in the body frame at the start: trapezoid of h(t) = R(t) f(t) */
-    double q[4], h1[3];
+    double h1[3];
     gf_q_from_rotvec_fast(phi, q);
     gf_q_rotate(q, f1, h1);
     for (int i = 0; i < 3; ++i)
@@ -1152,7 +1162,8 @@ gf_status gf_hermite_increments(const double *w0, const double *wd0, const doubl
     if (!gf_v3_isfinite(w0) || !gf_v3_isfinite(wd0) || !gf_v3_isfinite(f0) ||
         !gf_v3_isfinite(w1) || !gf_v3_isfinite(wd1) || !gf_v3_isfinite(f1))
         return GF_ERR_NONFINITE_INPUT;
-    hermite_increments(w0, wd0, f0, w1, wd1, f1, T, phi, dv_b);
+    double q[4];
+    hermite_increments(w0, wd0, f0, w1, wd1, f1, T, phi, dv_b, q);
     return GF_OK;
 }
 
@@ -1168,6 +1179,8 @@ gf_status gf_gfnav_run(gf_gfnav_state *st, size_t n, const double *A, double dt,
         return GF_ERR_BAD_SIZE;
     if (st->integration != GF_GFNAV_LINEAR && st->integration != GF_GFNAV_HERMITE)
         return GF_ERR_BAD_PARAMETER;
+    if (!gf_sins_state_valid(&st->nav))
+        return GF_ERR_BAD_PARAMETER;
     if (!(dt > 0.0 && isfinite(dt)))
         return GF_ERR_BAD_TIME;
     const size_t ns = st->rate.solver.n_sensors;
@@ -1182,15 +1195,17 @@ gf_status gf_gfnav_run(gf_gfnav_state *st, size_t n, const double *A, double dt,
         const double he = h_ext ? h_ext[k] : NAN;
         if (st->integration == GF_GFNAV_HERMITE && nav.have_prev) {
             /* the rate's derivative at both ends: w_dot, less the fused filter's bias */
-            double wd0[3], wd1[3], phi[3], dv_b[3];
+            double wd0[3], wd1[3], phi[3], dv_b[3], q_phi[4];
             gf_v3_copy(st->rate.omega_dot_rad_s2, wd0);
             gf_v3_copy(r.wd, wd1);
             if (st->rate.cfg.strategy == GF_RATE_FUSED) {
                 gf_v3_sub(wd0, st->rate.kf.x + 3, wd0);
                 gf_v3_sub(wd1, r.kf_x + 3, wd1);
             }
-            hermite_increments(nav.prev_gyro, wd0, nav.prev_accel, r.w, wd1, r.f, dt, phi, dv_b);
-            status = gf_sins_step_compensated(&nav, phi, dv_b, r.w, r.f, dt, he);
+            hermite_increments(nav.prev_gyro, wd0, nav.prev_accel, r.w, wd1, r.f, dt, phi, dv_b, q_phi);
+            /* the state was checked at the start of the call (gf_sins_state_valid) and is
+             * written only by the mechanization since */
+            status = gf_sins_step_compensated_trusted(&nav, phi, q_phi, dv_b, r.w, r.f, dt, he);
         } else {
             status = gf_sins_step(&nav, r.w, r.f, dt, he);
         }

@@ -80,6 +80,9 @@ typedef struct gf_array_solver {
     double noise_gain[GF_X_N];   /* std per unit output noise of f, w_dot and of every
                                     product W_jk wholly observed (0 otherwise), body axes */
     double pinv[GF_X_N * GF_ARRAY_MAX_SENSORS];   /* n_est rows, stride GF_ARRAY_MAX_SENSORS */
+    double pinv_t[GF_ARRAY_MAX_SENSORS * GF_X_N]; /* its transpose, rows of 12 (zero beyond
+                                                     n_est): the per-sample product as
+                                                     axpys that vectorise */
     double K_pred[GF_X_N * 6];   /* n_est x 6: rows of x per orthonormal product of w_pred */
     double W_obs[36];            /* 6 x 6 (n_obs columns used): products W (as in x) per
                                     observed coordinate */

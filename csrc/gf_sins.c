@@ -258,7 +258,7 @@ static inline void finish_update(gf_sins_state *s, const double gyro[3], const d
     s->n_samples += 1;
 }
 
-static gf_status nav_update(gf_sins_state *s, const double phi[3], const double dv_b[3], double T,
+static gf_status nav_update(gf_sins_state *s, const double qb[4], const double dv_b[3], double T,
                             double h_ext_m);
 
 /* One update of *s by one sample. All checks come before any write, so an error leaves
@@ -324,28 +324,29 @@ static gf_status sins_update(gf_sins_state *s, const double gyro[3], const doubl
     gf_v3_cross(dth, dv, t1);
     for (int i = 0; i < 3; ++i)
         dv_b[i] = dv[i] + 0.5 * t1[i] + scul[i];
-    const gf_status status = nav_update(s, phi, dv_b, T, h_ext_m);
+    double qb[4];
+    gf_q_from_rotvec_fast(phi, qb);
+    const gf_status status = nav_update(s, qb, dv_b, T, h_ext_m);
     if (status == GF_OK)
         finish_update(s, gyro, accel, T);
     return status;
 }
 
-/* The navigation update of one interval from its compensated increments: rotation
- * vector phi (body at the start -> body at the end, coning included) and velocity
+/* The navigation update of one interval from its compensated increments: the rotation
+ * qb = q(phi) (phi: body at the start -> body at the end, coning included) and velocity
  * increment dv_b (specific force integrated over the interval in the body frame at its
  * start, rotation and sculling included). Checks before writes: an error leaves *s
  * unchanged; the caller records the sample (finish_update) on GF_OK. */
-static gf_status nav_update(gf_sins_state *s, const double phi[3], const double dv_b[3], double T,
+static gf_status nav_update(gf_sins_state *s, const double qb[4], const double dv_b[3], double T,
                             double h_ext_m)
 {
     const gf_sins_config *cfg = &s->cfg;
     if (cfg->earth == GF_SINS_EARTH_FLAT) {
         /* fixed frame: v' = C f + g, r' = v, q' = q w/2, g = [0, 0, -flat_gravity] */
-        double dvn[3], v_new[3], qb[4], q[4];
+        double dvn[3], v_new[3], q[4];
         gf_q_rotate(s->q_bn, dv_b, dvn);
         gf_v3_add(s->v_n_m_s, dvn, v_new);
         v_new[2] -= cfg->flat_gravity_m_s2 * T;
-        gf_q_from_rotvec_fast(phi, qb);
         gf_q_mul(s->q_bn, qb, q);
         if (!gf_q_normalize(q, q) || !v3_finite(v_new))
             return GF_ERR_DIVERGED;
@@ -437,10 +438,9 @@ static gf_status nav_update(gf_sins_state *s, const double phi[3], const double 
     }
 
     /* attitude */
-    double qn[4], qb[4], q[4], zneg[3];
+    double qn[4], q[4], zneg[3];
     gf_v3_scale(zeta, -1.0, zneg);
     gf_q_from_rotvec_fast(zneg, qn);
-    gf_q_from_rotvec_fast(phi, qb);
     gf_q_mul(qn, s->q_bn, q);
     gf_q_mul(q, qb, q);
     /* products of unit quaternions have |q|^2 = 1 + O(eps): one Newton step of
@@ -529,6 +529,11 @@ gf_status gf_sins_step(gf_sins_state *state, const double *gyro, const double *a
     return sins_update(state, gyro, accel, dt_s, h_ext_m);
 }
 
+int gf_sins_state_valid(const gf_sins_state *state)
+{
+    return state && state_is_valid(state);
+}
+
 gf_status gf_sins_step_compensated(gf_sins_state *state, const double *phi, const double *dv_b,
                                    const double *rate, const double *f, double dt_s,
                                    double h_ext_m)
@@ -537,12 +542,23 @@ gf_status gf_sins_step_compensated(gf_sins_state *state, const double *phi, cons
         return GF_ERR_NULL_POINTER;
     if (!state_is_valid(state))
         return GF_ERR_BAD_PARAMETER;
-    const gf_sins_config *cfg = &state->cfg;
-    if (cfg->input != GF_SINS_INPUT_RATES || !state->have_prev || state->earth_rate_sign < 0)
-        return GF_ERR_BAD_PARAMETER;
     if (!v3_finite(phi) || !v3_finite(dv_b) || !v3_finite(rate) || !v3_finite(f) ||
         isinf(h_ext_m))
         return GF_ERR_NONFINITE_INPUT;
+    double q_phi[4];
+    gf_q_from_rotvec_fast(phi, q_phi);
+    return gf_sins_step_compensated_trusted(state, phi, q_phi, dv_b, rate, f, dt_s, h_ext_m);
+}
+
+gf_status gf_sins_step_compensated_trusted(gf_sins_state *state, const double *phi,
+                                           const double *q_phi, const double *dv_b,
+                                           const double *rate, const double *f, double dt_s,
+                                           double h_ext_m)
+{
+    const gf_sins_config *cfg = &state->cfg;
+    if (cfg->input != GF_SINS_INPUT_RATES || !state->have_prev || state->earth_rate_sign < 0)
+        return GF_ERR_BAD_PARAMETER;
+    /* finite inputs are the caller's (a NaN would fail the limits below: OUT_OF_RANGE) */
     if (!(dt_s > 0.0 && isfinite(dt_s)))
         return GF_ERR_BAD_TIME;
     const double wmax = cfg->max_rate_rad_s, fmax_ = cfg->max_specific_force_m_s2;
@@ -550,7 +566,7 @@ gf_status gf_sins_step_compensated(gf_sins_state *state, const double *phi, cons
     if (!(gf_v3_dot(rate, rate) <= wmax * wmax) || !(gf_v3_dot(f, f) <= fmax_ * fmax_) ||
         !(gf_v3_dot(phi, phi) <= wmax_T * wmax_T) || !(gf_v3_dot(dv_b, dv_b) <= fmax_T * fmax_T))
         return GF_ERR_OUT_OF_RANGE;
-    const gf_status status = nav_update(state, phi, dv_b, dt_s, h_ext_m);
+    const gf_status status = nav_update(state, q_phi, dv_b, dt_s, h_ext_m);
     if (status == GF_OK)
         finish_update(state, rate, f, dt_s);
     return status;

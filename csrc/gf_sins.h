@@ -209,6 +209,18 @@ gf_status gf_sins_run(gf_sins_state *state, size_t n, const double *gyro, const 
  * step's results non-finite: GF_ERR_DIVERGED. */
 gf_status gf_sins_state_check(const gf_sins_state *state);
 
+/* Internal to the core: the compare-only validity check that gf_sins_step runs before
+ * every sample (configuration, direction, attitude norm, latitude range, cos L > 0,
+ * R_M > 0), for batch callers that check once per call and keep the state valid
+ * themselves between samples; and gf_sins_step_compensated without it. */
+int gf_sins_state_valid(const gf_sins_state *state);
+/* q_phi: gf_q_from_rotvec_fast(phi_rad), computed by the caller already; the inputs
+ * must be finite (checked by the caller; h_ext_m may be NaN: no external height) */
+gf_status gf_sins_step_compensated_trusted(gf_sins_state *state, const double *phi_rad,
+                                           const double *q_phi, const double *dv_b_m_s,
+                                           const double *rate_rad_s, const double *f_m_s2,
+                                           double dt_s, double h_ext_m);
+
 /* Internal to the core: gf_sins_step forward in time without the check of *state, for
  * callers that keep the state valid themselves (the integrated-navigation filter sets it
  * only through gf_sins_init and gf_sins_set_navigation, which check). */

@@ -486,6 +486,7 @@ gf_status gf_gfins_state_check(const gf_gfins_state *st)
         return GF_ERR_NONFINITE_INPUT;
     if (!gf_all_finite(st->omega_rad_s, 3) || !gf_all_finite(st->omega_ref_rad_s, 3) ||
         !gf_all_finite(st->omega_dot_rad_s2, 3) || !gf_all_finite(st->R_W, 36) ||
+        !gf_all_finite(st->omega_dot_prev_rad_s2, 3) || !isfinite(st->dt_prev_s) ||
         !gf_all_finite(st->var_omega_dot, 9) || !gf_all_finite(st->frame, 9) ||
         !gf_all_finite(st->diag_map, 18) || !gf_all_finite(st->amb_rad_s, 3) ||
         !gf_all_finite(st->whiten, 36))
@@ -686,7 +687,7 @@ gf_status gf_gfins_init(gf_gfins_state *st, const gf_array_geometry *g, const gf
 
 /* Pending results of one rate step (committed only if the whole sample succeeds). */
 typedef struct rate_step_result {
-    double f[3], w[3], wd[3], ref[3], y[GF_X_N];
+    double f[3], w[3], wd[3], ref[3], y[GF_X_N], dt;
     double kf_x[6], kf_P[36];
     uint8_t flags;
 } rate_step_result;
@@ -869,6 +870,24 @@ static void rate_fit(const gf_gfins_state *st, const double *z, rate_step_result
         gf_v3_copy(w, r->ref);
 }
 
+/* the w_dot integral over the new interval (gf_gfins.h): third-order Adams-Moulton when
+ * the two previous intervals are equal, else the trapezoid */
+static int am3_ok(const gf_gfins_state *st, double dt)
+{
+    return st->n_samples >= 2 && fabs(dt - st->dt_prev_s) <= 1e-9 * dt;
+}
+
+static void wdot_integral(const gf_gfins_state *st, const double wd_new[3], double dt, double out[3])
+{
+    const double *w1 = st->omega_dot_rad_s2, *w2 = st->omega_dot_prev_rad_s2;
+    if (am3_ok(st, dt))
+        for (int k = 0; k < 3; ++k)
+            out[k] = dt / 12.0 * (5.0 * wd_new[k] + 8.0 * w1[k] - w2[k]);
+    else
+        for (int k = 0; k < 3; ++k)
+            out[k] = 0.5 * dt * (w1[k] + wd_new[k]);
+}
+
 static gf_status rate_step(const gf_gfins_state *st, const double *A, double dt,
                            rate_step_result *r)
 {
@@ -878,9 +897,14 @@ static gf_status rate_step(const gf_gfins_state *st, const double *A, double dt,
     const int first = st->n_samples == 0;
     if (!first && !(dt > 0.0 && isfinite(dt)))
         return GF_ERR_BAD_TIME;
+    r->dt = dt;
     double pred[3], y[GF_X_N], z[6], p_pred[6];
     if (first)
         gf_v3_copy(st->omega_rad_s, pred);
+    else if (am3_ok(st, dt))
+        for (int k = 0; k < 3; ++k)
+            pred[k] = st->omega_rad_s[k] +
+                      0.5 * dt * (3.0 * st->omega_dot_rad_s2[k] - st->omega_dot_prev_rad_s2[k]);
     else
         gf_v3_axpy(st->omega_rad_s, dt, st->omega_dot_rad_s2, pred);
     /* y = pinv A; w_dot and the observed combinations less the confounded products of
@@ -897,18 +921,14 @@ static gf_status rate_step(const gf_gfins_state *st, const double *A, double dt,
         for (size_t c = 0; c < s->n_obs; ++c)
             z[c] -= kp[3 + c];
     }
-    gf_v3_copy(st->omega_ref_rad_s, r->ref);
+    double dw[3] = {0, 0, 0};
     if (!first)
-        for (int k = 0; k < 3; ++k)
-            r->ref[k] += 0.5 * dt * (st->omega_dot_rad_s2[k] + r->wd[k]);
+        wdot_integral(st, r->wd, dt, dw);
+    gf_v3_add(st->omega_ref_rad_s, dw, r->ref);
     r->flags = 0;
     switch (st->cfg.strategy) {
     case GF_RATE_INTEGRATE:
-        if (first)
-            gf_v3_copy(st->omega_rad_s, r->w);
-        else
-            for (int k = 0; k < 3; ++k)
-                r->w[k] = st->omega_rad_s[k] + 0.5 * dt * (st->omega_dot_rad_s2[k] + r->wd[k]);
+        gf_v3_add(st->omega_rad_s, dw, r->w);
         gf_v3_copy(r->w, r->ref);
         break;
     case GF_RATE_SQRT:
@@ -958,7 +978,7 @@ static gf_status rate_step(const gf_gfins_state *st, const double *A, double dt,
                         F[6 * i + j] -= dt * Aw[3 * i + j];
             }
             for (int k = 0; k < 3; ++k)
-                kf.x[k] += 0.5 * dt * (st->omega_dot_rad_s2[k] + r->wd[k]) - dt * kf.x[3 + k];
+                kf.x[k] += dw[k] - dt * kf.x[3 + k];
             gf_kalman_predict(&kf, F, Q, 0);
         }
         const double *w = kf.x;
@@ -1019,6 +1039,9 @@ static void rate_products(const gf_array_solver *s, const rate_step_result *r, d
 static void rate_commit(gf_gfins_state *st, const rate_step_result *r)
 {
     gf_v3_copy(r->w, st->omega_rad_s);
+    if (st->n_samples > 0)
+        st->dt_prev_s = r->dt;
+    gf_v3_copy(st->omega_dot_rad_s2, st->omega_dot_prev_rad_s2);
     gf_v3_copy(r->wd, st->omega_dot_rad_s2);
     gf_v3_copy(r->ref, st->omega_ref_rad_s);
     if (st->cfg.strategy == GF_RATE_FUSED) {

@@ -112,7 +112,13 @@ gf_status gf_layout_cube6(double lever_arm_m, gf_array_geometry *geometry);
 gf_status gf_layout_12(double lever_arm_m, gf_array_geometry *geometry);
 
 /* ---- angular-rate strategies ------------------------------------------------------ */
-#define GF_RATE_INTEGRATE 0   /* w_k = w_(k-1) + trapezoid(w_dot)  (6-accelerometer style) */
+/* The w_dot integral over an interval (INTEGRATE's rate, FUSED's prediction, the
+ * reference of SQRT and EIGEN) is the third-order Adams-Moulton rule
+ * T (5 w_dot_k + 8 w_dot_(k-1) - w_dot_(k-2)) / 12 (the trapezoid for the first interval
+ * and after a change of dt), and the rate predicted for the confounded products is
+ * the second-order Adams-Bashforth extrapolation w_(k-1) + T (3 w_dot_(k-1) - w_dot_(k-2)) / 2:
+ * both exact for a quadratic rate, so the rate of a smooth motion errs by O(T^3). */
+#define GF_RATE_INTEGRATE 0   /* w_k = w_(k-1) + integral of w_dot (6-accelerometer style) */
 #define GF_RATE_SQRT 1        /* w from the observed products, sample by sample; the signs
                                  (mirror images) by continuity with the w_dot integral (Qin) */
 #define GF_RATE_EIGEN 2       /* dominant eigenpair of W (all of w w^T observed), sign from
@@ -173,6 +179,8 @@ typedef struct gf_gfins_state {
     double omega_ref_rad_s[3];      /* w_dot integral from omega_init, re-anchored to the
                                        rate wherever the rate is unambiguous */
     double omega_dot_rad_s2[3];     /* w_dot at the last sample */
+    double omega_dot_prev_rad_s2[3]; /* w_dot at the sample before it */
+    double dt_prev_s;               /* the last interval (0 before the second sample) */
     double R_W[36];                 /* covariance of the observed combinations (n_obs^2) */
     double var_omega_dot[9];        /* covariance of w_dot (3 x 3) */
     int32_t n_w_meas;               /* FUSED: n_obs, 1..6 */

@@ -602,9 +602,9 @@ def gyrofree_fused_std(geometry, t_s, bias_std_m_s2: float, noise_std_m_s2: floa
     filter uses), and the errors are propagated sample by sample: the estimated unknowns'
     errors dx_k = P (s_k - H_F J dw_pred) with s_k = b + n_k the sensor errors (a
     random constant plus white noise of ``noise_std_m_s2`` per sample); the prediction
-    uses the trapezoid of dw_dot over two samples (so the noise of consecutive samples
-    is correlated: the previous dw_dot is a state); the update uses the products of the
-    same sample. Navigation as ``gyrofree_error_model``. The result is a discrete-time
+    integrates dw_dot as the C core does (trapezoid, then third-order Adams-Moulton over
+    three samples, so the noise of consecutive samples is correlated: the two previous
+    dw_dot are states); the update uses the products of the same sample. Navigation as ``gyrofree_error_model``. The result is a discrete-time
     covariance recursion rather than a python-control system: the filter's gains vary
     with time until they settle.
 
@@ -637,21 +637,31 @@ def gyrofree_fused_std(geometry, t_s, bias_std_m_s2: float, noise_std_m_s2: floa
     Pf = np.diag([init_std_rad_s ** 2] * 3 + [init_bias_std_rad_s2 ** 2] * 3)
     C0 = quat_to_dcm(np.asarray(q_bn, float))
     fxn = _skew(np.array([0.0, 0.0, g]))
-    # error state z = [e_w, e_b, dwdot_prev, phi, dv, dp, b (ns)]
-    iw, ib, iwd, iphi, iv, ip, ibias = 0, 3, 6, 9, 12, 15, 18
-    nz = 18 + ns
+    # error state z = [e_w, e_b, dwdot_prev, dwdot_prev2, phi, dv, dp, b (ns)]
+    iw, ib, iwd, iwd2, iphi, iv, ip, ibias = 0, 3, 6, 9, 12, 15, 18, 21
+    nz = 21 + ns
 
     def step(Z, N, k, t):
-        """One sample, applied to columns: Z (nz, c) previous states, N (ns, c) noise."""
+        """One sample, applied to columns: Z (nz, c) previous states, N (ns, c) noise.
+        The w_dot integral and the prediction as gf_gfins (third-order Adams-Moulton
+        and second-order Adams-Bashforth from the third sample on)."""
         nonlocal Pf
         s_k = Z[ibias:] + N
         first = k == 0
-        e_pred = Z[iw:iw + 3] + (0.0 if first else dt * Z[iwd:iwd + 3])
+        wd1, wd2 = Z[iwd:iwd + 3], Z[iwd2:iwd2 + 3]
+        if first:
+            e_pred = Z[iw:iw + 3]
+        elif k == 1:
+            e_pred = Z[iw:iw + 3] + dt * wd1
+        else:
+            e_pred = Z[iw:iw + 3] + 0.5 * dt * (3.0 * wd1 - wd2)
         dx = P @ s_k - K @ e_pred
         wd = S_wd @ dx
         ew, eb = Z[iw:iw + 3], Z[ib:ib + 3]
-        if not first:
-            ew = ew + 0.5 * dt * (Z[iwd:iwd + 3] + wd) - dt * eb
+        if k == 1:
+            ew = ew + 0.5 * dt * (wd1 + wd) - dt * eb
+        elif k > 1:
+            ew = ew + dt / 12.0 * (5.0 * wd + 8.0 * wd1 - wd2) - dt * eb
         r = S_z @ (P @ s_k) - Hk[:, 0:3] @ ew
         Kg = Pf @ Hk.T @ np.linalg.inv(Hk @ Pf @ Hk.T + R)
         e = np.vstack([ew, eb]) + Kg @ r
@@ -659,6 +669,7 @@ def gyrofree_fused_std(geometry, t_s, bias_std_m_s2: float, noise_std_m_s2: floa
         Zn = np.zeros_like(Z)
         Zn[iw:iw + 6] = e
         Zn[iwd:iwd + 3] = wd
+        Zn[iwd2:iwd2 + 3] = wd1
         Zn[ibias:] = Z[ibias:]
         if not first:
             C = C0 @ _rotation(w * t)

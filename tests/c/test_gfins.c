@@ -2112,7 +2112,7 @@ static void test_rate_fused_model(void)
         for (int a = 0; a < m; ++a)
             for (int b = 0; b < m; ++b)
                 R[a * m + b] = s2 * Gi[(6 + a) * k_est + 6 + b];
-        double wd_prev[3] = {0, 0, 0}, worst = 0.0, worst_out = 0.0;
+        double wd_prev[3] = {0, 0, 0}, wd_prev2[3] = {0, 0, 0}, worst = 0.0, worst_out = 0.0;
         test_rng rng = {(uint64_t)(900 + id)};
         for (int k = 0; k < 50; ++k) {
             double f[3], A[GF_ARRAY_MAX_SENSORS];
@@ -2145,8 +2145,12 @@ static void test_rate_fused_model(void)
                         Q[6 * i + j] = dt * dt * s2 * Gi[(3 + i) * k_est + 3 + j];
                     Q[7 * (i + 3)] = SQ(cfg.bias_walk_rad_s2_sqrt_s) * dt;
                 }
+                /* w_dot integral: trapezoid on the first interval, then third-order
+                 * Adams-Moulton T (5 w_dot_k + 8 w_dot_(k-1) - w_dot_(k-2)) / 12 */
                 for (int i = 0; i < 3; ++i)
-                    x[i] += 0.5 * dt * (wd_prev[i] + xl[3 + i]) - dt * x[3 + i];
+                    x[i] += (k == 1 ? 0.5 * dt * (wd_prev[i] + xl[3 + i])
+                                    : dt / 12.0 * (5.0 * xl[3 + i] + 8.0 * wd_prev[i] - wd_prev2[i])) -
+                            dt * x[3 + i];
                 double FP[36], Pn[36];
                 for (int i = 0; i < 6; ++i)
                     for (int j = 0; j < 6; ++j) {
@@ -2164,8 +2168,10 @@ static void test_rate_fused_model(void)
                     }
                 memcpy(P, Pn, sizeof P);
             }
-            for (int i = 0; i < 3; ++i)
+            for (int i = 0; i < 3; ++i) {
+                wd_prev2[i] = wd_prev[i];
                 wd_prev[i] = xl[3 + i];
+            }
             double h[6], Hm[36] = {0}, r[6];
             products(x, h);
             Hm[0] = 2 * x[0], Hm[6 + 1] = 2 * x[1], Hm[12 + 2] = 2 * x[2];

@@ -1011,15 +1011,19 @@ static gf_status rate_step(const gf_gfins_state *st, const double *A, double dt,
     default:
         return GF_ERR_BAD_PARAMETER;
     }
-    /* f with the confounded products of the final rate (the products W are formed only
-     * when a caller asks for them: rate_products) */
+    /* f and w_dot with the confounded products of the final rate: the w_dot kept for the
+     * next intervals' integral is then that of the rate the strategy settled on, the
+     * w' = w_dot(w) the filter models (the products W are formed only when a caller
+     * asks for them: rate_products) */
     gf_v3_copy(y, r->f);
     if (s->n_conf) {
-        double p[6], kf[3];
+        double p[6], kf[6];
         products_on(r->w, p);
-        kpred_times(s, 0, 3, p, kf);
-        for (int k = 0; k < 3; ++k)
+        kpred_times(s, 0, 6, p, kf);
+        for (int k = 0; k < 3; ++k) {
             r->f[k] -= kf[k];
+            r->wd[k] = y[3 + k] - kf[3 + k];
+        }
     }
     memcpy(r->y, y, s->n_est * sizeof(double));
     if (!gf_all_finite(r->w, 3) || !gf_all_finite(r->f, 3))

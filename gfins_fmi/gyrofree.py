@@ -221,9 +221,12 @@ def _poly(row) -> str:
     return text[2:] if text.startswith("+ ") else "-" + text[1:]
 
 
+def _vec_text(v) -> str:
+    return "[" + ", ".join(f"{0.0 if abs(x) < 1e-12 else x:.3g}" for x in v) + "]"
+
+
 def _axes_text(frame) -> str:
-    return ", ".join(f"a{k + 1} = [{', '.join(f'{v:.3g}' for v in frame[:, k])}]"
-                     for k in range(3))
+    return ", ".join(f"a{k + 1} = {_vec_text(frame[:, k])}" for k in range(frame.shape[1]))
 
 
 def _common_axes(maps: SolverMaps):
@@ -351,6 +354,11 @@ def _sqrt_stability(maps, dirs, wmax, dt, model):
             f"the confounded products of the predicted rate corrupt the observed ones: a rate "
             f"error is multiplied by up to {rho[k]:.3g} each sample (near rates where the "
             "observed products barely determine w)")
+    if rho[k] < 1e-9:
+        return "stable", float(g), W[k], (
+            "the confounded products do not reach the observed ones: every sample is solved "
+            "on its own, errors do not propagate; mirror images are resolved by the w_dot "
+            "integral")
     if rho[k] < 1 - _GROWTH_TOL:
         return "stable", float(g), W[k], (
             f"a rate error fed back through the confounded products shrinks by a factor "
@@ -375,23 +383,31 @@ def _fused_stability(maps, dirs, wmax):
         Ac[:, :3, 3:] = -np.eye(3)
         Cc = np.zeros((n, maps.n_obs, 6))
         Cc[:, :, :3] = C
-        blocks, P = [], Cc
+        # observability matrix of the pair scaled to unit norms (the subspace does not
+        # depend on the scales; unscaled, the powers of A span ~1e10 and the rank
+        # tolerance would count weakly observed directions as unobservable)
+        a_n = np.maximum(np.linalg.norm(Ac, axis=(1, 2)), 1e-300)[:, None, None]
+        c_n = np.maximum(np.linalg.norm(Cc, axis=(1, 2)), 1e-300)[:, None, None]
+        As, blocks, P = Ac / a_n, [], Cc / c_n
         for _ in range(6):
             blocks.append(P)
-            P = P @ Ac
+            P = P @ As
         O = np.concatenate(blocks, axis=1)
         _, sv, vt = np.linalg.svd(O)
         for i in range(n):
-            tol = 1e-9 * max(sv[i, 0], 1e-300)
-            r = int(np.sum(sv[i] > tol))
+            r = int(np.sum(sv[i] > 1e-9 * max(sv[i, 0], 1e-300)))
             if r == 6:
                 continue
+            N = vt[i, r:].T                          # unobservable subspace: A-invariant
+            M = N.T @ Ac[i] @ N
+            if np.linalg.norm(Ac[i] @ N - N @ M) > 1e-6 * a_n[i, 0, 0]:
+                continue                             # not invariant: a rank-tolerance artefact
             n_unobs = max(n_unobs, 6 - r)
-            N = vt[i, r:].T                          # unobservable subspace (A-invariant)
-            lam = np.linalg.eigvals(N.T @ Ac[i] @ N).real.max()
+            lam = np.linalg.eigvals(M).real.max()
             if lam > worst:
                 worst, where = lam, W[i]
-    gain = max(np.abs(maps.loop_matrix(wmax * dirs)).max(), 1.0)
+    # eigenvalues of the restricted map carry ~1e-6 |A| of the subspace's error
+    gain = max(np.abs(maps.loop_matrix(wmax * dirs)).max(), 1.0) * 1e3
     if n_unobs == 0:
         return "stable", -np.inf, np.zeros(3), (
             f"the {maps.n_obs} observed product combination(s) and the loop through w_dot make "
@@ -533,26 +549,27 @@ class GeometryReport:
         n_obs = len(self.observed)
         lines = [f"{self.n_sensors} accelerometers; least-squares condition number "
                  f"{self.condition_number:.3g}."]
+        frame = self.rate_model == "frame"
+        observed = ("(w.a1)^2; (w.a2)^2; (w.a3)^2, the squared rates along the array's axes "
+                    + _axes_text(self.mirror_axes) if frame else "; ".join(self.observed))
         lines.append("Measured linearly every sample: the specific force f and the angular "
-                      "acceleration w_dot (3 axes each)"
-                      + (f", and {n_obs} of the 6 products of w w^T: " + "; ".join(self.observed)
-                         if n_obs else ", and none of the products of w w^T") + ".")
-        if self.rate_model == "frame":
-            lines[-1] = lines[-1][:-1] + f" (the squared rates (w.a_k)^2 along the array's axes " \
-                f"{_axes_text(self.mirror_axes)})."
+                     "acceleration w_dot (3 axes each)"
+                     + (f", and {n_obs} of the 6 products of w w^T: " + observed
+                        if n_obs else ", and none of the products of w w^T") + ".")
         if self.confounded:
             lines.append("Confounded with f and w_dot (they enter the outputs as these do, so "
                          "they are taken from the predicted rate): " + "; ".join(self.confounded)
                          + ".")
         if self.absent:
-            lines.append("Not in the outputs at all: " + "; ".join(self.absent) + ".")
+            lines.append("Not in the outputs at all: " + ("the cross products (w.a_j)(w.a_k), j != k"
+                                                         if frame and len(self.absent) == 3
+                                                         else "; ".join(self.absent)) + ".")
         if self.rate_model == "none":
             lines.append("The products do not determine the rate sample by sample; it comes "
                          "from the w_dot integral (and, with 'fused', from what they do observe).")
         else:
             mirrors = ("the sign of w along each of these axes" if self.rate_model == "frame" else
-                       "the sign of w.n for n = " + ", ".join(
-                           "[" + ", ".join(f"{v:.3g}" for v in n) + "]" for n in self.mirror_axes.T)
+                       "the sign of w.n for n = " + ", ".join(_vec_text(n) for n in self.mirror_axes.T)
                        if self.mirror_axes.shape[1] else "the global sign of w")
             lines.append("The observed products give the rate sample by sample up to mirror "
                          f"images ({mirrors}); the branch comes from the w_dot integral, and "

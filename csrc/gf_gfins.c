@@ -569,6 +569,14 @@ static int find_frame(const gf_array_solver *s, double frame[9])
             for (int i = 0; i < 3; ++i)
                 frame[3 * i + dst] = sg * V[3 * i + p];
         }
+        /* the body axes within round-off (Qin's array as tabled): exactly them, so that
+         * the per-sample step can skip the frame rotations */
+        double dI = 0.0;
+        for (int i = 0; i < 9; ++i)
+            dI = fmax(dI, fabs(frame[i] - (i % 4 == 0 ? 1.0 : 0.0)));
+        if (dI <= 1e-13)
+            for (int i = 0; i < 9; ++i)
+                frame[i] = i % 4 == 0 ? 1.0 : 0.0;
         return 1;
     }
     return 0;
@@ -710,9 +718,11 @@ static void times_jacobian(const double *M, size_t n, size_t stride, const doubl
 static void rate_frame(const gf_gfins_state *st, const double *z, rate_step_result *r)
 {
     double wp[3], refp[3];
+    const double *fr = st->frame;
+    const int body = fr[0] == 1.0 && fr[4] == 1.0 && fr[8] == 1.0; /* then exactly I */
     for (int k = 0; k < 3; ++k) {
         const double *fk = st->frame;
-        refp[k] = fk[k] * r->ref[0] + fk[3 + k] * r->ref[1] + fk[6 + k] * r->ref[2];
+        refp[k] = body ? r->ref[k] : fk[k] * r->ref[0] + fk[3 + k] * r->ref[1] + fk[6 + k] * r->ref[2];
         const double d = st->diag_map[3 * k] * z[0] + st->diag_map[3 * k + 1] * z[1] +
                          st->diag_map[3 * k + 2] * z[2];
         if (d >= 0.0) {
@@ -728,6 +738,11 @@ static void rate_frame(const gf_gfins_state *st, const double *z, rate_step_resu
             wp[k] = refp[k];
             r->flags |= (uint8_t)(GF_RATE_FLAG_NEG_X << k);
         }
+    }
+    if (body) {
+        gf_v3_copy(wp, r->w);
+        gf_v3_copy(refp, r->ref);
+        return;
     }
     for (int i = 0; i < 3; ++i) {
         const double *fi = st->frame + 3 * i;
@@ -1163,13 +1178,14 @@ static void hermite_increments(const double w0[3], const double wd0[3], const do
     for (int i = 0; i < 3; ++i)
         t1[i] = 2.0 * B3[i] + C1[i];
     commutator(B1, t1, C2);
+    /* (multiplications by the reciprocals: divisions would lengthen the dependent chain) */
     for (int i = 0; i < 3; ++i) {
         t1[i] = -20.0 * B1[i] - B3[i] + C1[i];
-        t2[i] = B2[i] - C2[i] / 60.0;
+        t2[i] = B2[i] - C2[i] * (1.0 / 60.0);
     }
     commutator(t1, t2, C1);
     for (int i = 0; i < 3; ++i)
-        phi[i] = B1[i] + B3[i] / 12.0 + C1[i] / 240.0;
+        phi[i] = B1[i] + B3[i] * (1.0 / 12.0) + C1[i] * (1.0 / 240.0);
     /* specific force in the body frame at the start: trapezoid of h(t) = R(t) f(t) */
     double h1[3];
     gf_q_from_rotvec_fast(phi, q);

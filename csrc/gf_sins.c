@@ -246,6 +246,20 @@ static inline void sincos_shift(double s, double c, double d, double *s_out, dou
     *s_out = s_new;
 }
 
+/* Products of unit quaternions have |q|^2 = 1 + O(eps): one Newton step of 1/sqrt,
+ * q (3 - |q|^2)/2, normalises to round-off without sqrt or division; anything further
+ * from 1 is normalised in full. 0 if q cannot be normalised. */
+static inline int renormalize(double q[4])
+{
+    const double n2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
+    if (fabs(n2 - 1.0) < 1e-6) {
+        const double k = 1.5 - 0.5 * n2;
+        q[0] *= k; q[1] *= k; q[2] *= k; q[3] *= k;
+        return 1;
+    }
+    return gf_q_normalize(q, q);
+}
+
 /* What every successful update ends with: the sample becomes the previous one, time
  * moves by T in the direction of travel. */
 static inline void finish_update(gf_sins_state *s, const double gyro[3], const double accel[3],
@@ -348,7 +362,7 @@ static gf_status nav_update(gf_sins_state *s, const double qb[4], const double d
         gf_v3_add(s->v_n_m_s, dvn, v_new);
         v_new[2] -= cfg->flat_gravity_m_s2 * T;
         gf_q_mul(s->q_bn, qb, q);
-        if (!gf_q_normalize(q, q) || !v3_finite(v_new))
+        if (!renormalize(q) || !v3_finite(v_new))
             return GF_ERR_DIVERGED;
         for (int i = 0; i < 3; ++i) {
             s->flat_pos_m[i] += 0.5 * T * (s->v_n_m_s[i] + v_new[i]);
@@ -443,15 +457,8 @@ static gf_status nav_update(gf_sins_state *s, const double qb[4], const double d
     gf_q_from_rotvec_fast(zneg, qn);
     gf_q_mul(qn, s->q_bn, q);
     gf_q_mul(q, qb, q);
-    /* products of unit quaternions have |q|^2 = 1 + O(eps): one Newton step of
-     * 1/sqrt, q (3 - |q|^2)/2, normalises to round-off without sqrt or division */
-    const double n2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
-    if (fabs(n2 - 1.0) < 1e-6) {
-        const double k = 1.5 - 0.5 * n2;
-        q[0] *= k; q[1] *= k; q[2] *= k; q[3] *= k;
-    } else if (!gf_q_normalize(q, q)) {
+    if (!renormalize(q))
         return GF_ERR_DIVERGED;
-    }
 
     /* commit */
     const double invT = 1.0 / T;
@@ -545,6 +552,12 @@ gf_status gf_sins_step_compensated(gf_sins_state *state, const double *phi, cons
     if (!v3_finite(phi) || !v3_finite(dv_b) || !v3_finite(rate) || !v3_finite(f) ||
         isinf(h_ext_m))
         return GF_ERR_NONFINITE_INPUT;
+    if (!(dt_s > 0.0 && isfinite(dt_s)))
+        return GF_ERR_BAD_TIME;
+    const double wmax_T = state->cfg.max_rate_rad_s * dt_s;
+    const double fmax_T = state->cfg.max_specific_force_m_s2 * dt_s;
+    if (!(gf_v3_dot(phi, phi) <= wmax_T * wmax_T) || !(gf_v3_dot(dv_b, dv_b) <= fmax_T * fmax_T))
+        return GF_ERR_OUT_OF_RANGE;
     double q_phi[4];
     gf_q_from_rotvec_fast(phi, q_phi);
     return gf_sins_step_compensated_trusted(state, phi, q_phi, dv_b, rate, f, dt_s, h_ext_m);
@@ -561,11 +574,13 @@ gf_status gf_sins_step_compensated_trusted(gf_sins_state *state, const double *p
     /* finite inputs are the caller's (a NaN would fail the limits below: OUT_OF_RANGE) */
     if (!(dt_s > 0.0 && isfinite(dt_s)))
         return GF_ERR_BAD_TIME;
+    /* absurd samples: the rate and force at the end of the interval, as gf_sins_step
+     * checks its samples (the increments are made of them and of the previous sample,
+     * which passed the same check) */
     const double wmax = cfg->max_rate_rad_s, fmax_ = cfg->max_specific_force_m_s2;
-    const double wmax_T = wmax * dt_s, fmax_T = fmax_ * dt_s;
-    if (!(gf_v3_dot(rate, rate) <= wmax * wmax) || !(gf_v3_dot(f, f) <= fmax_ * fmax_) ||
-        !(gf_v3_dot(phi, phi) <= wmax_T * wmax_T) || !(gf_v3_dot(dv_b, dv_b) <= fmax_T * fmax_T))
+    if (!(gf_v3_dot(rate, rate) <= wmax * wmax) || !(gf_v3_dot(f, f) <= fmax_ * fmax_))
         return GF_ERR_OUT_OF_RANGE;
+    (void)phi;
     const gf_status status = nav_update(state, q_phi, dv_b, dt_s, h_ext_m);
     if (status == GF_OK)
         finish_update(state, rate, f, dt_s);

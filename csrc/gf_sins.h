@@ -152,7 +152,8 @@ gf_status gf_sins_step(gf_sins_state *state, const double *gyro, const double *a
  * previous sample, as gf_sins_step keeps them. Needs a forward rate record that has
  * started (input RATES, a first sample given to gf_sins_step): GF_ERR_BAD_PARAMETER
  * otherwise. Other errors and the state on error as gf_sins_step; |phi| and |dv_b| are
- * checked against the limits times dt_s. */
+ * checked against the limits times dt_s (the trusted variant below checks the samples
+ * only). */
 gf_status gf_sins_step_compensated(gf_sins_state *state, const double *phi_rad,
                                    const double *dv_b_m_s, const double *rate_rad_s,
                                    const double *f_m_s2, double dt_s, double h_ext_m);

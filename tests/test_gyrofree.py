@@ -162,7 +162,7 @@ def test_negative_products_are_flagged_never_nan(rng):
 
 def test_fused_estimator_never_worse_than_the_better_pure_strategy():
     """Angular-rate RMS error in the paper's scenario and through zero crossings
-    (medians of 10 runs); measured: 1.97e-5 vs 2.87e-5 (sqrt) and 1.96e-4 vs 7.8e-4."""
+    (medians of 10 runs); measured: 1.96e-5 vs 2.86e-5 (sqrt) and 2.10e-4 vs 5.8e-4."""
     table = R.rate_strategy_table(runs=10)
     for case, row in table.items():
         print(case, row)

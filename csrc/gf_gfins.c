@@ -77,6 +77,20 @@ static gf_status svd_padded(size_t m, size_t k, const double *a, double *u, doub
     return gf_svd(mm, k, u, sv, v);
 }
 
+/* out[i * stride + off + c] = H_p row i . column c0 + c of the 6x6 basis B, c < nc: the
+ * outputs of product-basis directions */
+static void hp_times_columns(size_t m, const double *Hp, const double *B, size_t c0, size_t nc,
+                             double *out, size_t stride, size_t off)
+{
+    for (size_t i = 0; i < m; ++i)
+        for (size_t c = 0; c < nc; ++c) {
+            double acc = 0.0;
+            for (int k = 0; k < 6; ++k)
+                acc += Hp[i * 6 + (size_t)k] * B[(size_t)k * 6 + c0 + c];
+            out[i * stride + off + c] = acc;
+        }
+}
+
 gf_status gf_array_solver_init(gf_array_solver *s, const gf_array_geometry *g,
                                uint32_t *unobservable)
 {
@@ -170,13 +184,7 @@ gf_status gf_array_solver_init(gf_array_solver *s, const gf_array_geometry *g,
     double Vc[36] = {0};
     if (n_null > 0) {
         double HpVn[NS * 6];
-        for (size_t i = 0; i < m; ++i)
-            for (size_t c = 0; c < n_null; ++c) {
-                double acc = 0.0;
-                for (int k = 0; k < 6; ++k)
-                    acc += Hp[i * 6 + k] * Vo[k * 6 + n_obs + c];
-                HpVn[i * n_null + c] = acc;
-            }
+        hp_times_columns(m, Hp, Vo, n_obs, n_null, HpVn, n_null, 0);
         double Wc[36];
         if (svd_padded(m, n_null, HpVn, U, sv, Wc) != GF_OK)
             return GF_ERR_SINGULAR_GEOMETRY;
@@ -203,16 +211,10 @@ gf_status gf_array_solver_init(gf_array_solver *s, const gf_array_geometry *g,
     /* least squares for [f, w_dot, z]: X = [H_l, H_p B_o] */
     const size_t k = 6 + n_obs;
     double X[NS * GF_X_N];
-    for (size_t i = 0; i < m; ++i) {
+    for (size_t i = 0; i < m; ++i)
         for (int j = 0; j < 6; ++j)
-            X[i * k + j] = Hl[i * 6 + j];
-        for (size_t c = 0; c < n_obs; ++c) {
-            double acc = 0.0;
-            for (int j = 0; j < 6; ++j)
-                acc += Hp[i * 6 + j] * s->basis[j * 6 + c];
-            X[i * k + 6 + c] = acc;
-        }
-    }
+            X[i * k + (size_t)j] = Hl[i * 6 + (size_t)j];
+    hp_times_columns(m, Hp, s->basis, 0, n_obs, X, k, 6);
     if (svd_padded(m, k, X, U, sv, V) != GF_OK)
         return GF_ERR_SINGULAR_GEOMETRY;
     size_t rank = 0;
@@ -235,13 +237,7 @@ gf_status gf_array_solver_init(gf_array_solver *s, const gf_array_geometry *g,
     /* K_pred = pinv H_p B_c B_c^T (n_est x 6) */
     if (n_conf > 0) {
         double HpBc[NS * 6];
-        for (size_t i = 0; i < m; ++i)
-            for (size_t c = 0; c < n_conf; ++c) {
-                double acc = 0.0;
-                for (int j = 0; j < 6; ++j)
-                    acc += Hp[i * 6 + j] * s->basis[j * 6 + n_obs + c];
-                HpBc[i * 6 + c] = acc;
-            }
+        hp_times_columns(m, Hp, s->basis, n_obs, n_conf, HpBc, 6, 0);
         for (size_t r = 0; r < k; ++r) {
             double t[6] = {0, 0, 0, 0, 0, 0};
             for (size_t c = 0; c < n_conf; ++c) {

@@ -708,23 +708,33 @@ static void times_jacobian(const double *M, size_t n, size_t stride, const doubl
         }
 }
 
+/* A sign reference carries no information below this fraction of the rates' scale
+ * (|reference|, |previous rate|): it is round-off of an integral started at zero. */
+#define SIGN_INFO 1e-6
+
 /* SQRT, FRAME: w.a_k = +-sqrt(a_k^T W a_k) with the sign of the reference (seed 000
  * eq. 4 and 6 in the array's frame); the reference is re-anchored on the axes that are
  * unambiguous */
 static void rate_frame(const gf_gfins_state *st, const double *z, rate_step_result *r)
 {
-    double wp[3], refp[3];
+    double wp[3], refp[3], prevp[3];
     const double *fr = st->frame;
     const int body = fr[0] == 1.0 && fr[4] == 1.0 && fr[8] == 1.0; /* then exactly I */
+    const double *w0 = st->omega_rad_s;
+    const double tiny = SIGN_INFO * fmax(gf_v3_norm(r->ref), gf_v3_norm(w0));
     for (int k = 0; k < 3; ++k) {
         const double *fk = st->frame;
         refp[k] = body ? r->ref[k] : fk[k] * r->ref[0] + fk[3 + k] * r->ref[1] + fk[6 + k] * r->ref[2];
+        prevp[k] = body ? w0[k] : fk[k] * w0[0] + fk[3 + k] * w0[1] + fk[6 + k] * w0[2];
         const double d = st->diag_map[3 * k] * z[0] + st->diag_map[3 * k + 1] * z[1] +
                          st->diag_map[3 * k + 2] * z[2];
         if (d >= 0.0) {
             const double mag = sqrt(d);
-            wp[k] = refp[k] < 0.0 ? -mag : mag;
-            if (refp[k] == 0.0 && mag > 0.0)
+            /* the sign of the w_dot integral, or where it holds no information (a start at
+             * rest from zero: round-off), the previous rate's: continuity */
+            const double sref = fabs(refp[k]) > tiny ? refp[k] : prevp[k];
+            wp[k] = sref < 0.0 ? -mag : mag;
+            if (sref == 0.0 && mag > 0.0)
                 r->flags |= GF_RATE_FLAG_SIGN_UNKNOWN;
             if (mag < st->amb_rad_s[k])
                 r->flags |= GF_RATE_FLAG_AMBIGUOUS;
@@ -789,7 +799,11 @@ static void rate_full(const gf_gfins_state *st, const double *Wx, rate_step_resu
         const double mag = sqrt(ev[0]);
         for (int k = 0; k < 3; ++k)
             r->w[k] = mag * V[3 * k];
-        const double d = gf_v3_dot(r->w, r->ref);
+        /* the sign of the w_dot integral, or the previous rate's where the integral holds
+         * no information along w (a start at rest from zero: round-off) */
+        double d = gf_v3_dot(r->w, r->ref);
+        if (!(fabs(d) > SIGN_INFO * mag * fmax(gf_v3_norm(r->ref), gf_v3_norm(st->omega_rad_s))))
+            d = gf_v3_dot(r->w, st->omega_rad_s);
         if (d < 0.0)
             gf_v3_scale(r->w, -1.0, r->w);
         else if (d == 0.0)
@@ -814,6 +828,8 @@ static void rate_fit(const gf_gfins_state *st, const double *z, rate_step_result
     const size_t no = s->n_obs;
     double w[3];
     gf_v3_copy(r->ref, w);
+    if (!(gf_v3_norm(r->ref) > SIGN_INFO * gf_v3_norm(st->omega_rad_s)))
+        gf_v3_copy(st->omega_rad_s, w); /* the integral holds no information: continuity */
     double GtG[9] = {0};
     int converged = 0;
     for (int it = 0; it < 12; ++it) {

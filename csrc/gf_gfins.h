@@ -6,18 +6,22 @@
  *   A_i = theta_i . f + (u_i x theta_i) . w_dot + sum_jk M_i,jk W_jk,
  *   M_i = sym(theta_i u_i^T) - (theta_i . u_i) I                (from seed 000 eq. 1-2)
  *
- * so an array is the N x 12 matrix H of these rows. The solver (gf_array_solver) finds
- * which groups of unknowns affect the outputs and which of them the array separates:
- *   - all of them (e.g. the 12-accelerometer layout: w w^T is measured linearly),
- *   - f, w_dot and the diagonal of W while the off-diagonal products do not appear
- *     (Qin's 9-accelerometer layout), or
- *   - f and w_dot, the products being taken from a predicted rate (the 6-accelerometer
- *     cube of Tan & Park, which must integrate w_dot for its rate),
- * and solves by least squares with the pseudo-inverse (SVD). Its report gives rank,
- * condition number and the noise gain of each unknown (row norms of the pseudo-inverse).
+ * so an array is the N x 12 matrix H of these rows. The solver (gf_array_solver) splits
+ * the six products into the combinations the outputs separate from f and w_dot
+ * (observed), those that enter them only as f and w_dot do (confounded: taken from a
+ * predicted rate) and those that do not enter them (absent), in coordinates a rotation
+ * of the array acts on orthogonally, so that the same physical array gives the same
+ * (rotated) solution in any mounting; it solves each sample by least squares with the
+ * pseudo-inverse (SVD). Examples: the 12-accelerometer layout observes all of w w^T;
+ * Qin's 9-accelerometer layout the squared rates along its axes (the cross products are
+ * absent); the 6-accelerometer cube of Tan & Park none (its cross products are
+ * confounded: it must integrate w_dot); a coplanar array three combinations.
  *
- * The rate w follows from a strategy (gf_rate_strategy); the navigator feeds (w, f) to
- * the strapdown mechanization (gf_sins, rate input).
+ * The rate w follows from a strategy (GF_RATE_*); whether a strategy's error loop is
+ * stable on an array is analysed in gfins_fmi/gyrofree.py (rate_loop_stability). The
+ * navigator integrates (w, w_dot, f) over each interval with a cubic Hermite rate model
+ * (gf_hermite_increments) and hands the increments to the strapdown mechanization
+ * (gf_sins_step_compensated), or feeds it the rates (GF_GFNAV_LINEAR).
  */
 #ifndef GF_GFINS_H
 #define GF_GFINS_H

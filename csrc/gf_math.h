@@ -203,6 +203,25 @@ static inline void gf_q_from_rotvec(const double phi_rad[3], double out[4])
     out[0] = c; out[1] = s * phi_rad[0]; out[2] = s * phi_rad[1]; out[3] = s * phi_rad[2];
 }
 
+/* gf_q_from_rotvec without trigonometry for |phi| < 0.1 rad (the usual size of one
+ * navigation update): Taylor series of cos(a/2) and sin(a/2)/a to a^10, whose remainder
+ * is below 1e-19 there; larger angles go to gf_q_from_rotvec. */
+static inline void gf_q_from_rotvec_fast(const double phi[3], double q[4])
+{
+    const double a2 = gf_v3_dot(phi, phi);
+    if (a2 < 1e-2) {
+        const double x = 0.25 * a2; /* (a/2)^2 */
+        const double c = 1.0 - x * (1.0 / 2 - x * (1.0 / 24 - x * (1.0 / 720 - x * (1.0 / 40320 - x / 3628800.0))));
+        const double s = 0.5 * (1.0 - x * (1.0 / 6 - x * (1.0 / 120 - x * (1.0 / 5040 - x * (1.0 / 362880 - x / 39916800.0)))));
+        q[0] = c;
+        q[1] = s * phi[0];
+        q[2] = s * phi[1];
+        q[3] = s * phi[2];
+    } else {
+        gf_q_from_rotvec(phi, q);
+    }
+}
+
 /* Rotation vector (rad) of a unit quaternion, the inverse of gf_q_from_rotvec on the
  * shortest rotation (angle in [0, pi]; q and -q give the same vector). */
 static inline void gf_q_to_rotvec(const double q[4], double out_rad[3])

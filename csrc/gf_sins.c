@@ -253,25 +253,6 @@ gf_status gf_sins_reverse(gf_sins_state *state)
 
 /* ---- the update -------------------------------------------------------------------- */
 
-/* Quaternion of a rotation vector without trig for |phi| < 0.1 rad (the usual size of
- * one update): Taylor series of cos(a/2) and sin(a/2)/a to a^10, whose remainder is
- * below 1e-19 there. */
-static inline void q_from_rotvec_fast(const double phi[3], double q[4])
-{
-    const double a2 = gf_v3_dot(phi, phi);
-    if (a2 < 1e-2) {
-        const double x = 0.25 * a2; /* (a/2)^2 */
-        const double c = 1.0 - x * (1.0 / 2 - x * (1.0 / 24 - x * (1.0 / 720 - x * (1.0 / 40320 - x / 3628800.0))));
-        const double s = 0.5 * (1.0 - x * (1.0 / 6 - x * (1.0 / 120 - x * (1.0 / 5040 - x * (1.0 / 362880 - x / 39916800.0)))));
-        q[0] = c;
-        q[1] = s * phi[0];
-        q[2] = s * phi[1];
-        q[3] = s * phi[2];
-    } else {
-        gf_q_from_rotvec(phi, q);
-    }
-}
-
 static inline int v3_finite(const double a[3])
 {
     return gf_all_finite(a, 3);
@@ -287,6 +268,20 @@ static inline void sincos_shift(double s, double c, double d, double *s_out, dou
     *s_out = s_new;
 }
 
+/* Products of unit quaternions have |q|^2 = 1 + O(eps): one Newton step of 1/sqrt,
+ * q (3 - |q|^2)/2, normalises to round-off without sqrt or division; anything further
+ * from 1 is normalised in full. 0 if q cannot be normalised. */
+static inline int renormalize(double q[4])
+{
+    const double n2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
+    if (fabs(n2 - 1.0) < 1e-6) {
+        const double k = 1.5 - 0.5 * n2;
+        q[0] *= k; q[1] *= k; q[2] *= k; q[3] *= k;
+        return 1;
+    }
+    return gf_q_normalize(q, q);
+}
+
 /* What every successful update ends with: the sample becomes the previous one, time
  * moves by T in the direction of travel. */
 static inline void finish_update(gf_sins_state *s, const double gyro[3], const double accel[3],
@@ -298,6 +293,9 @@ static inline void finish_update(gf_sins_state *s, const double gyro[3], const d
     s->time_s += s->earth_rate_sign > 0 ? T : -T;
     s->n_samples += 1;
 }
+
+static gf_status nav_update(gf_sins_state *s, const double qb[4], const double dv_b[3], double T,
+                            double h_ext_m);
 
 /* One update of *s by one sample. All checks come before any write, so an error leaves
  * *s unchanged. dir = +1 forward, -1 backward (gyro already negated by the caller). */
@@ -362,14 +360,29 @@ static gf_status sins_update(gf_sins_state *s, const double gyro[3], const doubl
     gf_v3_cross(dth, dv, t1);
     for (int i = 0; i < 3; ++i)
         dv_b[i] = dv[i] + 0.5 * t1[i] + scul[i];
+    double qb[4];
+    gf_q_from_rotvec_fast(phi, qb);
+    const gf_status status = nav_update(s, qb, dv_b, T, h_ext_m);
+    if (status == GF_OK)
+        finish_update(s, gyro, accel, T);
+    return status;
+}
 
+/* The navigation update of one interval from its compensated increments: the rotation
+ * qb = q(phi) (phi: body at the start -> body at the end, coning included) and velocity
+ * increment dv_b (specific force integrated over the interval in the body frame at its
+ * start, rotation and sculling included). Checks before writes: an error leaves *s
+ * unchanged; the caller records the sample (finish_update) on GF_OK. */
+static gf_status nav_update(gf_sins_state *s, const double qb[4], const double dv_b[3], double T,
+                            double h_ext_m)
+{
+    const gf_sins_config *cfg = &s->cfg;
     if (cfg->earth == GF_SINS_EARTH_FLAT) {
         /* fixed frame: v' = C f + g, r' = v, q' = q w/2, g = [0, 0, -flat_gravity] */
-        double dvn[3], v_new[3], qb[4], q[4];
+        double dvn[3], v_new[3], q[4];
         gf_q_rotate(s->q_bn, dv_b, dvn);
         gf_v3_add(s->v_n_m_s, dvn, v_new);
         v_new[2] -= cfg->flat_gravity_m_s2 * T;
-        q_from_rotvec_fast(phi, qb);
         gf_q_mul(s->q_bn, qb, q);
         double pos_new[3], a_new[3];
         for (int i = 0; i < 3; ++i) {
@@ -377,13 +390,12 @@ static gf_status sins_update(gf_sins_state *s, const double gyro[3], const doubl
             a_new[i] = (v_new[i] - s->v_n_m_s[i]) / T;
         }
         /* finite but absurd velocities can overflow the position (found by fuzzing) */
-        if (!gf_q_normalize(q, q) || !v3_finite(v_new) || !v3_finite(pos_new) || !v3_finite(a_new))
+        if (!renormalize(q) || !v3_finite(v_new) || !v3_finite(pos_new) || !v3_finite(a_new))
             return GF_ERR_DIVERGED;
         gf_v3_copy(pos_new, s->flat_pos_m);
         gf_v3_copy(a_new, s->a_n_m_s2);
         memcpy(s->q_bn, q, sizeof q);
         gf_v3_copy(v_new, s->v_n_m_s);
-        finish_update(s, gyro, accel, T);
         return GF_OK;
     }
 
@@ -466,21 +478,13 @@ static gf_status sins_update(gf_sins_state *s, const double gyro[3], const doubl
     }
 
     /* attitude */
-    double qn[4], qb[4], q[4], zneg[3];
+    double qn[4], q[4], zneg[3];
     gf_v3_scale(zeta, -1.0, zneg);
-    q_from_rotvec_fast(zneg, qn);
-    q_from_rotvec_fast(phi, qb);
+    gf_q_from_rotvec_fast(zneg, qn);
     gf_q_mul(qn, s->q_bn, q);
     gf_q_mul(q, qb, q);
-    /* products of unit quaternions have |q|^2 = 1 + O(eps): one Newton step of
-     * 1/sqrt, q (3 - |q|^2)/2, normalises to round-off without sqrt or division */
-    const double n2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
-    if (fabs(n2 - 1.0) < 1e-6) {
-        const double k = 1.5 - 0.5 * n2;
-        q[0] *= k; q[1] *= k; q[2] *= k; q[3] *= k;
-    } else if (!gf_q_normalize(q, q)) {
+    if (!renormalize(q))
         return GF_ERR_DIVERGED;
-    }
 
     /* commit (the acceleration checked first: finite but absurd velocities overflow it) */
     const double invT = 1.0 / T;
@@ -520,7 +524,6 @@ static gf_status sins_update(gf_sins_state *s, const double gyro[3], const doubl
         s->R_M_m = e_new.R_M_m;
     }
     s->baro_accel_m_s2 = b_new;
-    finish_update(s, gyro, accel, T);
     return GF_OK;
 }
 
@@ -572,6 +575,57 @@ gf_status gf_sins_step(gf_sins_state *state, const double *gyro, const double *a
         return sins_update(state, g, accel, dt_s, h_ext_m);
     }
     return sins_update(state, gyro, accel, dt_s, h_ext_m);
+}
+
+int gf_sins_state_valid(const gf_sins_state *state)
+{
+    return state && state_is_valid(state);
+}
+
+gf_status gf_sins_step_compensated(gf_sins_state *state, const double *phi, const double *dv_b,
+                                   const double *rate, const double *f, double dt_s,
+                                   double h_ext_m)
+{
+    if (!state || !phi || !dv_b || !rate || !f)
+        return GF_ERR_NULL_POINTER;
+    if (!state_is_valid(state))
+        return GF_ERR_BAD_PARAMETER;
+    if (!v3_finite(phi) || !v3_finite(dv_b) || !v3_finite(rate) || !v3_finite(f) ||
+        isinf(h_ext_m))
+        return GF_ERR_NONFINITE_INPUT;
+    if (!(dt_s > 0.0 && isfinite(dt_s)))
+        return GF_ERR_BAD_TIME;
+    const double wmax_T = state->cfg.max_rate_rad_s * dt_s;
+    const double fmax_T = state->cfg.max_specific_force_m_s2 * dt_s;
+    if (!(gf_v3_dot(phi, phi) <= wmax_T * wmax_T) || !(gf_v3_dot(dv_b, dv_b) <= fmax_T * fmax_T))
+        return GF_ERR_OUT_OF_RANGE;
+    double q_phi[4];
+    gf_q_from_rotvec_fast(phi, q_phi);
+    return gf_sins_step_compensated_trusted(state, phi, q_phi, dv_b, rate, f, dt_s, h_ext_m);
+}
+
+gf_status gf_sins_step_compensated_trusted(gf_sins_state *state, const double *phi,
+                                           const double *q_phi, const double *dv_b,
+                                           const double *rate, const double *f, double dt_s,
+                                           double h_ext_m)
+{
+    const gf_sins_config *cfg = &state->cfg;
+    if (cfg->input != GF_SINS_INPUT_RATES || !state->have_prev || state->earth_rate_sign < 0)
+        return GF_ERR_BAD_PARAMETER;
+    /* finite inputs are the caller's (a NaN would fail the limits below: OUT_OF_RANGE) */
+    if (!(dt_s > 0.0 && isfinite(dt_s)))
+        return GF_ERR_BAD_TIME;
+    /* absurd samples: the rate and force at the end of the interval, as gf_sins_step
+     * checks its samples (the increments are made of them and of the previous sample,
+     * which passed the same check) */
+    const double wmax = cfg->max_rate_rad_s, fmax_ = cfg->max_specific_force_m_s2;
+    if (!(gf_v3_dot(rate, rate) <= wmax * wmax) || !(gf_v3_dot(f, f) <= fmax_ * fmax_))
+        return GF_ERR_OUT_OF_RANGE;
+    (void)phi;
+    const gf_status status = nav_update(state, q_phi, dv_b, dt_s, h_ext_m);
+    if (status == GF_OK)
+        finish_update(state, rate, f, dt_s);
+    return status;
 }
 
 gf_status gf_sins_run(gf_sins_state *state, size_t n, const double *gyro, const double *accel,

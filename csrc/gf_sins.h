@@ -142,6 +142,22 @@ gf_status gf_sins_init(gf_sins_state *state, const gf_sins_config *cfg, const do
 gf_status gf_sins_step(gf_sins_state *state, const double *gyro, const double *accel,
                        double dt_s, double h_ext_m);
 
+/* One interval of a rate record from increments the caller computed with its own,
+ * higher-order model of the motion over the interval (the gyro-free navigator's cubic
+ * Hermite rate model, gf_gfins.h): phi_rad, the rotation vector from the body frame at
+ * the start of the interval to the body frame at its end (coning included), and
+ * dv_b_m_s, the specific force integrated over the interval and expressed in the body
+ * frame at its start (rotation and sculling included). rate_rad_s and f_m_s2 are the
+ * sample at the end of the interval: checked against the limits and kept as the
+ * previous sample, as gf_sins_step keeps them. Needs a forward rate record that has
+ * started (input RATES, a first sample given to gf_sins_step): GF_ERR_BAD_PARAMETER
+ * otherwise. Other errors and the state on error as gf_sins_step; |phi| and |dv_b| are
+ * checked against the limits times dt_s (the trusted variant below checks the samples
+ * only). */
+gf_status gf_sins_step_compensated(gf_sins_state *state, const double *phi_rad,
+                                   const double *dv_b_m_s, const double *rate_rad_s,
+                                   const double *f_m_s2, double dt_s, double h_ext_m);
+
 /* The state's position as the batch calls report it: (lat rad, lon rad, h m), or
  * (x, y, z) m with EARTH_FLAT. */
 gf_status gf_sins_position(const gf_sins_state *state, double *pos);
@@ -194,6 +210,18 @@ gf_status gf_sins_run(gf_sins_state *state, size_t n, const double *gyro, const 
  * attitude norm, latitude range, cos L > 0, R_M > 0); other non-finite numbers make the
  * step's results non-finite: GF_ERR_DIVERGED. */
 gf_status gf_sins_state_check(const gf_sins_state *state);
+
+/* Internal to the core: the compare-only validity check that gf_sins_step runs before
+ * every sample (configuration, direction, attitude norm, latitude range, cos L > 0,
+ * R_M > 0), for batch callers that check once per call and keep the state valid
+ * themselves between samples; and gf_sins_step_compensated without it. */
+int gf_sins_state_valid(const gf_sins_state *state);
+/* q_phi: gf_q_from_rotvec_fast(phi_rad), computed by the caller already; the inputs
+ * must be finite (checked by the caller; h_ext_m may be NaN: no external height) */
+gf_status gf_sins_step_compensated_trusted(gf_sins_state *state, const double *phi_rad,
+                                           const double *q_phi, const double *dv_b_m_s,
+                                           const double *rate_rad_s, const double *f_m_s2,
+                                           double dt_s, double h_ext_m);
 
 /* Internal to the core: gf_sins_step forward in time without the check of *state, for
  * callers that keep the state valid themselves (the integrated-navigation filter sets it

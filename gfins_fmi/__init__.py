@@ -11,7 +11,7 @@ from gfins_fmi.fmu import FmuRunError, fmu_path, run_accel9_fmu
 from gfins_fmi.array_errors import ArraySensorErrors
 from gfins_fmi.imu_errors import ImuErrors, ImuNoise
 from gfins_fmi.gyrofree import (GeometryReport, GyroFreeNavigator, RateSolution, RateSolver,
-                                geometry_report, layout)
+                                geometry_report, hermite_increments, layout)
 from gfins_fmi.sins import (NavSolution, NavState, SampleError, SinsConfig, Strapdown,
                             euler_to_quat, quat_to_euler)
 
@@ -24,7 +24,7 @@ __all__ = [
     "FLAG_NEG_OMEGA_SQ", "FLAG_SIGN_UNKNOWN", "MAX_SENSORS",
     "fmu_path", "run_accel9_fmu",
     "layout", "geometry_report", "GeometryReport", "RateSolver", "RateSolution",
-    "GyroFreeNavigator", "ArraySensorErrors", "ImuErrors", "ImuNoise",
+    "GyroFreeNavigator", "hermite_increments", "ArraySensorErrors", "ImuErrors", "ImuNoise",
     "SinsConfig", "NavState", "NavSolution", "Strapdown", "SampleError",
     "euler_to_quat", "quat_to_euler", "__version__",
 ]

@@ -217,41 +217,35 @@ def _rotation(rotvec):
     return np.eye(3) + np.sin(th) / th * K + (1 - np.cos(th)) / th ** 2 * K @ K
 
 
-def _products_jacobian(w):
-    """d[wx^2, wy^2, wz^2, wx wy, wx wz, wy wz] / dw (6 x 3)."""
-    x, y, z = w
-    return np.array([[2 * x, 0, 0], [0, 2 * y, 0], [0, 0, 2 * z],
-                     [y, x, 0], [z, 0, x], [0, z, y]], float)
-
-
 @dataclass
 class _ArrayMaps:
     ns: int
     n_est: int
-    est: list
-    P: np.ndarray        # pseudo-inverse, n_est x ns
-    K: np.ndarray        # dx / d(w_pred) through the products taken from the rate
+    P: np.ndarray        # pseudo-inverse, n_est x ns: rows f, w_dot, observed combinations z
+    K: np.ndarray        # dy / d(w_pred) through the confounded products taken from the rate
+    W_obs: np.ndarray    # products W (as in x) per observed coordinate, 6 x n_obs
+    maps: object         # gyrofree.SolverMaps
     w: np.ndarray
     g: float
 
     def S(self, idx):
-        """Rows of the estimated unknowns idx (selector, len(idx) x n_est)."""
-        return np.eye(self.n_est)[[self.est.index(j) for j in idx]]
+        """Rows mapping the solved vector y (n_est) to the unknowns idx of x (0..5: f,
+        w_dot; 6..11: the products W_jk, wholly observed ones only)."""
+        rows = []
+        for j in idx:
+            r = np.zeros(self.n_est)
+            if j < 6:
+                r[j] = 1.0
+            else:
+                r[6:] = self.W_obs[j - 6]
+            rows.append(r)
+        return np.array(rows)
 
 
 def _array_maps(geometry, gravity_m_s2, omega_b_rad_s, dt_s) -> _ArrayMaps:
     """The linear maps of an array's solver (from the C core) and checked parameters."""
-    from gfins_fmi._lib import lib
-    from gfins_fmi.gyrofree import _solver_c
-    s = _solver_c(geometry)
-    ns, n_est = int(s.n_sensors), int(s.n_est)
-    est = [int(s.est[r]) for r in range(n_est)]
-    stride = int(lib.GF_ARRAY_MAX_SENSORS)          # rows of pinv are padded to the maximum
-    P = np.array([[s.pinv[r * stride + i] for i in range(ns)] for r in range(n_est)])
-    H = np.array([[s.H[i * 12 + j] for j in range(12)] for i in range(ns)])
-    if not all(j in est for j in range(6)):
-        raise ValueError("the array does not estimate f and omega_dot linearly; "
-                         "gyrofree_error_model needs both (see geometry_report)")
+    from gfins_fmi.gyrofree import on_jacobian, solver_maps
+    maps = solver_maps(geometry)
     g = float(gravity_m_s2)
     if not (np.isfinite(g) and g > 0):
         raise ValueError("gravity_m_s2 must be a positive finite number (m/s^2)")
@@ -260,10 +254,8 @@ def _array_maps(geometry, gravity_m_s2, omega_b_rad_s, dt_s) -> _ArrayMaps:
         raise ValueError("omega_b_rad_s must be 3 finite numbers (rad/s)")
     if not dt_s > 0:
         raise ValueError("dt_s must be > 0 (s)")
-    from_rate = [j for j in range(6, 12) if j not in est and np.any(H[:, j] != 0)]
-    K = (P @ H[:, from_rate] @ _products_jacobian(w)[[j - 6 for j in from_rate]]
-         if from_rate else np.zeros((n_est, 3)))
-    return _ArrayMaps(ns, n_est, est, P, K, w, g)
+    K = maps.K_pred @ on_jacobian(w)
+    return _ArrayMaps(maps.pinv.shape[1], maps.pinv.shape[0], maps.pinv, K, maps.W_obs, maps, w, g)
 
 
 @dataclass
@@ -300,8 +292,10 @@ def gyrofree_error_model(geometry, q_bn=(1.0, 0.0, 0.0, 0.0), gravity_m_s2: floa
 
     * ``integrate``: dw' = dw_dot (a state; constant b gives dw ~ t at rest);
     * ``sqrt`` (seed 000 eq. 4): dw_k = d(w_k^2) / (2 w_k), an algebraic map (constant
-      b gives a constant dw: attitude ~ t along the rotation, position ~ t^3); it
-      needs every w_k away from zero -- near a zero crossing the linearisation fails.
+      b gives a constant dw: attitude ~ t along the rotation, position ~ t^3); in
+      general dw = G^+ dz, the linearised weighted least-squares fit of w to the
+      observed product combinations z (G = B_o^T J(w)). It needs a rate the products determine (every w_k away from zero for
+      Qin's array) -- near a zero crossing the linearisation fails.
 
     Navigation (C = C_b^n(t) = C0 exp([w x] t), f^n = [0, 0, g]):
 
@@ -324,7 +318,7 @@ def gyrofree_error_model(geometry, q_bn=(1.0, 0.0, 0.0, 0.0), gravity_m_s2: floa
     import control
     from gfins_fmi.trajectory import quat_to_dcm
     lm = _array_maps(geometry, gravity_m_s2, omega_b_rad_s, dt_s)
-    ns, n_est, est, P, K, S, w, g = lm.ns, lm.n_est, lm.est, lm.P, lm.K, lm.S, lm.w, lm.g
+    ns, n_est, P, K, S, w, g = lm.ns, lm.n_est, lm.P, lm.K, lm.S, lm.w, lm.g
     S_f, S_wd = S(range(3)), S(range(3, 6))
     if strategy == "integrate":
         # dw' = S_wd (P b - K dw): the rate error is a state
@@ -332,16 +326,26 @@ def gyrofree_error_model(geometry, q_bn=(1.0, 0.0, 0.0, 0.0), gravity_m_s2: floa
         A_rate, B_rate = -S_wd @ K, S_wd @ P
         G_f_x, G_f_b = -S_f @ K, S_f @ P                  # df = G_f_x dw + G_f_b b
     elif strategy == "sqrt":
-        if not all(j in est for j in (6, 7, 8)):
-            raise ValueError("strategy 'sqrt' needs an array that measures the diagonal of w w^T")
-        if np.min(np.abs(w)) < 1e-3:
-            raise ValueError("strategy 'sqrt' is linearised about a rate with every component "
-                             "away from zero (|w_k| >= 1e-3 rad/s): d(w_k) = d(w_k^2) / 2 w_k")
-        M = np.diag(1 / (2 * w)) @ S((6, 7, 8)) + dt_s * S_wd
+        from gfins_fmi.gyrofree import fit_pinv, on_jacobian, rate_model
+        model = rate_model(lm.maps, "sqrt")
+        if model == "none":
+            raise ValueError("strategy 'sqrt' needs an array whose observed products determine "
+                             "the rate (at least 3 combinations, such as the diagonal of w w^T)")
+        # the rate read from the observed combinations z: a least-squares fit of w weighted
+        # by their noise covariance, whose linearisation is dw = G^+ dz, G = B_o^T J(w)
+        # (seed 000 eq. 4 for Qin's array: dw_k = d(w_k^2) / (2 w_k))
+        G = lm.maps.observed.T @ on_jacobian(w)
+        if np.linalg.svd(G, compute_uv=False)[-1] < 2e-3:
+            raise ValueError("strategy 'sqrt' is linearised about a rate that the observed products "
+                             "determine, with every component away from zero (|w_k| >= 1e-3 rad/s "
+                             "for Qin's array): d(w_k) = d(w_k^2) / 2 w_k")
+        S_z = np.eye(n_est)[6:]
+        Gz = fit_pinv(lm.maps, G, model) @ S_z
+        M = Gz + dt_s * S_wd
         G_pred = np.linalg.solve(np.eye(3) + M @ K, M @ P)     # dw_pred = G_pred b
         dx = P - K @ G_pred
         n_x, off = 9, 0
-        G_w = np.diag(1 / (2 * w)) @ S((6, 7, 8)) @ dx
+        G_w = Gz @ dx
         G_f_b = S_f @ dx
     else:
         raise ValueError("strategy must be 'integrate' or 'sqrt' for the error model")
@@ -598,9 +602,9 @@ def gyrofree_fused_std(geometry, t_s, bias_std_m_s2: float, noise_std_m_s2: floa
     filter uses), and the errors are propagated sample by sample: the estimated unknowns'
     errors dx_k = P (s_k - H_F J dw_pred) with s_k = b + n_k the sensor errors (a
     random constant plus white noise of ``noise_std_m_s2`` per sample); the prediction
-    uses the trapezoid of dw_dot over two samples (so the noise of consecutive samples
-    is correlated: the previous dw_dot is a state); the update uses the products of the
-    same sample. Navigation as ``gyrofree_error_model``. The result is a discrete-time
+    integrates dw_dot as the C core does (trapezoid, then third-order Adams-Moulton over
+    three samples, so the noise of consecutive samples is correlated: the two previous
+    dw_dot are states); the update uses the products of the same sample. Navigation as ``gyrofree_error_model``. The result is a discrete-time
     covariance recursion rather than a python-control system: the filter's gains vary
     with time until they settle.
 
@@ -609,48 +613,63 @@ def gyrofree_fused_std(geometry, t_s, bias_std_m_s2: float, noise_std_m_s2: floa
     ErrorStd with the outputs ``GYROFREE_OUTPUTS``.
     """
     from gfins_fmi.trajectory import quat_to_dcm
+    from gfins_fmi.gyrofree import on_jacobian
     lm = _array_maps(geometry, gravity_m_s2, omega_b_rad_s, dt_s)
-    if not all(j in lm.est for j in (6, 7, 8)):
-        raise ValueError("strategy 'fused' needs an array that measures the diagonal of w w^T")
-    m = 6 if all(j in lm.est for j in range(9, 12)) else 3
+    m = lm.maps.n_obs
+    if m == 0:
+        raise ValueError("strategy 'fused' needs an array that observes at least one product "
+                         "combination of w w^T (see geometry_report)")
     ns, P, K, w, g, dt = lm.ns, lm.P, lm.K, lm.w, lm.g, float(dt_s)
-    S_f, S_wd, S_W = lm.S(range(3)), lm.S(range(3, 6)), lm.S(range(6, 6 + m))
-    J = _products_jacobian(w)[:m]
+    S_f, S_wd = lm.S(range(3)), lm.S(range(3, 6))
+    S_z = np.eye(lm.n_est)[6:6 + m]
     sig2 = float(noise_std_m_s2) ** 2
-    # the filter's own model (gf_gfins_init / rate_step)
-    R = sig2 * (S_W @ P) @ (S_W @ P).T
+    # the filter's own model (gf_gfins_init / rate_step): the observed rows measure
+    # (B_o^T + K_z) p(w); the confounded products close a loop through w_dot
+    R = sig2 * (S_z @ P) @ (S_z @ P).T
     Fk = np.eye(6)
     Fk[0:3, 3:6] = -dt * np.eye(3)
+    Fk[0:3, 0:3] += dt * lm.maps.loop_matrix(w)
     Qk = np.zeros((6, 6))
     Qk[0:3, 0:3] = dt * dt * sig2 * (S_wd @ P) @ (S_wd @ P).T
     Qk[3:6, 3:6] = np.eye(3) * float(bias_walk_rad_s2_sqrt_s) ** 2 * dt
     Hk = np.zeros((m, 6))
-    Hk[:, 0:3] = J
+    Hk[:, 0:3] = lm.maps.measurement_matrix() @ on_jacobian(w)
     Pf = np.diag([init_std_rad_s ** 2] * 3 + [init_bias_std_rad_s2 ** 2] * 3)
     C0 = quat_to_dcm(np.asarray(q_bn, float))
     fxn = _skew(np.array([0.0, 0.0, g]))
-    # error state z = [e_w, e_b, dwdot_prev, phi, dv, dp, b (ns)]
-    iw, ib, iwd, iphi, iv, ip, ibias = 0, 3, 6, 9, 12, 15, 18
-    nz = 18 + ns
+    # error state z = [e_w, e_b, dwdot_prev, dwdot_prev2, phi, dv, dp, b (ns)]
+    iw, ib, iwd, iwd2, iphi, iv, ip, ibias = 0, 3, 6, 9, 12, 15, 18, 21
+    nz = 21 + ns
 
     def step(Z, N, k, t):
-        """One sample, applied to columns: Z (nz, c) previous states, N (ns, c) noise."""
+        """One sample, applied to columns: Z (nz, c) previous states, N (ns, c) noise.
+        The w_dot integral and the prediction as gf_gfins (third-order Adams-Moulton
+        and second-order Adams-Bashforth from the third sample on)."""
         nonlocal Pf
         s_k = Z[ibias:] + N
         first = k == 0
-        e_pred = Z[iw:iw + 3] + (0.0 if first else dt * Z[iwd:iwd + 3])
+        wd1, wd2 = Z[iwd:iwd + 3], Z[iwd2:iwd2 + 3]
+        if first:
+            e_pred = Z[iw:iw + 3]
+        elif k == 1:
+            e_pred = Z[iw:iw + 3] + dt * wd1
+        else:
+            e_pred = Z[iw:iw + 3] + 0.5 * dt * (3.0 * wd1 - wd2)
         dx = P @ s_k - K @ e_pred
         wd = S_wd @ dx
         ew, eb = Z[iw:iw + 3], Z[ib:ib + 3]
-        if not first:
-            ew = ew + 0.5 * dt * (Z[iwd:iwd + 3] + wd) - dt * eb
-        r = S_W @ dx - J @ ew
+        if k == 1:
+            ew = ew + 0.5 * dt * (wd1 + wd) - dt * eb
+        elif k > 1:
+            ew = ew + dt / 12.0 * (5.0 * wd + 8.0 * wd1 - wd2) - dt * eb
+        r = S_z @ (P @ s_k) - Hk[:, 0:3] @ ew
         Kg = Pf @ Hk.T @ np.linalg.inv(Hk @ Pf @ Hk.T + R)
         e = np.vstack([ew, eb]) + Kg @ r
         df = S_f @ (P @ s_k - K @ e[0:3])
         Zn = np.zeros_like(Z)
         Zn[iw:iw + 6] = e
         Zn[iwd:iwd + 3] = wd
+        Zn[iwd2:iwd2 + 3] = wd1
         Zn[ibias:] = Z[ibias:]
         if not first:
             C = C0 @ _rotation(w * t)

@@ -1,0 +1,135 @@
+"""The rotating IMU (gfins_fmi.rotation over C gf_rotation): seed 001's path table, the
+modulation property of the indexing schemes, the simulated outputs at rest and the
+checks of bad schedules. Independent truth: the patent's published table, rotation
+matrices written here, the closed-form specific force at rest. (The C test
+tests/c/test_rotation.c checks the kinematics against difference quotients and closed
+forms of turning increments.)"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import gfins_fmi.rotation as rot
+
+
+def _rx(a):
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
+
+
+def _rz(a):
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
+
+
+def _dcm(q):
+    a, b, c, d = q
+    return np.array([[a * a + b * b - c * c - d * d, 2 * (b * c - a * d), 2 * (b * d + a * c)],
+                     [2 * (b * c + a * d), a * a - b * b + c * c - d * d, 2 * (c * d - a * b)],
+                     [2 * (b * d - a * c), 2 * (c * d + a * b), a * a - b * b - c * c + d * d]])
+
+
+def test_every_row_of_the_seed001_table_follows_from_the_previous():
+    rows = rot.check_seed001_table()
+    assert len(rows) == 19
+    bad = [r for r in rows if not r["agrees"]]
+    assert not bad, f"rows that do not follow from the mechanism: {bad}"
+
+
+def test_seed001_table_against_rotation_matrices_written_here():
+    """C_m^n = R_x(alpha) R_z(beta) (base ENU), alpha, beta the sums of the turns."""
+    names = {"E": [1, 0, 0], "W": [-1, 0, 0], "N": [0, 1, 0], "S": [0, -1, 0], "U": [0, 0, 1],
+             "D": [0, 0, -1]}
+    a = b = 0.0
+    sched = rot.seed001_path(repeats=1, align_s=10.0, dwell_s=5.0)
+    ends = sched.turn_end_times_s - 0.5
+    poses = sched.poses(ends)
+    for k, (axis, angle, dirs) in enumerate(rot.SEED001_TABLE):
+        a += np.radians(angle) if axis == "middle" else 0.0
+        b += np.radians(angle) if axis == "inner" else 0.0
+        C = _rx(a) @ _rz(b)
+        want = np.array([names[c] for c in dirs]).T
+        np.testing.assert_allclose(C, want, atol=1e-12, err_msg=f"row {k} (matrices)")
+        np.testing.assert_allclose(_dcm(poses["q_mb"][k]), want, atol=1e-12, err_msg=f"row {k} (C core)")
+        # gimbal angles as the encoders would read them
+        g = poses["gimbal_rad"][k]
+        np.testing.assert_allclose(np.exp(1j * g), np.exp(1j * np.array([a, b])), atol=1e-12)
+
+
+def test_seed001_path_duration():
+    """18 dwells of 180 s, 12 turns of 90 deg and 6 of 180 deg at 5 deg/s (+1 s ramp each)
+    after 600 s: 61.2 min per pass plus the ramps; the seed says "within 1 hour"."""
+    s = rot.seed001_path(repeats=1)
+    assert s.duration_s == pytest.approx(600 + 18 * 180 + 12 * 19 + 6 * 37, abs=1e-9)
+    assert rot.seed001_path(repeats=2).duration_s == pytest.approx(600 + 2 * (18 * 180 + 12 * 19 + 6 * 37))
+    assert s.is_mechanism
+
+
+@pytest.mark.parametrize("positions", [8, 16])
+def test_indexing_schemes_average_the_imu_axes_to_zero(positions):
+    """Modulation: over the dwells of one cycle every IMU axis spends equal time along
+    +d and -d for each direction d, so a constant bias averages to zero in n."""
+    s = rot.indexing_scheme(positions, dwell_s=10.0)
+    ends = s.turn_end_times_s - 1.0
+    C = np.array([_dcm(q) for q in s.poses(ends)["q_mb"]])
+    np.testing.assert_allclose(C.mean(axis=0), 0.0, atol=1e-12)
+    # the cycle closes: the pose repeats
+    t = np.array([3.3, 3.3 + 5 * s.duration_s])
+    q = s.poses(t)["q_mb"]
+    assert min(np.abs(q[0] - q[1]).max(), np.abs(q[0] + q[1]).max()) < 1e-9
+
+
+def test_continuous_scheme_rates():
+    s = rot.continuous_scheme(inner_rate_deg_s=6.0, middle_rate_deg_s=3.0, half_cycle_s=120.0)
+    p = s.poses([60.0])
+    # mid-turn: inner rate 6 deg/s about IMU z, middle 3 deg/s
+    np.testing.assert_allclose(np.degrees(p["gimbal_rad"][0]) % 360,
+                               [(3.0 * (60 - 0.5)) % 360, (6.0 * (60 - 0.5)) % 360], atol=1e-9)
+    with pytest.raises(ValueError, match="whole turns"):
+        rot.continuous_scheme(inner_rate_deg_s=5.0, half_cycle_s=100.0)
+
+
+def test_static_simulation_at_rest_is_gravity_and_earth_rate():
+    lat, h = np.radians(40.0), 50.0
+    s = rot.RotationSchedule((rot.rest(2.0),))
+    r = rot.simulate_static(s, 1.0, 0.01, lat, h, heading_rad=np.radians(30.0))
+    W = 7.292115e-5
+    # body x = cos(psi) E - sin(psi) N, y = sin(psi) E + cos(psi) N (heading clockwise)
+    psi = np.radians(30.0)
+    w_b = W * np.array([-np.sin(psi) * np.cos(lat), np.cos(psi) * np.cos(lat), np.sin(lat)])
+    np.testing.assert_allclose(r.dtheta_rad, np.tile(w_b * 0.01, (100, 1)), rtol=0, atol=1e-19)
+    assert np.allclose(r.dv_m_s[:, :2], 0.0, atol=1e-16)
+    assert r.dv_m_s[0, 2] == pytest.approx(0.01 * 9.80167, rel=1e-4)   # g at 40 deg, 50 m
+
+
+def test_vehicle_attitude_roundtrip():
+    rng = np.random.default_rng(3)
+    g = rng.uniform(-np.pi, np.pi, (20, 2))
+    qb = rng.normal(size=(20, 4))
+    qb /= np.linalg.norm(qb, axis=1)[:, None]
+    # C_m^n = C_b^n R_x(alpha) R_z(beta), written here
+    Cm = np.array([_dcm(q) @ _rx(a) @ _rz(b) for q, (a, b) in zip(qb, g)])
+    from scipy.spatial.transform import Rotation
+    q_mn = Rotation.from_matrix(Cm).as_quat()[:, [3, 0, 1, 2]]
+    out = rot.vehicle_attitude(q_mn, g)
+    for k in range(20):
+        np.testing.assert_allclose(_dcm(out[k]), _dcm(qb[k]), atol=1e-12)
+
+
+def test_bad_schedules_are_refused_with_the_reason():
+    with pytest.raises(ValueError, match="bring the IMU back"):
+        rot.RotationSchedule((rot.middle(90.0, 1.0),), repeat=True)
+    with pytest.raises(ValueError, match="ramp"):
+        rot.RotationSchedule((rot.middle(2.0, 1.0, rate_deg_s=5.0, ramp_s=1.0),))
+    with pytest.raises(ValueError, match=r"turns\[0\].rate_deg_s"):
+        rot.RotationSchedule((rot.middle(90.0, 1.0, rate_deg_s=0.0),))
+    with pytest.raises(ValueError, match="600 deg/s"):
+        rot.RotationSchedule((rot.middle(180.0, 1.0, rate_deg_s=1000.0, ramp_s=0.0),))
+    with pytest.raises(ValueError, match="x, y or z"):
+        rot.about_imu("w", 90.0)
+    with pytest.raises(ValueError, match="repeats"):
+        rot.seed001_path(repeats=4)
+    with pytest.raises(ValueError, match="accel_delay_s"):
+        rot.simulate_static(rot.seed001_path(1), 10.0, 0.01, 0.5, 0.0, accel_delay_s=0.1)
+    with pytest.raises(ValueError, match="lat_rad"):
+        rot.simulate_static(rot.seed001_path(1), 10.0, 0.01, np.radians(89.5), 0.0)

@@ -31,6 +31,7 @@ HEADERS = [
     "gf_aiding_sim.h",
     "gf_ins_gnss.h",
     "gf_rotation.h",
+    "gf_ins_model.h",
 ]
 _BLOCK = re.compile(r"/\* CDEF BEGIN \*/(.*?)/\* CDEF END \*/", re.S)
 _COMMENT = re.compile(r"/\*.*?\*/", re.S)

@@ -18,12 +18,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from gfins_fmi._lib import GfinsError, as_array, as_scalar, check_status, ffi, lib, ptr
+from gfins_fmi._lib import (GfinsError, as_array, as_scalar, check_status, ffi, lib, ptr,
+                            struct_columns, struct_doubles)
 
 __all__ = ["Turn", "rest", "middle", "inner", "about_imu", "about_base", "RotationSchedule",
            "SEED001_TABLE", "seed001_path", "path_table", "check_seed001_table",
            "indexing_scheme", "continuous_scheme", "turntable_path_19", "RotatingImuRecord",
-           "simulate_static", "simulate_on_vehicle", "vehicle_attitude", "MAX_TURNS"]
+           "simulate_static", "simulate_on_vehicle", "vehicle_attitude", "navigate",
+           "RotatingNavSolution", "MAX_TURNS"]
 
 MAX_TURNS = int(lib.GF_ROT_MAX_SEGMENTS)
 _AXES = {None: -1, "x": 0, "y": 1, "z": 2}
@@ -349,6 +351,11 @@ class RotatingImuRecord:
     schedule: RotationSchedule
     accel_delay_s: float = 0.0
     vehicle: object = None
+    initial: object = None
+
+    @property
+    def dt_s_array(self) -> np.ndarray:
+        return np.full(self.t_s.size, self.dt_s)
 
     def imu_record(self, dtheta_rad=None, dv_m_s=None, source: str = "gfins_fmi rotating IMU"):
         """As an :class:`gfins_fmi.io.ImuRecord` of increments (the given ones, e.g. with
@@ -387,8 +394,11 @@ def simulate_static(schedule: RotationSchedule, duration_s: float, dt_s: float,
                                        delay, ptr(dth, 3 * n), ptr(dv, 3 * n), ptr(q, 4 * n),
                                        ptr(g, 2 * n), done),
                  f"gf_rot_imu_static (stopped at sample {done[0]})")
-    return RotatingImuRecord(np.arange(1, n + 1) * dt, dth, dv, q, g, dt, lat,
-                             as_scalar("lon_rad", lon_rad, "rad"), h, q_base, schedule, delay)
+    lon = as_scalar("lon_rad", lon_rad, "rad")
+    q0 = _qmul(q_base, schedule.poses([0.0])["q_mb"][0])
+    from gfins_fmi.sins import NavState
+    return RotatingImuRecord(np.arange(1, n + 1) * dt, dth, dv, q, g, dt, lat, lon, h, q_base,
+                             schedule, delay, None, NavState(q0, np.zeros(3), lat, lon, h, 0.0))
 
 
 def simulate_on_vehicle(schedule: RotationSchedule, profile, duration_s: float,
@@ -397,7 +407,7 @@ def simulate_on_vehicle(schedule: RotationSchedule, profile, duration_s: float,
     VehicleProfile`), n = duration/dt samples after the start, in one C call. The
     vehicle's truth at each sample end is in ``record.vehicle`` (a dict of arrays: t_s,
     q_bn, v_n_m_s, lat_rad, lon_rad, h_m; body rates and increments)."""
-    from gfins_fmi.vehicle import _columns, _describe_bad, _doubles
+    from gfins_fmi.vehicle import _describe_bad
     dt = as_scalar("dt_s", dt_s, "s", above=0.0)
     n = int(round(as_scalar("duration_s", duration_s, "s", above=0.0) / dt))
     if n < 1:
@@ -409,17 +419,61 @@ def simulate_on_vehicle(schedule: RotationSchedule, profile, duration_s: float,
     if st == lib.GF_ERR_BAD_PARAMETER:
         raise ValueError(f"vehicle profile rejected: {_describe_bad(bad[0])}")
     check_status(st, "gf_vehicle_init")
-    buf = np.zeros((n, _doubles("gf_vehicle_sample")))
+    buf = np.zeros((n, struct_doubles("gf_vehicle_sample")))
     dth, dv, q, g = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 4)), np.empty((n, 2))
     done = ffi.new("size_t *")
     st = lib.gf_rot_imu_vehicle(schedule.c_state(), veh, n, dt, ptr(dth, 3 * n), ptr(dv, 3 * n),
                                 ffi.NULL, ffi.NULL, ptr(g, 2 * n), ptr(q, 4 * n),
                                 ffi.cast("gf_vehicle_sample *", ptr(buf, buf.size)), done)
     check_status(st, f"gf_rot_imu_vehicle (stopped at sample {done[0]} of {n})")
-    cols = {k: np.array(v) for k, v in _columns(buf, "gf_vehicle_sample").items()}
+    cols = {k: np.array(v) for k, v in struct_columns(buf, "gf_vehicle_sample").items()}
+    from gfins_fmi.sins import NavState
+    qb0 = np.array(list(first.q_bn))
+    q0 = _qmul(qb0, schedule.poses([0.0])["q_mb"][0])
     return RotatingImuRecord(cols["time_s"], dth, dv, q, g, dt, float(first.lat_rad),
-                             float(first.lon_rad), float(first.h_m), np.array(list(first.q_bn)),
-                             schedule, 0.0, cols)
+                             float(first.lon_rad), float(first.h_m), qb0, schedule, 0.0, cols,
+                             NavState(q0, np.array(list(first.v_n_m_s)), float(first.lat_rad),
+                                      float(first.lon_rad), float(first.h_m), 0.0))
+
+
+def _qmul(p, q):
+    return np.array([p[0] * q[0] - p[1] * q[1] - p[2] * q[2] - p[3] * q[3],
+                     p[0] * q[1] + p[1] * q[0] + p[2] * q[3] - p[3] * q[2],
+                     p[0] * q[2] - p[1] * q[3] + p[2] * q[0] + p[3] * q[1],
+                     p[0] * q[3] + p[1] * q[2] - p[2] * q[1] + p[3] * q[0]])
+
+
+@dataclass(frozen=True)
+class RotatingNavSolution:
+    """Navigation of a rotating IMU: ``imu`` is the strapdown solution of the IMU frame
+    (its ``q_bn`` holds C_m^n), ``q_bn_vehicle`` the vehicle's attitude from it and the
+    gimbal angles (None when the schedule drives no mechanism)."""
+    imu: object
+    q_bn_vehicle: np.ndarray | None
+
+    @property
+    def t_s(self):
+        return self.imu.t_s
+
+
+def navigate(record: RotatingImuRecord, dtheta_rad=None, dv_m_s=None, *, initial=None,
+             compensation=None, config=None) -> RotatingNavSolution:
+    """Rotation-modulated navigation: the IMU's increments (``record``'s, or the given
+    ones, e.g. with sensor errors) compensated with ``compensation`` (an ImuErrors: the
+    calibrated model; seed 001 S6), navigated in the IMU frame by the one mechanization
+    (gf_sins), and the vehicle attitude from the navigated C_m^n and the gimbal angles
+    (the encoders). ``initial``: the IMU's initial state (default: the record's truth);
+    ``config``: a SinsConfig (default increments with coning, height held)."""
+    from gfins_fmi.sins import SinsConfig, Strapdown
+    th = record.dtheta_rad if dtheta_rad is None else dtheta_rad
+    dv = record.dv_m_s if dv_m_s is None else dv_m_s
+    if compensation is not None:
+        th, dv = compensation.compensate_increments(th, dv, record.dt_s)
+    x0 = initial if initial is not None else record.initial
+    cfg = config or SinsConfig(vertical="hold")
+    sol = Strapdown(x0, cfg).run(th, dv, t_s=record.t_s)
+    qv = vehicle_attitude(sol.q_bn, record.gimbal_rad) if record.schedule.is_mechanism else None
+    return RotatingNavSolution(sol, qv)
 
 
 def vehicle_attitude(q_mn, gimbal_rad) -> np.ndarray:

@@ -120,51 +120,9 @@ def main(argv=None):
         with open(a.json, "w") as f:
             json.dump(out, f, indent=1)
     if a.figures:
-        figures(keep["report"], keep["truth"], a.figures, a.path)
+        for f in c36.plot_report(keep["report"], a.figures, keep["truth"], tag=f"_{a.path}"):
+            print(f"figure: {f}")
     return out
-
-
-def figures(rep, truth, folder, tag):
-    """Convergence of nine parameters with +-1 sigma bands, and the velocity residual at
-    each update with the static intervals shaded (run 0)."""
-    import pathlib
-
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    folder = pathlib.Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
-    ep = rep.pass_epochs[0]
-    t = ep["t_s"] / 60.0
-    pick = ["gyro_scale_x", "gyro_gamma_zx", "gyro_bias_z", "accel_scale_y", "accel_alpha_yx",
-            "accel_bias_z", "accel_k2_x", "lever_arm_y", "lever_arm_z"]
-    fig, axes = plt.subplots(3, 3, figsize=(13, 9), constrained_layout=True)
-    for ax, name in zip(axes.ravel(), pick):
-        k = c36.PARAM_NAMES.index(name)
-        u = c36.PARAM_UNITS[k]
-        est, sd = ep["params"][:, k] / u[1], ep["std"][:, 9 + k] / u[1]
-        ax.fill_between(t, est - sd, est + sd, color="C0", alpha=0.3, label="estimate +- 1 sigma")
-        ax.plot(t, est, "C0")
-        ax.axhline(truth[k] / u[1], color="k", ls="--", lw=1, label="truth")
-        ax.set_title(f"{name} ({u[0]})", fontsize=9)
-        prior = sd[0] if sd.size else 1.0
-        ax.set_ylim(truth[k] / u[1] - 1.5 * prior, truth[k] / u[1] + 1.5 * prior)
-    for ax in axes[-1]:
-        ax.set_xlabel("time (min)")
-    axes[0, 0].legend(fontsize=8)
-    fig.suptitle("system calibration, first pass from the prior: estimates with +-1 sigma (run 0)")
-    fig.savefig(folder / f"syscal_convergence_{tag}.png", dpi=90)
-    fig, ax = plt.subplots(figsize=(12, 4), constrained_layout=True)
-    for s in rep.segments:
-        if s.kind == "static":
-            ax.axvspan(s.t0_s / 60, s.t1_s / 60, color="0.9")
-    last = rep.epochs
-    for i, c in enumerate("ENU"):
-        ax.plot(last["t_s"] / 60.0, last["residual_m_s"][:, i] * 1e3, lw=0.7, label=f"v_{c}")
-    ax.set(xlabel="time (min) — shaded: static intervals", ylabel="velocity residual (mm/s)",
-           title="zero-velocity residuals at each update (second pass; run 0)")
-    ax.legend(fontsize=8)
-    fig.savefig(folder / f"syscal_residuals_{tag}.png", dpi=90)
 
 
 if __name__ == "__main__":

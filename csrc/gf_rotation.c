@@ -340,8 +340,7 @@ static double next_break(const gf_rot_state *st, double t_s)
     return INFINITY; /* not reached: the segment ends after tau */
 }
 
-/* (4) at t_s for the base rate w_b and specific force f_b (base axes) */
-static void imu_outputs(const gf_rot_state *st, double t_s, const double w_b[3],
+void gf_rot_imu_outputs(const gf_rot_state *st, double t_s, const double w_b[3],
                         const double f_b[3], double w_m[3], double f_m[3], gf_rot_pose *pose)
 {
     eval_pose(st, t_s, pose);
@@ -370,7 +369,7 @@ static void integrate_static(const gf_rot_state *st, const double w_b[3], const 
             for (int j = 0; j < 8; ++j) {
                 double wm[3], fm[3];
                 gf_rot_pose pose;
-                imu_outputs(st, pa + half * (GF_GL8_X[j] + 1.0), w_b, f_b, wm, fm, &pose);
+                gf_rot_imu_outputs(st, pa + half * (GF_GL8_X[j] + 1.0), w_b, f_b, wm, fm, &pose);
                 const double *v = which == 1 ? wm : fm;
                 for (int i = 0; i < 3; ++i)
                     out[i] += half * GF_GL8_W[j] * v[i];
@@ -434,7 +433,7 @@ static gf_status mount_fn(const void *ctx, double t_s, const double w_b[3], cons
                           double w_s[3], double f_s[3])
 {
     gf_rot_pose pose;
-    imu_outputs((const gf_rot_state *)ctx, t_s, w_b, f_b, w_s, f_s, &pose);
+    gf_rot_imu_outputs((const gf_rot_state *)ctx, t_s, w_b, f_b, w_s, f_s, &pose);
     return GF_OK;
 }
 

@@ -160,6 +160,12 @@ gf_status gf_rot_vehicle_attitude(size_t n, const double *q_mn, const double *gi
                                   double *q_bn, size_t *n_done);
 /* CDEF END */
 
+/* Internal to the core: (4) at t_s for the base's rate w_b and specific force f_b (base
+ * axes): the IMU's w_im^m, f^m and the pose at t_s. The caller has checked the state
+ * (n_segments within the array) and t_s (finite). */
+void gf_rot_imu_outputs(const gf_rot_state *state, double t_s, const double w_b[3],
+                        const double f_b[3], double w_m[3], double f_m[3], gf_rot_pose *pose);
+
 /* Checks a state handed in by a caller: sizes (GF_ERR_BAD_SIZE), finite numbers and the
  * schedule as gf_rot_init checks it (GF_ERR_BAD_PARAMETER). */
 gf_status gf_rot_state_check(const gf_rot_state *state);

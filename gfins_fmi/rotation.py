@@ -195,6 +195,25 @@ class RotationSchedule:
         """End of each turn's rest (s from the start)."""
         return np.array([self._state.seg_t0_s[k + 1] for k in range(len(self.turns))])
 
+    def fmu_parameters(self) -> dict:
+        """The schedule as start values of the vehicle FMU (rotation = 1; arrays padded to
+        MAX_TURNS). The FMU starts the schedule at its start time; q_mb0 must be the
+        identity (the mechanism's zero position)."""
+        if not np.allclose(np.abs(self.q_mb0), [1.0, 0.0, 0.0, 0.0]):
+            raise ValueError("the vehicle FMU starts the IMU at the mechanism's zero position: "
+                             "q_mb0 must be (1, 0, 0, 0)")
+        s = self.c_schedule()
+        n = len(self.turns)
+        pad = MAX_TURNS - n
+
+        def col(name, fill):
+            return [getattr(s.segment[k], name) for k in range(n)] + [fill] * pad
+        return {"rotation": 1, "rot_n": n, "rot_repeat": int(bool(self.repeat)),
+                "rot_base_axis": col("base_axis", -1), "rot_imu_axis": col("imu_axis", -1),
+                "rot_base_angle": col("base_angle_rad", 0.0), "rot_imu_angle": col("imu_angle_rad", 0.0),
+                "rot_move": col("move_s", 0.0), "rot_ramp": col("ramp_s", 0.0),
+                "rot_dwell": col("dwell_s", 0.0)}
+
     def poses(self, t_s, t0_s: float = 0.0) -> dict:
         """The mechanism at the times ``t_s`` (n,): ``q_mb`` (n, 4), ``w_bm_m_rad_s``
         (n, 3), ``gimbal_rad`` (n, 2: middle, inner)."""
@@ -269,14 +288,18 @@ def check_seed001_table() -> list[dict]:
             for k, (axis, angle, dirs) in enumerate(SEED001_TABLE)]
 
 
-def turntable_path_19(dwells_s=None, rate_deg_s: float = 10.0, ramp_s: float = 0.5,
+def turntable_path_19(dwells_s=None, rate_deg_s: float = 6.0, ramp_s: float = 0.5,
                       align_s: float = 300.0) -> RotationSchedule:
-    """A 19-position turntable path of 90 deg turns about the IMU's own axes (+-x, +-y,
-    +-z; after PSINS's 19-position system-calibration path): every axis points up and
-    down, every axis turns both ways with another axis vertical, and the path returns to
-    the start. ``dwells_s`` (18 values) defaults to 20-70 s."""
-    seq = ("+x", "+x", "+x", "+x", "+y", "+y", "+y", "+y", "+z", "+z", "+z", "+z",
-           "-y", "-x", "-y", "-z", "+y", "+x")
+    """A 19-position turntable path: 18 turns of 90 deg about the IMU's own axes (+-x,
+    +-y, +-z), each turned axis horizontal when it turns (so that its scale factor and
+    misalignment tilt the IMU and show in the velocity at once), every axis up and down,
+    every axis turned both ways at least twice, back to the start; after
+    ``align_s`` at rest, ``dwells_s`` (18 values; default 20-70 s) after the turns. The
+    sequence was chosen among random ones with these properties as the one whose worst
+    observed parameter (gyro biases excepted: they need time, not turns) is best
+    determined (calibration36.covariance_study, 45 s dwells)."""
+    seq = ("-x", "-z", "+z", "-z", "+z", "+x", "+x", "-x", "+y", "-y", "-y", "-y", "-x", "-z",
+           "+z", "+x", "+y", "+y")
     if dwells_s is None:
         dwells_s = [20 + (37 * k) % 51 for k in range(18)]
     dwells_s = as_array("dwells_s", dwells_s, (18,), "s")

@@ -30,7 +30,7 @@ from gfins_fmi.imu_errors import ARCSEC, DEG_H, G0, PPM, UG, ImuErrors, ImuNoise
 __all__ = ["STATE_NAMES", "PARAM_NAMES", "PARAM_UNITS", "Prior", "SyscalConfig", "SyscalFilter",
            "Segment", "segment_record", "CalibrationReport", "calibrate", "simulate_record",
            "params_to_imu_errors", "imu_errors_to_params", "random_params", "covariance_study",
-           "CalibrationInputError"]
+           "CalibrationInputError", "plot_report"]
 
 NAV_NAMES = ("phi_E", "phi_N", "phi_U", "dv_E", "dv_N", "dv_U", "dL", "dlon", "dh")
 PARAM_NAMES = ("gyro_scale_x", "gyro_scale_y", "gyro_scale_z",
@@ -647,3 +647,55 @@ def covariance_study(schedule, lat_rad: float, h_m: float, config: SyscalConfig 
     std = f.std()[9:]
     prior = config.prior.params_std()[:n_p]
     return {"names": PARAM_NAMES[:n_p], "std": std, "prior_std": prior, "ratio": std / prior}
+
+
+def plot_report(rep: CalibrationReport, folder, truth=None,
+                names=("gyro_scale_x", "gyro_gamma_zx", "gyro_bias_z", "accel_scale_y",
+                       "accel_alpha_yx", "accel_bias_z", "accel_k2_x", "lever_arm_y", "lever_arm_z"),
+                tag: str = "") -> list:
+    """Two figures in ``folder``: the first pass's estimates of nine parameters with
+    +-1 sigma bands (and ``truth``, SI, if known), and the zero-velocity residuals of the
+    last pass with the static intervals shaded. Returns their paths."""
+    import pathlib
+
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    folder = pathlib.Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    ep = rep.pass_epochs[0]
+    t = ep["t_s"] / 60.0
+    fig, axes = plt.subplots(3, 3, figsize=(13, 9), constrained_layout=True)
+    for ax, name in zip(axes.ravel(), names):
+        k = PARAM_NAMES.index(name)
+        unit, si = PARAM_UNITS[k]
+        est, sd = ep["params"][:, k] / si, ep["std"][:, 9 + k] / si
+        ax.fill_between(t, est - sd, est + sd, color="C0", alpha=0.3, label="estimate +- 1 sigma")
+        ax.plot(t, est, "C0", lw=1)
+        centre = est[-1]
+        if truth is not None:
+            ax.axhline(truth[k] / si, color="k", ls="--", lw=1, label="truth")
+            centre = truth[k] / si
+        ax.set_ylim(centre - 1.5 * sd[0], centre + 1.5 * sd[0])
+        ax.set_title(f"{name} ({unit})", fontsize=9)
+    for ax in axes[-1]:
+        ax.set_xlabel("time (min)")
+    axes[0, 0].legend(fontsize=8)
+    fig.suptitle("system calibration, first pass from the prior: estimates with +-1 sigma")
+    f1 = folder / f"syscal_convergence{tag}.png"
+    fig.savefig(f1, dpi=90)
+    plt.close(fig)
+    fig, ax = plt.subplots(figsize=(12, 4), constrained_layout=True)
+    for s in rep.segments:
+        if s.kind == "static":
+            ax.axvspan(s.t0_s / 60, s.t1_s / 60, color="0.9")
+    last = rep.epochs
+    for i, c in enumerate("ENU"):
+        ax.plot(last["t_s"] / 60.0, last["residual_m_s"][:, i] * 1e3, lw=0.7, label=f"v_{c}")
+    ax.set(xlabel="time (min); shaded: static intervals", ylabel="velocity residual (mm/s)",
+           title="zero-velocity residual at each update (last pass)")
+    ax.legend(fontsize=8)
+    f2 = folder / f"syscal_residuals{tag}.png"
+    fig.savefig(f2, dpi=90)
+    plt.close(fig)
+    return [f1, f2]

@@ -157,3 +157,32 @@ def test_vehicle_fmu_carries_the_rotating_imu(version):
     assert np.allclose(np.abs(np.sum(qmn * ref.q_mn, axis=1)), 1.0, atol=1e-12)
     with pytest.raises(ValueError, match="zero position"):
         rot.RotationSchedule((rot.rest(1.0),), q_mb0=(0.0, 1.0, 0.0, 0.0)).fmu_parameters()
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_sins_fmu_navigates_the_rotating_imu_with_compensation(version):
+    """The SINS FMU with rotating = 1 and the calibrated error model as parameters (seed
+    001 S6: dynamic error suppression in the FMU) equals rotation.navigate through cffi:
+    compensation, mechanization and the vehicle attitude from the gimbal angles. The
+    FMU compensates increments as mean rates, as ImuErrors.compensate_increments does:
+    same operations, so 1e-12 relative covers the compiler's freedom between the two
+    builds (measured: 0)."""
+    from gfins_fmi.fmu import run_sins_fmu
+    from gfins_fmi.imu_errors import ImuErrors
+    from gfins_fmi.sins import SinsConfig
+    from gfins_fmi.vehicle import VehicleProfile
+    prof = VehicleProfile.seed001(align_s=5.0, turn_times_s=(22.0,), turn_s=8.0)
+    sched = rot.indexing_scheme(8, dwell_s=2.0, rate_deg_s=30.0)
+    rec = rot.simulate_on_vehicle(sched, prof, 40.0, 0.01)
+    e = ImuErrors(gyro_bias_deg_h=[0.01, -0.01, 0.02], gyro_scale_ppm=[30, -20, 10],
+                  accel_bias_ug=[500, -300, 200], accel_k2_ug_g2=[20, -20, 20], lever_arm_cm=[3, 3, -3])
+    th, dv = e.apply_increments(rec.dtheta_rad, rec.dv_m_s, rec.dt_s)
+    cfg = SinsConfig(vertical="hold")
+    want = rot.navigate(rec, th, dv, compensation=e, config=cfg)
+    got = run_sins_fmu(th, dv, rec.dt_s, rec.initial, config=cfg, imu_errors=e,
+                       gimbal_rad=rec.gimbal_rad, fmi_version=version)
+    np.testing.assert_allclose(got.imu.q_bn, want.imu.q_bn, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(got.imu.v_n_m_s, want.imu.v_n_m_s, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(got.q_bn_vehicle, want.q_bn_vehicle, rtol=0, atol=1e-12)
+    # and the vehicle attitude is the truth's (compensation with the true model)
+    assert np.max(np.abs(np.abs(np.sum(got.q_bn_vehicle * rec.vehicle["q_bn"], axis=1)) - 1)) < 1e-9

@@ -167,15 +167,18 @@ class SyscalConfig:
         intervals (s).
     vel_std_m_s : std of the zero-velocity measurement (base sway, m/s).
     gyro_arw_deg_sqrt_h, accel_vrw_ug_sqrt_hz : the IMU's white noise (the conventions of
-        :class:`gfins_fmi.ImuNoise`: angle random walk; one-sided accelerometer ASD).
+        :class:`gfins_fmi.ImuNoise`: angle random walk; one-sided accelerometer ASD);
+        default seed 001's class (0.002 deg/sqrt(h) laser gyros, 10 ug/sqrt(Hz)). Give
+        your IMU's: a filter that assumes less noise than the data hold becomes
+        overconfident.
     estimate_delay : add the 37th state (accelerometer sample delay).
     prior : :class:`Prior`.
     """
     prop_interval_s: float = 0.1
     update_interval_s: float = 1.0
     vel_std_m_s: float = 1e-3
-    gyro_arw_deg_sqrt_h: float = 0.0
-    accel_vrw_ug_sqrt_hz: float = 0.0
+    gyro_arw_deg_sqrt_h: float = 0.002
+    accel_vrw_ug_sqrt_hz: float = 10.0
     estimate_delay: bool = False
     prior: Prior = field(default_factory=Prior)
 

@@ -30,6 +30,9 @@ HEADERS = [
     "gf_noise.h",
     "gf_aiding_sim.h",
     "gf_ins_gnss.h",
+    "gf_rotation.h",
+    "gf_ins_model.h",
+    "gf_syscal.h",
 ]
 _BLOCK = re.compile(r"/\* CDEF BEGIN \*/(.*?)/\* CDEF END \*/", re.S)
 _COMMENT = re.compile(r"/\*.*?\*/", re.S)

@@ -47,7 +47,9 @@ extern "C" {
 #endif
 
 /* CDEF BEGIN */
-#define GF_KF_MAX_N 36   /* states: the 36-state rotating-INS calibration of seed 001 */
+#define GF_KF_MAX_N 40   /* states: the 36-state rotating-INS calibration of seed 001
+                            and its optional accelerometer-delay state (gf_syscal.h), 37,
+                            rounded up to a multiple of 4 (see the assertion below) */
 #define GF_KF_MAX_M 12   /* measurements per update */
 
 typedef struct gf_kalman {
@@ -150,6 +152,11 @@ gf_status gf_kalman_rts_step(size_t n, const double *P_post, const double *x_pos
                              const double *x_prior_next, const double *P_s_next,
                              const double *x_s_next, double *x_s, double *P_s);
 /* CDEF END */
+
+/* The structured predict works in rows padded to a multiple of 4 inside arrays of
+ * GF_KF_MAX_N^2 doubles: n rows of stride GF_PADDED(n) fit only if the maximum is itself a
+ * multiple of 4 (37 would overflow them by 111 doubles at n = 37). */
+_Static_assert(GF_KF_MAX_N % 4 == 0, "GF_KF_MAX_N must be a multiple of 4 (gf_kalman.c's padded work arrays)");
 
 /* Checks a filter struct handed in by a caller (e.g. restored from saved bytes): n in
  * 1..GF_KF_MAX_N (GF_ERR_BAD_SIZE), x and the used n x n block of P finite

@@ -267,6 +267,23 @@ static inline void gf_q_to_dcm(const double q[4], gf_mat3 *dcm)
     out[2][2] = q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3;
 }
 
+/* ---- profiles ------------------------------------------------------------- */
+
+/* C2 smooth step S(s) = s - sin(2 pi s)/(2 pi) on [0, 1] (s clamped), its derivatives
+ * S' = 1 - cos(2 pi s), S'' = 2 pi sin(2 pi s) (both vanish at s = 0 and 1) and its
+ * integral I(s) = int_0^s S = s^2/2 + (cos(2 pi s) - 1)/(4 pi^2): the one step shape of
+ * the vehicle profiles (gf_vehicle) and the turns of the rotation schedules
+ * (gf_rotation). */
+static inline void gf_smooth_step(double s, double *S, double *dS, double *ddS, double *I)
+{
+    s = s < 0.0 ? 0.0 : (s > 1.0 ? 1.0 : s);
+    const double w = 2.0 * GF_PI * s;
+    *S = s - sin(w) / (2.0 * GF_PI);
+    *dS = 1.0 - cos(w);
+    *ddS = 2.0 * GF_PI * sin(w);
+    *I = 0.5 * s * s + (cos(w) - 1.0) / (4.0 * GF_PI * GF_PI);
+}
+
 #ifdef __cplusplus
 }
 #endif

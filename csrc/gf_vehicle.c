@@ -6,22 +6,15 @@
 
 #include "gf_earth.h"
 #include "gf_math.h"
+#include "gf_quad.h"
 #include "gf_sins.h"
 
 #define PIECE_MAX_S 0.25                 /* longest quadrature piece */
 #define LAT_MAX_RAD (89.0 * GF_PI / 180.0)
 #define STEP_MAX_S 1e5                   /* longest step (4e5 pieces; see gf_vehicle.h) */
 
-/* 8-node Gauss-Legendre rule on [-1, 1] (exact for degree 15). */
-static const double GL_X[8] = {-0.9602898564975363, -0.7966664774136267, -0.5255324099163290,
-                               -0.1834346424956498, 0.1834346424956498, 0.5255324099163290,
-                               0.7966664774136267, 0.9602898564975363};
-static const double GL_W[8] = {0.1012285362903763, 0.2223810344533745, 0.3137066458778873,
-                               0.3626837833783620, 0.3626837833783620, 0.3137066458778873,
-                               0.2223810344533745, 0.1012285362903763};
-
-/* Integration matrix of the same rule: int_{-1}^{x_j} g = sum_i GL_S[j][i] g(x_i) for g a
- * polynomial of degree <= 7 (the Lagrange interpolant through the nodes, integrated);
+/* Integration matrix of the Gauss-Legendre rule of gf_quad.h: int_{-1}^{x_j} g =
+ * sum_i GL_S[j][i] g(x_i) for g a polynomial of degree <= 7 (the Lagrange interpolant through the nodes, integrated);
  * on a piece of <= 0.25 s the displacement at the nodes is then exact to round-off. */
 static const double GL_S[8][8] = {
     {0.0506142681451881, -0.018211886611940037, 0.012561662294061027, -0.008966031226109283,
@@ -47,17 +40,6 @@ typedef struct kin {
     double psi, dpsi, ddpsi;     /* rad, rad/s, rad/s^2 */
 } kin;
 
-/* C2 smooth step S(s) = s - sin(2 pi s)/(2 pi) on [0, 1], its derivatives and integral. */
-static void smooth_step(double s, double *S, double *dS, double *ddS, double *I)
-{
-    s = s < 0.0 ? 0.0 : (s > 1.0 ? 1.0 : s);
-    const double w = 2.0 * GF_PI * s;
-    *S = s - sin(w) / (2.0 * GF_PI);
-    *dS = 1.0 - cos(w);
-    *ddS = 2.0 * GF_PI * sin(w);
-    *I = 0.5 * s * s + (cos(w) - 1.0) / (4.0 * GF_PI * GF_PI);
-}
-
 static kin kinematics(const gf_vehicle_state *st, double t_s)
 {
     const gf_vehicle_segment *g = &st->active;
@@ -66,7 +48,7 @@ static kin kinematics(const gf_vehicle_state *st, double t_s)
     if (g->duration_s > 0.0) {
         const double T = g->duration_s;
         double S, dS, ddS, I;
-        smooth_step(tau / T, &S, &dS, &ddS, &I);
+        gf_smooth_step(tau / T, &S, &dS, &ddS, &I);
         k.u += g->dspeed_m_s * S;
         k.du = g->dspeed_m_s * dS / T;
         k.psi += g->dheading_rate_rad_s * T * I + g->dheading_rad * S;
@@ -166,16 +148,17 @@ static double active_end(const gf_vehicle_state *st)
 }
 
 /* Integrates displacement and increments over [a, b] inside the active segment: the
- * velocity at the 8 nodes gives the displacement at each node (GL_S) and at b (GL_W);
- * the sensor rates at the nodes give the increments. */
+ * velocity at the 8 nodes gives the displacement at each node (GL_S) and at b (GF_GL8_W);
+ * the sensor rates at the nodes give the increments (body, and through the mount, if
+ * any, those of the mounted sensor: msum = [dtheta_s, dv_s]). */
 static gf_status integrate_piece(gf_vehicle_state *st, double a, double b, double dth[3],
-                                 double dv[3])
+                                 double dv[3], const gf_vehicle_mount *mount, double msum[6])
 {
     const double half = 0.5 * (b - a);
     double tj[8], vE[8], vN[8];
     kin kj[8];
     for (int j = 0; j < 8; ++j) {
-        tj[j] = a + half * (GL_X[j] + 1.0);
+        tj[j] = a + half * (GF_GL8_X[j] + 1.0);
         kj[j] = kinematics(st, tj[j]);
         vE[j] = kj[j].u * sin(kj[j].psi);
         vN[j] = kj[j].u * cos(kj[j].psi);
@@ -187,19 +170,29 @@ static gf_status integrate_piece(gf_vehicle_state *st, double a, double b, doubl
             dN += GL_S[j][i] * vN[i];
         }
         gf_vehicle_sample s;
-        const gf_status status = evaluate(st, tj[j], kj[j], st->east_m + half * dE,
-                                          st->north_m + half * dN, &s);
+        gf_status status = evaluate(st, tj[j], kj[j], st->east_m + half * dE,
+                                    st->north_m + half * dN, &s);
         if (status != GF_OK)
             return status;
         for (int i = 0; i < 3; ++i) {
-            dth[i] += half * GL_W[j] * s.gyro_rad_s[i];
-            dv[i] += half * GL_W[j] * s.accel_m_s2[i];
+            dth[i] += half * GF_GL8_W[j] * s.gyro_rad_s[i];
+            dv[i] += half * GF_GL8_W[j] * s.accel_m_s2[i];
+        }
+        if (mount) {
+            double ws[3], fs[3];
+            status = mount->fn(mount->ctx, tj[j], s.gyro_rad_s, s.accel_m_s2, ws, fs);
+            if (status != GF_OK)
+                return status;
+            for (int i = 0; i < 3; ++i) {
+                msum[i] += half * GF_GL8_W[j] * ws[i];
+                msum[3 + i] += half * GF_GL8_W[j] * fs[i];
+            }
         }
     }
     double e = 0.0, n = 0.0;
     for (int j = 0; j < 8; ++j) {
-        e += GL_W[j] * vE[j];
-        n += GL_W[j] * vN[j];
+        e += GF_GL8_W[j] * vE[j];
+        n += GF_GL8_W[j] * vN[j];
     }
     st->east_m += half * e;
     st->north_m += half * n;
@@ -344,9 +337,11 @@ gf_status gf_vehicle_command(gf_vehicle_state *state, double speed_m_s,
     return GF_OK;
 }
 
-gf_status gf_vehicle_step(gf_vehicle_state *state, double t_end_s, gf_vehicle_sample *sample)
+gf_status gf_vehicle_step_mounted(gf_vehicle_state *state, double t_end_s,
+                                  const gf_vehicle_mount *mount, gf_vehicle_sample *sample,
+                                  double *mounted)
 {
-    if (!state || !sample)
+    if (!state || !sample || (mount && (!mount->fn || !mounted)))
         return GF_ERR_NULL_POINTER;
     if (!indices_valid(state))
         return GF_ERR_BAD_SIZE;
@@ -354,7 +349,7 @@ gf_status gf_vehicle_step(gf_vehicle_state *state, double t_end_s, gf_vehicle_sa
         return GF_ERR_BAD_TIME;
     gf_vehicle_state s = *state;
     const double t_end = t_end_s;
-    double dth[3] = {0.0, 0.0, 0.0}, dv[3] = {0.0, 0.0, 0.0};
+    double dth[3] = {0.0, 0.0, 0.0}, dv[3] = {0.0, 0.0, 0.0}, msum[6] = {0.0};
     double a = s.time_s;
     while (a < t_end) {
         const double seg_end = active_end(&s);
@@ -363,7 +358,7 @@ gf_status gf_vehicle_step(gf_vehicle_state *state, double t_end_s, gf_vehicle_sa
         for (int m = 0; m < pieces; ++m) {
             const double pa = a + (b_seg - a) * m / pieces;
             const double pb = m + 1 == pieces ? b_seg : a + (b_seg - a) * (m + 1) / pieces;
-            const gf_status status = integrate_piece(&s, pa, pb, dth, dv);
+            const gf_status status = integrate_piece(&s, pa, pb, dth, dv, mount, msum);
             if (status != GF_OK)
                 return status;
         }
@@ -372,15 +367,29 @@ gf_status gf_vehicle_step(gf_vehicle_state *state, double t_end_s, gf_vehicle_sa
             activate_next(&s, seg_end);
     }
     gf_vehicle_sample out;
-    const gf_status status = evaluate(&s, t_end, kinematics(&s, t_end), s.east_m, s.north_m, &out);
+    gf_status status = evaluate(&s, t_end, kinematics(&s, t_end), s.east_m, s.north_m, &out);
     if (status != GF_OK)
         return status;
+    double m_out[12] = {0.0};
+    if (mount) {
+        status = mount->fn(mount->ctx, t_end, out.gyro_rad_s, out.accel_m_s2, m_out, m_out + 3);
+        if (status != GF_OK)
+            return status;
+        memcpy(m_out + 6, msum, sizeof msum);
+    }
     memcpy(out.dtheta_rad, dth, sizeof dth);
     memcpy(out.dv_m_s, dv, sizeof dv);
     s.time_s = t_end;
     *state = s;
     *sample = out;
+    if (mount)
+        memcpy(mounted, m_out, sizeof m_out);
     return GF_OK;
+}
+
+gf_status gf_vehicle_step(gf_vehicle_state *state, double t_end_s, gf_vehicle_sample *sample)
+{
+    return gf_vehicle_step_mounted(state, t_end_s, NULL, sample, NULL);
 }
 
 gf_status gf_vehicle_run(gf_vehicle_state *state, size_t n, double dt_s,

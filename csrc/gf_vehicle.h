@@ -127,6 +127,26 @@ gf_status gf_vehicle_run(gf_vehicle_state *state, size_t n, double dt_s,
                          gf_vehicle_sample *samples, size_t *n_done);
 /* CDEF END */
 
+/* Internal to the core (not in the Python binding): a sensor mounted on the vehicle
+ * whose frame s moves relative to the body (the rotating IMU of gf_rotation). fn maps the
+ * body rate w_ib^b and specific force f^b at t_s to the sensor's w_is^s and f^s; it must
+ * not change anything (ctx is const) and returns GF_OK or an error that stops the step. */
+typedef gf_status (*gf_vehicle_mount_fn)(const void *ctx, double t_s, const double w_b[3],
+                                         const double f_b[3], double w_s[3], double f_s[3]);
+typedef struct gf_vehicle_mount {
+    gf_vehicle_mount_fn fn;
+    const void *ctx;
+} gf_vehicle_mount;
+
+/* gf_vehicle_step with a mounted sensor (mount may be NULL: gf_vehicle_step): the same
+ * quadrature also integrates the sensor's outputs; mounted (12) receives w_is^s and f^s
+ * at t_end_s, then the increments dtheta_s, dv_s over the step. The caller splits the
+ * step where the mount's motion is not smooth (the quadrature assumes smooth integrands
+ * on each piece). */
+gf_status gf_vehicle_step_mounted(gf_vehicle_state *state, double t_end_s,
+                                  const gf_vehicle_mount *mount, gf_vehicle_sample *sample,
+                                  double *mounted);
+
 /* Checks a state handed in by a caller (e.g. restored from saved bytes). gf_vehicle_step
  * and gf_vehicle_command check before every call what indexes the profile (n_segments
  * <= GF_VEHICLE_MAX_SEGMENTS, next_segment <= n_segments: GF_ERR_BAD_SIZE); this also

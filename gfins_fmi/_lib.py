@@ -20,7 +20,8 @@ except ImportError as exc:  # pragma: no cover - only without a build
     ) from exc
 
 __all__ = ["ffi", "lib", "GfinsError", "NonFiniteInputError", "SampleError", "check_status",
-           "as_array", "as_scalar", "as_rows", "as_positive_scalar", "as_vector3", "ptr"]
+           "as_array", "as_scalar", "as_rows", "as_positive_scalar", "as_vector3", "ptr",
+           "struct_columns", "struct_doubles"]
 
 
 class GfinsError(RuntimeError):
@@ -225,3 +226,22 @@ def first_nonfinite(arr: np.ndarray, row: int) -> int:
     """Column of the first non-finite value in ``arr[row]``."""
     bad = np.flatnonzero(~np.isfinite(arr[row]))
     return int(bad[0]) if bad.size else -1
+
+
+def struct_doubles(ctype: str) -> int:
+    """Number of doubles in a C struct made of doubles only (a row of its numpy buffer)."""
+    return ffi.sizeof(ctype) // 8
+
+
+def struct_columns(buf: np.ndarray, ctype: str) -> dict:
+    """Views of the fields of an array of C structs made of doubles only (one struct a
+    row of ``buf``, shape (n, struct_doubles(ctype))), by field name: (n,) for a double,
+    (n, k) for a double[k]."""
+    t = ffi.typeof(ctype)
+    if buf.shape[1] * 8 != ffi.sizeof(t):  # pragma: no cover - layout guard
+        raise GfinsError(f"{ctype} is not {buf.shape[1]} doubles")
+    cols = {}
+    for name, f in t.fields:
+        i, width = f.offset // 8, ffi.sizeof(f.type) // 8
+        cols[name] = buf[:, i] if f.type.kind == "primitive" else buf[:, i:i + width]
+    return cols

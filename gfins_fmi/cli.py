@@ -354,8 +354,22 @@ def _gfnav(args) -> int:
 
 
 def _reproduce(args) -> int:
-    from gfins_fmi import reproduce as R
     args.out.mkdir(parents=True, exist_ok=True)
+    if args.experiment == "seed001":
+        from gfins_fmi import reproduce_seed001 as S
+        runs = args.runs or 3
+        print(f"Reproduction of seed 001's vehicle test: {runs} calibrations with and without K_a2 "
+              "and lever arms, each driven (assumptions: gfins_fmi/reproduce_seed001.py, "
+              "docs/reproductions/seed001_vehicle.md)")
+        res = S.run_seed001(runs=runs, seed=args.seed, progress=True)
+        table = S.seed001_table(res)
+        print("\n" + table)
+        png = S.seed001_plot(res, args.out / "seed001_vehicle.png")
+        (args.out / "seed001_table.md").write_text(table + "\n", encoding="utf-8")
+        print(f"\nfigure: {png}\ntable: {args.out / 'seed001_table.md'}")
+        return 0
+    from gfins_fmi import reproduce as R
+    args.runs = args.runs or 100
     print("Reproduction of Qin, Xu, Li (seed 000), section 2: Monte Carlo of "
           f"{args.runs} runs (assumptions: gfins_fmi/reproduce.py, docs/reproductions/qin.md)")
     from gfins_fmi.montecarlo import executor
@@ -633,8 +647,11 @@ def main(argv: list[str] | None = None) -> int:
     p = parsers["reproduce"] = sub.add_parser(
         "reproduce", help="reproduce a published experiment (qin: the 6- vs 9-accelerometer "
         "comparison of seed 000, as a Monte Carlo)")
-    p.add_argument("experiment", choices=["qin"])
-    p.add_argument("--runs", type=_option_count(1), default=100, help="Monte-Carlo runs (default 100)")
+    p.add_argument("experiment", choices=["qin", "seed001"],
+                   help="qin: seed 000; seed001: the vehicle test of seed 001 (rotating INS, "
+                        "calibration with and without K_a2 and lever arms)")
+    p.add_argument("--runs", type=_option_count(1), default=None,
+                   help="Monte-Carlo runs (default: qin 100, seed001 3 calibrations)")
     p.add_argument("--seed", type=_option_count(0), default=2008, help="random seed (default 2008)")
     p.add_argument("--drift-signs", choices=["random", "equal"], default="random",
                    help="signs of the 1.5e-5 m/s^2 drifts (default: random per sensor and run)")
@@ -678,6 +695,8 @@ def main(argv: list[str] | None = None) -> int:
 
     from gfins_fmi.estimation import cli as estimation_cli
     parsers["integrate"] = estimation_cli.add_parser(sub)
+    from gfins_fmi.estimation import calibrate_cli
+    parsers["calibrate"] = calibrate_cli.add_parser(sub)
 
     p = parsers["validate"] = sub.add_parser("validate", help="run fmpy's validation on every shipped FMU")
     p.set_defaults(func=_validate)

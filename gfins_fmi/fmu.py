@@ -321,7 +321,8 @@ def run_accel9_fmu(A_m_s2, dt_s: float, l_m: float, omega_init_rad_s=(0.0, 0.0, 
 
 def run_sins_fmu(gyro, accel, dt_s: float, initial, *, config=None, h_ext_m=None,
                  fmi_version: int = 2, start_time_s: float | None = None,
-                 progress: bool = False, imu_errors=None, lowpass_sos=None, **kwargs):
+                 progress: bool = False, imu_errors=None, lowpass_sos=None, gimbal_rad=None,
+                 **kwargs):
     """Run a record through the strapdown FMU; the result lines up with
     :meth:`gfins_fmi.Strapdown.run` on the same record (for increments, the FMU takes
     the increment over (t_(k-1), t_k] at t_k, so the record is shifted by one step
@@ -331,7 +332,12 @@ def run_sins_fmu(gyro, accel, dt_s: float, initial, *, config=None, h_ext_m=None
     its inputs; ``lowpass_sos`` (n_sections <= 8, 6) its low-pass after it (the same as
     ``ImuErrors.compensate`` followed by ``signal_conditioning.BiquadFilter`` on the six channels).
 
-    Returns a :class:`gfins_fmi.NavSolution`.
+    ``gimbal_rad`` (n, 2; the middle and inner angles at each record row's time) makes it
+    the navigator of a rotating INS (rotating = 1): the record is the IMU frame's and the
+    result is a :class:`gfins_fmi.rotation.RotatingNavSolution` with the vehicle attitude
+    from the gimbal angles (as :func:`gfins_fmi.rotation.navigate`).
+
+    Returns a :class:`gfins_fmi.NavSolution` (with ``gimbal_rad``: a RotatingNavSolution).
     """
     from gfins_fmi.sins import _INPUTS, _VERTICAL, NavSolution, SinsConfig
     cfg = config or SinsConfig()
@@ -361,22 +367,34 @@ def run_sins_fmu(gyro, accel, dt_s: float, initial, *, config=None, h_ext_m=None
                       lowpass_sos=np.r_[sos.ravel(), np.zeros(48 - sos.size)])
     he = np.full(n, np.nan) if h_ext_m is None else as_array("h_ext_m", h_ext_m, (n,), "m",
                                                              finite=False)
+    gim = None if gimbal_rad is None else as_array("gimbal_rad", gimbal_rad, (n, 2), "rad")
+    if gim is not None:
+        params["rotating"] = 1
     if cfg.input == "increments":
         # sample j of the record covers (t_j, t_(j+1)]: set it at t_(j+1)
         z = np.zeros((1, 3))
         ins = {"dtheta": np.r_[z, g], "dv": np.r_[z, a], "gyro_rate": np.zeros((n + 1, 3)),
                "specific_force": np.zeros((n + 1, 3)), "h_ext": np.r_[np.nan, he]}
+        if gim is not None:
+            ins["gimbal"] = np.r_[gim[:1], gim]
     else:
         ins = {"gyro_rate": g, "specific_force": a, "dtheta": np.zeros((n, 3)),
                "dv": np.zeros((n, 3)), "h_ext": he}
+        if gim is not None:
+            ins["gimbal"] = gim
     shift = 1 if cfg.input == "increments" else 0   # FMU step k takes record row k - shift
 
     def solution(d):
         sl = slice(shift, None)
-        return NavSolution(d["time_s"][sl, 0], d["q"][sl], d["v"][sl], d["lat"][sl, 0],
-                           d["lon"][sl, 0], d["h"][sl, 0])
+        sol = NavSolution(d["time_s"][sl, 0], d["q"][sl], d["v"][sl], d["lat"][sl, 0],
+                          d["lon"][sl, 0], d["h"][sl, 0])
+        if gim is None:
+            return sol
+        from gfins_fmi.rotation import RotatingNavSolution
+        return RotatingNavSolution(sol, d["q_vehicle"][sl])
+    outs = ["q", "v", "lat", "lon", "h", "time_s"] + (["q_vehicle"] if gim is not None else [])
     try:
-        d = run_fmu("sins", ins, ["q", "v", "lat", "lon", "h", "time_s"], dt_s, parameters=params,
+        d = run_fmu("sins", ins, outs, dt_s, parameters=params,
                     fmi_version=fmi_version, start_time_s=t0, progress=progress, **kwargs)
     except FmuRunError as exc:
         k = len(exc.partial.get("q", [])) if exc.partial else 0

@@ -194,6 +194,20 @@ class ImuErrors:
         return self._run(lib.gf_imu_compensate, gyro_out_rad_s, accel_out_m_s2, temp_C,
                          ("gyro_out_rad_s", "accel_out_m_s2"))
 
+    def apply_increments(self, dtheta_rad, dv_m_s, dt_s, temp_C=None):
+        """Sensor increments of true increments over intervals dt_s (scalar or (n,)):
+        the model applied to the mean rates over each interval, as the vehicle FMU and
+        the calibration filter (gf_syscal) do."""
+        dt = np.broadcast_to(np.asarray(dt_s, float), (np.shape(dtheta_rad)[0],))[:, None]
+        w, f = self.apply(np.asarray(dtheta_rad) / dt, np.asarray(dv_m_s) / dt, temp_C)
+        return w * dt, f * dt
+
+    def compensate_increments(self, dtheta_rad, dv_m_s, dt_s, temp_C=None):
+        """The inverse of :meth:`apply_increments` (mean rates over each interval)."""
+        dt = np.broadcast_to(np.asarray(dt_s, float), (np.shape(dtheta_rad)[0],))[:, None]
+        w, f = self.compensate(np.asarray(dtheta_rad) / dt, np.asarray(dv_m_s) / dt, temp_C)
+        return w * dt, f * dt
+
 
 @dataclass
 class ImuNoise:

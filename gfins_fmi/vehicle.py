@@ -24,7 +24,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from gfins_fmi._lib import GfinsError, as_scalar, as_vector3, check_status, ffi, lib, ptr
+from gfins_fmi._lib import (GfinsError, as_scalar, as_vector3, check_status, ffi, lib, ptr,
+                            struct_columns as _columns, struct_doubles as _doubles)
 from gfins_fmi.trajectory import Trajectory, deg
 
 __all__ = ["Segment", "VehicleProfile", "VehicleRecord", "simulate_vehicle", "MAX_SEGMENTS",
@@ -35,23 +36,6 @@ MAX_SEGMENTS = int(lib.GF_VEHICLE_MAX_SEGMENTS)
 MAX_OUTAGES = int(lib.GF_AIDING_MAX_OUTAGES)
 _MAX_RATE_HZ = 1000.0       # GF_AIDING_MAX_RATE_HZ
 _QUEUE = int(lib.GF_GNSS_QUEUE)
-
-
-def _columns(buf: np.ndarray, ctype: str) -> dict:
-    """Views of the fields of an array of C structs made of doubles only (one struct a
-    row of ``buf``), by field name: (n,) for a double, (n, k) for a double[k]."""
-    t = ffi.typeof(ctype)
-    if buf.shape[1] * 8 != ffi.sizeof(t):  # pragma: no cover - layout guard
-        raise GfinsError(f"{ctype} is not {buf.shape[1]} doubles; update gfins_fmi.vehicle")
-    cols = {}
-    for name, f in t.fields:
-        i, width = f.offset // 8, ffi.sizeof(f.type) // 8
-        cols[name] = buf[:, i] if f.type.kind == "primitive" else buf[:, i:i + width]
-    return cols
-
-
-def _doubles(ctype: str) -> int:
-    return ffi.sizeof(ctype) // 8
 
 
 @dataclass

@@ -22,8 +22,8 @@ import numpy as np
 
 from gfins_fmi.sins import NavState, euler_to_quat
 
-__all__ = ["CoarseAlignment", "coarse_align", "heading_from_gnss", "AlignmentError", "StartingPoint",
-           "align_static_then_gnss", "FineAlignment", "fine_align"]
+__all__ = ["CoarseAlignment", "coarse_align", "attitude_from_gravity_and_earth_rate", "heading_from_gnss",
+           "AlignmentError", "StartingPoint", "align_static_then_gnss", "FineAlignment", "fine_align"]
 
 _OMEGA = 7.292115e-5
 
@@ -132,6 +132,33 @@ def coarse_align(imu, t0_s: float, t1_s: float, lat_rad: float, *, gyro_bias_std
     tilt_std = float(accel_bias_std_m_s2 / np.linalg.norm(fm))
     return CoarseAlignment(np.array([heading, pitch, roll]), tilt_std, hstd, method, (t0_s, t1_s), fm, wm,
                            notes)
+
+
+def attitude_from_gravity_and_earth_rate(f_mean_m_s2, w_mean_rad_s) -> np.ndarray:
+    """Coarse attitude q_b^n at rest for ANY orientation of the body (no Euler angles, so
+    no singularity with an axis vertical: the positions of a calibration path): the mean
+    specific force is Up and the mean rate x specific force is East in body axes (TRIAD
+    on gravity and the Earth rate), C_n^b = [E, N = U x E, U]. Needs a gyro that sees the
+    Earth rate (bias << W cos L) and |lat| < 85 deg.
+
+    Raises
+    ------
+    AlignmentError
+        The rate is (anti)parallel to the specific force (at a pole or without Earth rate).
+    """
+    f = np.asarray(f_mean_m_s2, float)
+    w = np.asarray(w_mean_rad_s, float)
+    u = f / np.linalg.norm(f)
+    e = np.cross(w, f)
+    if not np.linalg.norm(e) > 1e-3 * np.linalg.norm(w) * np.linalg.norm(f):
+        raise AlignmentError("the mean rate is parallel to the specific force: no heading from "
+                             "gyrocompassing (near a pole, or the gyros do not see the Earth rate)")
+    e /= np.linalg.norm(e)
+    nn = np.cross(u, e)
+    C_bn = np.array([e, nn, u])                     # rows: E, N, U in body axes = C_b^n
+    from scipy.spatial.transform import Rotation
+    q = Rotation.from_matrix(C_bn).as_quat()        # x, y, z, w
+    return np.array([q[3], q[0], q[1], q[2]])
 
 
 def heading_from_gnss(gnss, min_speed_m_s: float = 1.0, t_from_s: Optional[float] = None):

@@ -15,7 +15,11 @@
  *   7. damaged and crafted states (check_damaged_states in fmu2_test.h), with IMU errors
  *      and noise on: refused with a reason (CRC-32, or the field), random bytes in the
  *      live structs never make a step read or write out of bounds, and the instance
- *      continues exactly as before. */
+ *      continues exactly as before;
+ *   8. rotation = 1 (the IMU on the two-axis mechanism, default 16-position scheme):
+ *      IMU outputs = gf_rot_vehicle_step (+ gf_imu_apply) called directly, bit for bit;
+ *      the gimbal angles = gf_rot_eval; the array stays on the body; a bad turn and a
+ *      bad switch refused with a reason. */
 #include <string.h>
 
 #include "fmi2Functions.h"
@@ -24,6 +28,7 @@
 #include "gf_aiding_sim.h"
 #include "gf_gfins.h"
 #include "gf_math.h"
+#include "gf_rotation.h"
 #include "gf_test.h"
 #include "gf_vehicle.h"
 
@@ -267,6 +272,89 @@ static void test_equals_core(int imu_errors)
     CHECK(worst < 0, "imu_errors = %d: FMU differs from the core at step %d", imu_errors, worst);
 }
 
+/* 8. the rotating IMU: the FMU's default schedule (16 positions: 180 deg turns of 19 s
+ * with 1 s ramps, 10 s stops; repeated) against gf_rot_vehicle_step */
+static void test_rotation_equals_core(void)
+{
+    fmi2Component c = instantiate("rotating");
+    CHECK(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2True, N * H_S) == fmi2OK, "setup");
+    CHECK(fmi2EnterInitializationMode(c) == fmi2OK, "enter");
+    set_int(c, "rotation", 1);
+    set_int(c, "imu_errors", 1);
+    const double k2[3] = {2e-5, -1e-5, 1.5e-5}, lever[3] = {0.03, -0.02, 0.025};
+    set_vec(c, "accel_k2", k2, 3);
+    set_vec(c, "lever_arm", lever, 3);
+    CHECK(fmi2ExitInitializationMode(c) == fmi2OK, "exit: %s", g_log);
+    fmi2ValueReference gim[2];
+    vrs("gimbal", 2, gim);
+    static double got_gimbal[N][2];
+    for (int k = 0; k < N; ++k) {
+        CHECK(fmi2DoStep(c, k * H_S, H_S, fmi2True) == fmi2OK, "doStep %d", k);
+        fmi2GetReal(c, g_out, N_OUT, g_a[k]);
+        fmi2GetReal(c, gim, 2, got_gimbal[k]);
+    }
+    fmi2FreeInstance(c);
+    gf_rot_schedule sch;
+    memset(&sch, 0, sizeof sch);
+    sch.q_mb0[0] = 1.0;
+    sch.repeat = 1;
+    sch.n_segments = 16;
+    const int axis8[8] = {1, 0, 1, 0, 0, 1, 0, 1}; /* 1 inner, 0 middle */
+    const double sgn8[8] = {1, 1, -1, -1, -1, -1, 1, 1};
+    for (int k = 0; k < 16; ++k) {
+        const int inner = k < 8 ? axis8[k] : !axis8[k - 8];
+        const double a = sgn8[k % 8] * GF_PI;
+        sch.segment[k] = inner ? (gf_rot_segment){-1, 2, 0.0, a, 19.0, 1.0, 10.0}
+                               : (gf_rot_segment){0, -1, a, 0.0, 19.0, 1.0, 10.0};
+    }
+    gf_rot_state rs;
+    CHECK(gf_rot_init(&rs, &sch, 0.0, NULL) == GF_OK, "direct schedule");
+    const gf_vehicle_profile p = default_profile();
+    gf_vehicle_state s;
+    gf_vehicle_sample x;
+    CHECK(gf_vehicle_init(&s, &p, 0.0, &x, NULL) == GF_OK, "direct init");
+    gf_array_geometry g;
+    gf9_geometry(0.1, &g);
+    gf_imu_errors e;
+    memset(&e, 0, sizeof e);
+    memcpy(e.a_k2_s2_m, k2, sizeof k2);
+    memcpy(e.a_lever_m, lever, sizeof lever);
+    int worst = -1;
+    for (int k = 0; k < N && worst < 0; ++k) {
+        s.time_s = k * H_S;
+        double imu[12];
+        CHECK(gf_rot_vehicle_step(&rs, &s, k * H_S + H_S, &x, imu) == GF_OK, "direct step");
+        double w[3], f[3], mw[3], mf[3], ew[3], ef[3], A[GF_ARRAY_MAX_SENSORS];
+        size_t done;
+        gf_imu_apply(&e, 1, imu, imu + 3, NULL, w, f, &done);
+        for (int i = 0; i < 3; ++i) {
+            mw[i] = imu[6 + i] / H_S;
+            mf[i] = imu[9 + i] / H_S;
+        }
+        gf_imu_apply(&e, 1, mw, mf, NULL, ew, ef, &done);
+        gf_array_forward(&g, 1, x.accel_m_s2, x.gyro_rad_s, x.gyro_dot_rad_s2, A, &done);
+        double want[N_OUT], *q = want;
+        memcpy(q, x.q_bn, 4 * sizeof *q); q += 4;
+        memcpy(q, x.v_n_m_s, 3 * sizeof *q); q += 3;
+        *q++ = x.lat_rad;
+        *q++ = x.lon_rad;
+        memcpy(q, w, 3 * sizeof *q); q += 3;
+        memcpy(q, f, 3 * sizeof *q); q += 3;
+        for (int i = 0; i < 3; ++i) q[i] = ew[i] * H_S;
+        q += 3;
+        for (int i = 0; i < 3; ++i) q[i] = ef[i] * H_S;
+        q += 3;
+        memcpy(q, A, 9 * sizeof *q);
+        gf_rot_pose pose;
+        gf_rot_eval(&rs, k * H_S + H_S, &pose);
+        if (memcmp(want, g_a[k], sizeof want) != 0 || pose.gimbal_rad[0] != got_gimbal[k][0] ||
+            pose.gimbal_rad[1] != got_gimbal[k][1])
+            worst = k;
+    }
+    CHECK(worst < 0, "rotation = 1: FMU differs from the core at step %d", worst);
+    CHECK(fabs(got_gimbal[N - 1][1]) > 0.1, "the inner axis has turned by 30 s");
+}
+
 /* 6. the aiding sensors against gf_aiding_run on the same vehicle and seed */
 enum { CAP = 4000 };
 static gf_gnss_epoch g_gnss[CAP];
@@ -384,6 +472,18 @@ static void expect_refused(const char *param, double value, const char *mention)
     fmi2FreeInstance(c);
 }
 
+static void expect_refused_rotation(void)
+{
+    fmi2Component c = instantiate("bad turn");
+    fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0);
+    fmi2EnterInitializationMode(c);
+    set_int(c, "rotation", 1);
+    set_real(c, "rot_ramp[3]", 12.0);
+    CHECK(fmi2ExitInitializationMode(c) == fmi2Error, "a ramp longer than half the turn accepted");
+    CHECK(strstr(g_log, "turn 3 (rot_*[3])") != NULL, "log does not name turn 3: %s", g_log);
+    fmi2FreeInstance(c);
+}
+
 static void test_commands(void)
 {
     fmi2Component c = instantiate("cmd");
@@ -461,6 +561,9 @@ int main(void)
     expect_refused("baro_bias_gm_std", -0.1, "baro_bias_gm_std");
     expect_refused("odo_scale_error", 0.6, "odo_scale_error");
     test_aiding_equals_core();
+    test_rotation_equals_core();
+    expect_refused("rotation", 2, "rotation = 2 must be 0 or 1");
+    expect_refused_rotation();
     test_commands();
     test_damaged_states();
     TEST_MAIN_END();

@@ -14,15 +14,30 @@
 #include "model.h"
 #include "skip_steps.h"
 
-static void publish(ModelData *d)
+/* returns 0 when the gimbal angles cannot make a vehicle attitude (non-finite) */
+static int publish(ModelData *d)
 {
     memcpy(d->q_bn, d->nav.q_bn, sizeof d->q_bn);
     gf_quat_to_euler(d->nav.q_bn, d->euler_rad);
+    int ok = 1;
+    if (d->rotating) {
+        size_t done = 0;
+        double q[4];
+        ok = gf_rot_vehicle_attitude(1, d->nav.q_bn, d->gimbal_rad, q, &done) == GF_OK;
+        if (ok) {
+            memcpy(d->q_vehicle, q, sizeof q);
+            gf_quat_to_euler(q, d->euler_vehicle_rad);
+        }
+    } else {
+        memcpy(d->q_vehicle, d->q_bn, sizeof d->q_vehicle);
+        memcpy(d->euler_vehicle_rad, d->euler_rad, sizeof d->euler_vehicle_rad);
+    }
     memcpy(d->v_n_m_s, d->nav.v_n_m_s, sizeof d->v_n_m_s);
     d->lat_rad = d->nav.lat_rad;
     d->lon_rad = d->nav.lon_rad;
     d->h_m = d->nav.h_m;
     d->nav_time_s = d->nav.time_s;
+    return ok;
 }
 
 /* Validates the parameters and starts the navigation at start_time_s (also used to
@@ -91,9 +106,17 @@ static FmuStatus start_navigation(FmuInstance *instance, ModelData *d, double st
             return FMU_ERROR;
         }
     }
+    if (d->rotating != 0 && d->rotating != 1) {
+        fmu_log_error(instance, "parameter rotating = %d must be 0 or 1", (int)d->rotating);
+        return FMU_ERROR;
+    }
     d->previous_step_s = 0.0;
     d->started = 0;
-    publish(d);
+    if (!publish(d)) {
+        fmu_log_error(instance, "input gimbal = [%g, %g] rad is not finite", d->gimbal_rad[0],
+                      d->gimbal_rad[1]);
+        return FMU_ERROR;
+    }
     return FMU_OK;
 }
 
@@ -148,6 +171,11 @@ FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double 
         d->started = 1;
         return FMU_OK;
     }
+    if (d->rotating && !gf_all_finite(d->gimbal_rad, 2)) {
+        fmu_log_error(instance, "t = %.9g s: input gimbal = [%g, %g] rad is not finite; the "
+                      "outputs keep the last good sample", t_s, d->gimbal_rad[0], d->gimbal_rad[1]);
+        return FMU_ERROR;
+    }
     gf_sins_state next = d->nav;
     const double *gyro = increments ? d->dtheta_rad : d->gyro_rad_s;
     const double *accel = increments ? d->dv_m_s : d->accel_m_s2;
@@ -187,7 +215,7 @@ FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double 
     d->nav = next;
     d->previous_step_s = h_s;
     d->started = 1;
-    publish(d);
+    publish(d); /* the gimbal angles are finite: it cannot fail */
     return FMU_OK;
 }
 
@@ -201,6 +229,8 @@ const char *model_validate_state(const ModelData *d)
         return "the navigation state (configuration, attitude, position) is invalid";
     if (d->imu_comp != 0 && d->imu_comp != 1)
         return "imu_comp is not 0 or 1";
+    if (d->rotating != 0 && d->rotating != 1)
+        return "rotating is not 0 or 1";
     if (d->imu_comp && gf_imu_errors_check(&d->imu, NULL) != GF_OK)
         return "the IMU error model is invalid";
     /* the low-pass: its section count sizes the filter-state copies of model_do_step */

@@ -6,6 +6,7 @@
 
 #include "gf_biquad.h"
 #include "gf_imu_error.h"
+#include "gf_rotation.h"
 #include "gf_sins.h"
 #include "imu_params.h"
 
@@ -17,11 +18,12 @@ typedef struct ModelData {
     int32_t imu_comp, lowpass_sections;
     FmuImuParams imu_params;
     double lowpass_sos[48];
-    int32_t skip_steps;
+    int32_t skip_steps, rotating;
     /* inputs */
-    double dtheta_rad[3], dv_m_s[3], gyro_rad_s[3], accel_m_s2[3], h_ext_m;
+    double dtheta_rad[3], dv_m_s[3], gyro_rad_s[3], accel_m_s2[3], h_ext_m, gimbal_rad[2];
     /* outputs */
     double q_bn[4], euler_rad[3], v_n_m_s[3], lat_rad, lon_rad, h_m, nav_time_s;
+    double q_vehicle[4], euler_vehicle_rad[3];
     /* internal */
     double previous_step_s;   /* communication step that ended at this sample: its dt */
     int32_t started;          /* 1 once a doStep has been taken */

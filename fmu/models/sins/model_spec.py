@@ -47,8 +47,17 @@ MODEL = dict(
              shape=(48,), start=0.0, field="lowpass_sos",
              description="Low-pass sections [b0 b1 b2 1 a1 a2] x lowpass_sections (e.g. "
                          "gfins_fmi.signal_conditioning.design_cheby2), applied after the compensation"),
+        dict(name="rotating", causality="parameter", variability="fixed", type="Int32",
+             shape=(), start=0, field="rotating",
+             description="1: the inputs come from an IMU on seed 001's two-axis mechanism (the "
+                         "IMU frame m is navigated: q, euler describe it); q_vehicle and "
+                         "euler_vehicle give the vehicle from it and the input gimbal "
+                         "(gf_rotation.h: C_b^n = C_m^n (R_x(middle) R_z(inner))^T)"),
         *_COMMON["imu_inputs"](),
         _COMMON["external_height"](),
+        dict(name="gimbal", causality="input", variability="continuous", type="Float64",
+             shape=(2,), unit=_RAD, start=0.0, field="gimbal_rad",
+             description="rotating = 1: middle and inner gimbal angles (encoders) at the sample"),
         dict(name="q", causality="output", variability="discrete", type="Float64",
              shape=(4,), field="q_bn", description="Attitude quaternion q_b^n"),
         dict(name="euler", causality="output", variability="discrete", type="Float64",
@@ -65,5 +74,11 @@ MODEL = dict(
         dict(name="time_s", causality="output", variability="discrete", type="Float64",
              shape=(), unit="s", field="nav_time_s",
              description="Time that the navigation outputs describe"),
+        dict(name="q_vehicle", causality="output", variability="discrete", type="Float64",
+             shape=(4,), field="q_vehicle",
+             description="Vehicle attitude q_b^n (rotating = 1: from q and gimbal; else q)"),
+        dict(name="euler_vehicle", causality="output", variability="discrete", type="Float64",
+             shape=(3,), unit=_RAD, field="euler_vehicle_rad",
+             description="Vehicle heading, pitch, roll (rotating = 1; else euler)"),
     ],
 )

@@ -1,6 +1,7 @@
 /* model.c — the vehicle as an FMU model: FMI-agnostic, calls gf_vehicle (truth),
- * gf_imu_error (IMU errors), gf_array_forward (accelerometer array) and gf_aiding_sim
- * (GNSS receiver, barometer, odometer).
+ * gf_rotation (rotation = 1: the IMU on the two-axis mechanism), gf_imu_error (IMU
+ * errors), gf_array_forward (accelerometer array) and gf_aiding_sim (GNSS receiver,
+ * barometer, odometer).
  *
  * Sampling: after exitInitializationMode the outputs describe the start time (zero
  * increments); doStep(t, h) moves the vehicle to t + h (an absolute time, so a long run
@@ -25,25 +26,31 @@ typedef struct Sensed {
     gf_rng array_rng;
 } Sensed;
 
-static gf_status sense(const ModelData *d, const gf_vehicle_sample *x, double dt_s, Sensed *o)
+/* imu (12, may be NULL: the body's): the IMU's true w, f at the sample and dtheta, dv over
+ * the step (the rotating IMU's, from gf_rot_vehicle_step) */
+static gf_status sense(const ModelData *d, const gf_vehicle_sample *x, const double *imu,
+                       double dt_s, Sensed *o)
 {
     double *w = o->gyro_rad_s, *f = o->accel_m_s2;
-    memcpy(w, x->gyro_rad_s, sizeof o->gyro_rad_s);
-    memcpy(f, x->accel_m_s2, sizeof o->accel_m_s2);
-    memcpy(o->dtheta_rad, x->dtheta_rad, sizeof o->dtheta_rad);
-    memcpy(o->dv_m_s, x->dv_m_s, sizeof o->dv_m_s);
+    double true_w[3], true_f[3];
+    memcpy(true_w, imu ? imu : x->gyro_rad_s, sizeof true_w);
+    memcpy(true_f, imu ? imu + 3 : x->accel_m_s2, sizeof true_f);
+    memcpy(w, true_w, sizeof o->gyro_rad_s);
+    memcpy(f, true_f, sizeof o->accel_m_s2);
+    memcpy(o->dtheta_rad, imu ? imu + 6 : x->dtheta_rad, sizeof o->dtheta_rad);
+    memcpy(o->dv_m_s, imu ? imu + 9 : x->dv_m_s, sizeof o->dv_m_s);
     o->imu_noise = d->imu_noise;
     o->array_rng = d->array_rng;
     size_t done = 0;
     if (d->imu_errors) {
-        gf_status st = gf_imu_apply(&d->imu, 1, x->gyro_rad_s, x->accel_m_s2, NULL, w, f, &done);
+        gf_status st = gf_imu_apply(&d->imu, 1, true_w, true_f, NULL, w, f, &done);
         if (st != GF_OK)
             return st;
         if (dt_s > 0.0) { /* increments as mean rates over the step, as the SINS FMU compensates */
             double mw[3], mf[3], ew[3], ef[3]; /* gf_imu_apply's outputs must not alias its inputs */
             for (int i = 0; i < 3; ++i) {
-                mw[i] = x->dtheta_rad[i] / dt_s;
-                mf[i] = x->dv_m_s[i] / dt_s;
+                mw[i] = o->dtheta_rad[i] / dt_s;
+                mf[i] = o->dv_m_s[i] / dt_s;
             }
             st = gf_imu_apply(&d->imu, 1, mw, mf, NULL, ew, ef, &done);
             if (st != GF_OK)
@@ -127,6 +134,64 @@ static void log_bad_aiding(FmuInstance *instance, int bad)
             return;
         }
     fmu_log_error(instance, "aiding sensor parameters refused (code %d)", bad);
+}
+
+/* rotation = 1: the schedule from the rot_* parameters, the IMU's rates at the start
+ * (imu0) and the mechanism's outputs; 0 if refused (logged). */
+static int rotation_start(FmuInstance *instance, ModelData *d, double start_time_s, double *imu0)
+{
+    d->gimbal_rad[0] = d->gimbal_rad[1] = 0.0;
+    d->q_mb[0] = 1.0;
+    d->q_mb[1] = d->q_mb[2] = d->q_mb[3] = 0.0;
+    memset(&d->rot, 0, sizeof d->rot);
+    if (d->rotation != 0 && d->rotation != 1) {
+        fmu_log_error(instance, "parameter rotation = %d must be 0 or 1", (int)d->rotation);
+        return 0;
+    }
+    if (!d->rotation)
+        return 1;
+    if (d->rot_n < 0 || d->rot_n > GF_ROT_MAX_SEGMENTS) {
+        fmu_log_error(instance, "parameter rot_n = %d must be 0..%d", (int)d->rot_n, GF_ROT_MAX_SEGMENTS);
+        return 0;
+    }
+    gf_rot_schedule s;
+    memset(&s, 0, sizeof s);
+    s.q_mb0[0] = 1.0;
+    s.n_segments = (size_t)d->rot_n;
+    s.repeat = d->rot_repeat;
+    for (int32_t k = 0; k < d->rot_n; ++k) {
+        gf_rot_segment *g = &s.segment[k];
+        g->base_axis = d->rot_base_axis[k];
+        g->imu_axis = d->rot_imu_axis[k];
+        g->base_angle_rad = d->rot_base_angle_rad[k];
+        g->imu_angle_rad = d->rot_imu_angle_rad[k];
+        g->move_s = d->rot_move_s[k];
+        g->ramp_s = d->rot_ramp_s[k];
+        g->dwell_s = d->rot_dwell_s[k];
+    }
+    int bad = 0;
+    const gf_status st = gf_rot_init(&d->rot, &s, start_time_s, &bad);
+    if (st != GF_OK) {
+        if (bad >= GF_ROT_BAD_SEGMENT)
+            fmu_log_error(instance, "turn %d (rot_*[%d]): an axis not in -1..2, an angle about no "
+                          "axis, rot_move <= 0 with an angle, 2 rot_ramp > rot_move, rot_dwell < 0, "
+                          "a turn of no duration or faster than 600 deg/s",
+                          bad - GF_ROT_BAD_SEGMENT + 1, bad - GF_ROT_BAD_SEGMENT + 1);
+        else if (bad == GF_ROT_BAD_REPEAT)
+            fmu_log_error(instance, "rot_repeat = 1 but one cycle of the turns does not bring the "
+                          "IMU back to its start attitude");
+        else if (bad == GF_ROT_BAD_EMPTY_CYCLE)
+            fmu_log_error(instance, "rot_repeat = 1 with a cycle of zero duration");
+        else
+            fmu_log_error(instance, "rotation schedule refused: %s (a non-finite value?)",
+                          gf_status_string(st));
+        return 0;
+    }
+    gf_rot_pose pose;
+    gf_rot_imu_outputs(&d->rot, start_time_s, d->out.gyro_rad_s, d->out.accel_m_s2, imu0, imu0 + 3, &pose);
+    memcpy(d->gimbal_rad, pose.gimbal_rad, sizeof d->gimbal_rad);
+    memcpy(d->q_mb, pose.q_mb, sizeof d->q_mb);
+    return 1;
 }
 
 FmuStatus model_exit_initialization(FmuInstance *instance, ModelData *d, double start_time_s)
@@ -222,8 +287,11 @@ FmuStatus model_exit_initialization(FmuInstance *instance, ModelData *d, double 
         return FMU_ERROR;
     }
     d->active_cmd[0] = d->active_cmd[1] = NAN;
+    double imu0[12] = {0.0};
+    if (!rotation_start(instance, d, start_time_s, imu0))
+        return FMU_ERROR;
     Sensed sensed;
-    st = sense(d, &d->out, 0.0, &sensed);
+    st = sense(d, &d->out, d->rotation ? imu0 : NULL, 0.0, &sensed);
     if (st != GF_OK) {
         fmu_log_error(instance, "sensor outputs at the start failed: %s", gf_status_string(st));
         return FMU_ERROR;
@@ -280,7 +348,9 @@ FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double 
         }
     }
     gf_vehicle_sample out;
-    gf_status st = gf_vehicle_step(&next, t_s + h_s, &out);
+    double imu[12];
+    gf_status st = d->rotation ? gf_rot_vehicle_step(&d->rot, &next, t_s + h_s, &out, imu)
+                               : gf_vehicle_step(&next, t_s + h_s, &out);
     if (st != GF_OK) {
         fmu_log_error(instance, "t = %.9g s: vehicle step failed: %s", t_s,
                       st == GF_ERR_DIVERGED ? "the vehicle reached |latitude| = 89 deg"
@@ -288,9 +358,14 @@ FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double 
         return FMU_ERROR;
     }
     Sensed sensed;
-    st = sense(d, &out, h_s, &sensed);
+    st = sense(d, &out, d->rotation ? imu : NULL, h_s, &sensed);
     if (st != GF_OK) {
         fmu_log_error(instance, "t = %.9g s: sensor outputs failed: %s", t_s, gf_status_string(st));
+        return FMU_ERROR;
+    }
+    gf_rot_pose pose;
+    if (d->rotation && gf_rot_eval(&d->rot, t_s + h_s, &pose) != GF_OK) {
+        fmu_log_error(instance, "t = %.9g s: rotation schedule failed", t_s);
         return FMU_ERROR;
     }
     /* last: it changes its state only on success, and nothing after it can fail */
@@ -311,6 +386,10 @@ FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double 
     d->out = out;
     commit(d, &sensed);
     d->vehicle = next;
+    if (d->rotation) {
+        memcpy(d->gimbal_rad, pose.gimbal_rad, sizeof d->gimbal_rad);
+        memcpy(d->q_mb, pose.q_mb, sizeof d->q_mb);
+    }
     return FMU_OK;
 }
 
@@ -343,6 +422,10 @@ const char *model_validate_state(const ModelData *d)
             return "the array geometry is not finite";
     if (gf_vehicle_state_check(&d->vehicle) != GF_OK)
         return "the vehicle state (profile indices, motion) is invalid";
+    if (d->rotation != 0 && d->rotation != 1)
+        return "rotation is not 0 or 1";
+    if (d->rotation && gf_rot_state_check(&d->rot) != GF_OK)
+        return "the rotation schedule's state is invalid";
     if ((d->aiding.gnss.enabled || d->aiding.baro.enabled || d->aiding.odo.enabled) &&
         gf_aiding_sim_check(&d->aiding_sim) != GF_OK)
         return "the aiding sensors' state (GNSS queue, outages, parameters) is invalid";

@@ -8,6 +8,7 @@
 #include "gf_aiding_sim.h"
 #include "gf_imu_error.h"
 #include "gf_noise.h"
+#include "gf_rotation.h"
 #include "gf_vehicle.h"
 #include "imu_params.h"
 
@@ -26,6 +27,11 @@ typedef struct ModelData {
     gf_imu_noise noise_params;            /* SI, the conventions of gfins_fmi.ImuNoise */
     double array_noise_m_s2;
     gf_aiding_params aiding;              /* GNSS, barometer, odometer (gf_aiding_sim.h) */
+    int32_t rotation, rot_n, rot_repeat;  /* the rotating IMU (gf_rotation.h) */
+    int32_t rot_base_axis[GF_ROT_MAX_SEGMENTS], rot_imu_axis[GF_ROT_MAX_SEGMENTS];
+    double rot_base_angle_rad[GF_ROT_MAX_SEGMENTS], rot_imu_angle_rad[GF_ROT_MAX_SEGMENTS];
+    double rot_move_s[GF_ROT_MAX_SEGMENTS], rot_ramp_s[GF_ROT_MAX_SEGMENTS];
+    double rot_dwell_s[GF_ROT_MAX_SEGMENTS];
     /* inputs */
     double speed_cmd_m_s, heading_rate_cmd_rad_s;
     /* outputs */
@@ -33,6 +39,7 @@ typedef struct ModelData {
     double gyro_rad_s[3], accel_m_s2[3], dtheta_rad[3], dv_m_s[3];
     double A_m_s2[VEHICLE_ARRAY_MAX];
     gf_aiding_output aiding_out;          /* newest epochs and how many the last step delivered */
+    double gimbal_rad[2], q_mb[4];        /* the mechanism at the outputs' time */
     /* internal */
     gf_vehicle_state vehicle;
     double active_cmd[2];                 /* command being followed (drive = 1); NaN: none */
@@ -41,6 +48,7 @@ typedef struct ModelData {
     gf_rng array_rng;
     gf_array_geometry array;
     gf_aiding_sim aiding_sim;             /* its generators and vehicle copy: restored with it */
+    gf_rot_state rot;                     /* rotation = 1: the schedule, derived at start */
 } ModelData;
 
 #endif /* VEHICLE_MODEL_H */

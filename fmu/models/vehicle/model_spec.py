@@ -37,6 +37,55 @@ def _out(name, unit, shape, field, description, type_="Float64"):
 
 
 MAX_OUTAGES = 8  # GF_AIDING_MAX_OUTAGES
+MAX_TURNS = 64  # GF_ROT_MAX_SEGMENTS
+# default rotation scheme: 16-position indexing, 180 deg turns at 10 deg/s (1 s ramps),
+# 10 s stops (gfins_fmi.rotation.indexing_scheme(16)); used when rotation = 1
+_IDX8 = [("i", 1), ("m", 1), ("i", -1), ("m", -1), ("m", -1), ("i", -1), ("m", 1), ("i", 1)]
+_IDX16 = _IDX8 + [("m" if a == "i" else "i", s) for a, s in _IDX8]
+
+
+def _turn_column(kind):
+    col = []
+    for a, s in _IDX16:
+        col.append({"base_axis": 0 if a == "m" else -1, "imu_axis": 2 if a == "i" else -1,
+                    "base_angle": s * math.pi if a == "m" else 0.0,
+                    "imu_angle": s * math.pi if a == "i" else 0.0,
+                    "move": 19.0, "ramp": 1.0, "dwell": 10.0}[kind])
+    pad = -1 if kind.endswith("axis") else 0.0
+    return col + [pad] * (MAX_TURNS - len(col))
+
+
+def _rotation_parameters():
+    """The IMU on seed 001's two-axis mechanism (csrc/gf_rotation.h): a schedule of turns
+    about the base's axes (middle axis: base x) and the IMU's axes (inner axis: IMU z);
+    gfins_fmi.rotation.RotationSchedule.fmu_parameters() gives them."""
+    r = "rot_"
+    return [
+        _p("rotation", None, 0, "rotation", "1: the IMU rides the two-axis indexing mechanism "
+           "and its outputs (gyro_rate ... dv) are those of the IMU frame m, turned by the "
+           "schedule below; 0: fixed to the body", type_="Int32"),
+        _p("rot_n", None, len(_IDX16), r + "n", f"Number of turns used, 0 .. {MAX_TURNS}",
+           type_="Int32"),
+        _p("rot_repeat", None, 1, r + "repeat", "1: the turns repeat (one cycle must bring "
+           "the IMU back to its start attitude)", type_="Int32"),
+        _p("rot_base_axis", None, _turn_column("base_axis"), r + "base_axis",
+           "Turn k about the base's axis -1 (none), 0, 1, 2 = x (middle axis), y, z",
+           type_="Int32", shape=(MAX_TURNS,)),
+        _p("rot_imu_axis", None, _turn_column("imu_axis"), r + "imu_axis",
+           "Turn k about the IMU's axis -1 (none), 0, 1, 2 = x, y, z (inner axis)",
+           type_="Int32", shape=(MAX_TURNS,)),
+        _p("rot_base_angle", "rad", _turn_column("base_angle"), r + "base_angle_rad",
+           "Angle of turn k about the base axis (right-handed)", shape=(MAX_TURNS,)),
+        _p("rot_imu_angle", "rad", _turn_column("imu_angle"), r + "imu_angle_rad",
+           "Angle of turn k about the IMU axis (right-handed)", shape=(MAX_TURNS,)),
+        _p("rot_move", "s", _turn_column("move"), r + "move_s",
+           "Duration of turn k (0 only for a rest)", shape=(MAX_TURNS,)),
+        _p("rot_ramp", "s", _turn_column("ramp"), r + "ramp_s",
+           "Acceleration and deceleration time of turn k (smooth), 2 ramp <= move",
+           shape=(MAX_TURNS,)),
+        _p("rot_dwell", "s", _turn_column("dwell"), r + "dwell_s", "Rest after turn k",
+           shape=(MAX_TURNS,)),
+    ]
 
 
 def _aiding_parameters():
@@ -177,6 +226,7 @@ MODEL = dict(
         _p("imu_errors", None, 0, "imu_errors", "1: the IMU outputs carry the error model "
            "below (applied to rates; to increments as mean rates over the step)", type_="Int32"),
         *_COMMON["imu_error_parameters"](),
+        *_rotation_parameters(),
         _p("noise", None, 0, "noise", "1: add the random errors below to the IMU and array "
            "outputs after the start sample (ImuNoise.fmu_parameters() gives them)", type_="Int32"),
         _p("noise_seed", None, 1, "noise_seed", "Seed of the noise generators: IMU, array "
@@ -225,13 +275,18 @@ MODEL = dict(
         _out("lon", "rad", (), "out.lon_rad", "True longitude"),
         _out("h", "m", (), "out.h_m", "True height"),
         _out("gyro_rate", "rad/s", (3,), "gyro_rad_s", "IMU angular rate w_ib^b (with errors "
-             "when imu_errors = 1)"),
-        _out("specific_force", "m/s2", (3,), "accel_m_s2", "IMU specific force f^b"),
+             "when imu_errors = 1; rotation = 1: w_im^m of the turning IMU frame)"),
+        _out("specific_force", "m/s2", (3,), "accel_m_s2", "IMU specific force f^b (rotation "
+             "= 1: f^m)"),
         _out("dtheta", "rad", (3,), "dtheta_rad", "IMU angle increment over the last step"),
         _out("dv", "m/s", (3,), "dv_m_s", "IMU velocity increment over the last step"),
         _out("angular_accel", "rad/s2", (3,), "out.gyro_dot_rad_s2", "True d w_ib^b / dt"),
         _out("A", "m/s2", (12,), "A_m_s2", "Accelerometer-array outputs (layout array_layout)"),
         _out("time_s", "s", (), "out.time_s", "Time that the outputs describe"),
+        _out("gimbal", "rad", (2,), "gimbal_rad", "rotation = 1: middle and inner gimbal angles "
+             "(encoders), C_m^b = R_x(middle) R_z(inner); 0 for a turntable schedule"),
+        _out("q_mb", None, (4,), "q_mb", "rotation = 1: IMU attitude on the base C_m^b "
+             "(scalar first); 1, 0, 0, 0 otherwise"),
         *_aiding_outputs(),
     ],
 )

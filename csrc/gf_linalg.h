@@ -87,6 +87,17 @@ static inline gf_v4 gf_v4_sub(gf_v4 u, gf_v4 v)
 /* n rounded up to a multiple of 4 (the padded row stride of the kernels on gf_v4) */
 #define GF_PADDED(n) (((n) + 3) & ~(size_t)3)
 
+/* out[0..m) += a in[0..m) for m a multiple of 4 (rows padded by GF_PADDED) */
+static inline void gf_axpy4(size_t m, double a, const double *restrict in, double *restrict out)
+{
+    for (size_t j = 0; j < m; j += 4) {
+        out[j] += a * in[j];
+        out[j + 1] += a * in[j + 1];
+        out[j + 2] += a * in[j + 2];
+        out[j + 3] += a * in[j + 3];
+    }
+}
+
 /* Hot kernels on gf_v4 are compiled twice on x86-64 Linux with GCC, for the baseline
  * (SSE2) and for AVX2, and the loader picks the one the processor runs (function
  * multi-versioning). Both do the same IEEE operations in the same order (no FMA:

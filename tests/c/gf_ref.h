@@ -123,7 +123,7 @@ static inline double quat_angle(const double p[4], const double q[4])
 
 /* ---- independent reference: the Kalman update (textbook Joseph form) ---------------- */
 
-#define REF_KF_MAX 36   /* states and measurements */
+#define REF_KF_MAX 40   /* states and measurements: at least GF_KF_MAX_N (checked by the tests that include gf_kalman.h) */
 
 /* x += K r, P <- (I - K H) P (I - K H)^T + K R K^T with K = P H^T S^-1 from an explicit
  * inverse of S = H P H^T + R (Gauss-Jordan with pivoting) */

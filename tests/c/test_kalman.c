@@ -25,6 +25,7 @@
 #include "gf_test.h"
 
 #define NMAX GF_KF_MAX_N
+_Static_assert(REF_KF_MAX >= GF_KF_MAX_N, "gf_ref.h: the reference update must hold the largest filter");
 #define MMAX GF_KF_MAX_M
 #define EPS 2.220446049250313e-16
 
@@ -394,7 +395,7 @@ int main(void)
         test_ukf_predict(n);
         test_cholesky_solve(n, n);
     }
-    const size_t ns[] = {1, 2, 5, 6, 8, 9, 15, 16, 17, 21, 23, 24, 25, 36};
+    const size_t ns[] = {1, 2, 5, 6, 8, 9, 15, 16, 17, 21, 23, 24, 25, 36, 37, GF_KF_MAX_N};
     const size_t ms[] = {1, 2, 3, 6, 12};
     for (size_t a = 0; a < sizeof ns / sizeof ns[0]; ++a)
         for (size_t b = 0; b < sizeof ms / sizeof ms[0]; ++b)

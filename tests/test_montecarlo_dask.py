@@ -59,7 +59,8 @@ def test_cli_scheduler_option(scheduler, tmp_path, capsys):
     assert main(["reproduce", "qin", "--runs", "2", "--seed", "9", "--scheduler", scheduler,
                  "--out", str(out)]) == 0
     table = R.qin_table(R.run_qin(runs=2, seed=9, progress=False))
-    assert (out / "qin_table.md").read_text() == table + "\n"
+    # the file holds the Monte-Carlo table, then the navigator's own error (no random part)
+    assert (out / "qin_table.md").read_text().startswith(table + "\n\n")
 
 
 def test_executor_refusals(monkeypatch, capsys):

@@ -5,7 +5,7 @@
  *
  *   cc -O3 -std=c11 -ffp-contract=off -I csrc bench/bench_gfnav.c build/libgfins_core.a -lm \
  *      -o bench_gfnav
- *   ./bench_gfnav [repeats] [case 0..3, all when absent]
+ *   ./bench_gfnav [repeats] [case 0..3, -1 = all] [1 = linear rate model, else Hermite]
  *
  * Prints, per case, the smallest CPU time of the repeats (ns per sample): CPU time and
  * the minimum keep other processes' load out of the figure as far as they can; on a
@@ -37,6 +37,7 @@ int main(int argc, char **argv)
 {
     const int reps = argc > 1 ? atoi(argv[1]) : 15;
     const int which = argc > 2 ? atoi(argv[2]) : -1;
+    const int linear = argc > 3 && atoi(argv[3]) == 1; /* 1: the linear rate model (GF_GFNAV_LINEAR) */
     const double dt = 0.01, w[3] = {2, 2, 2};
     const char *names[4] = {"cube6/integrate", "qin9/sqrt", "qin9/fused", "12/eigen"};
     const int strat[4] = {GF_RATE_INTEGRATE, GF_RATE_SQRT, GF_RATE_FUSED, GF_RATE_EIGEN};
@@ -79,6 +80,8 @@ int main(int argc, char **argv)
                 printf("%s: init failed\n", names[c]);
                 return 1;
             }
+            if (linear && gf_gfnav_set_integration(&st, GF_GFNAV_LINEAR) != GF_OK)
+                return 1;
             size_t done = 0;
             const double t0 = cpu_s();
             const gf_status e = gf_gfnav_run(&st, N, A, dt, NULL, q, v, p, NULL, NULL, NULL, &done);

@@ -1231,6 +1231,38 @@ gf_status gf_hermite_increments(const double *w0, const double *wd0, const doubl
     return GF_OK;
 }
 
+/* What rate_commit changes in a rate state, to undo commits */
+typedef struct rate_snapshot {
+    double w[3], ref[3], wd[3], wd_prev[3], dt_prev, kf_x[6], kf_P[36];
+    uint64_t n_samples;
+} rate_snapshot;
+
+static rate_snapshot rate_save(const gf_gfins_state *st)
+{
+    rate_snapshot s;
+    gf_v3_copy(st->omega_rad_s, s.w);
+    gf_v3_copy(st->omega_ref_rad_s, s.ref);
+    gf_v3_copy(st->omega_dot_rad_s2, s.wd);
+    gf_v3_copy(st->omega_dot_prev_rad_s2, s.wd_prev);
+    s.dt_prev = st->dt_prev_s;
+    memcpy(s.kf_x, st->kf.x, sizeof s.kf_x);
+    memcpy(s.kf_P, st->kf.P, sizeof s.kf_P);
+    s.n_samples = st->n_samples;
+    return s;
+}
+
+static void rate_restore(gf_gfins_state *st, const rate_snapshot *s)
+{
+    gf_v3_copy(s->w, st->omega_rad_s);
+    gf_v3_copy(s->ref, st->omega_ref_rad_s);
+    gf_v3_copy(s->wd, st->omega_dot_rad_s2);
+    gf_v3_copy(s->wd_prev, st->omega_dot_prev_rad_s2);
+    st->dt_prev_s = s->dt_prev;
+    memcpy(st->kf.x, s->kf_x, sizeof s->kf_x);
+    memcpy(st->kf.P, s->kf_P, sizeof s->kf_P);
+    st->n_samples = s->n_samples;
+}
+
 gf_status gf_gfnav_run(gf_gfnav_state *st, size_t n, const double *A, double dt,
                        const double *h_ext, double *q_bn, double *v_n, double *pos, double *w_out,
                        double *f_out, uint8_t *flags, size_t *n_done)
@@ -1247,46 +1279,79 @@ gf_status gf_gfnav_run(gf_gfnav_state *st, size_t n, const double *A, double dt,
         return GF_ERR_BAD_PARAMETER;
     if (!(dt > 0.0 && isfinite(dt)))
         return GF_ERR_BAD_TIME;
+    /* In blocks of samples, three passes each: the rate solutions (their own recursion),
+     * then the Hermite increments (no recursion: the processor overlaps the samples'
+     * dependent chains), then the mechanization (its recursion). The results are those of
+     * one sample at a time, bit for bit: the rate commits are replayed from the block's
+     * start up to a failed mechanization step, so that an error leaves both states after
+     * the last good sample. */
+    enum { BLOCK = 32 };
     const size_t ns = st->rate.solver.n_sensors;
+    const int hermite = st->integration == GF_GFNAV_HERMITE;
+    const int fused = st->rate.cfg.strategy == GF_RATE_FUSED;
     gf_status status = GF_OK;
     size_t k = 0;
-    for (; k < n; ++k) {
-        rate_step_result r;
-        status = rate_step(&st->rate, A + ns * k, dt, &r);
-        if (status != GF_OK)
-            break;
-        gf_sins_state nav = st->nav;
-        const double he = h_ext ? h_ext[k] : NAN;
-        if (st->integration == GF_GFNAV_HERMITE && nav.have_prev) {
-            /* the rate's derivative at both ends: w_dot, less the fused filter's bias */
-            double wd0[3], wd1[3], phi[3], dv_b[3], q_phi[4];
-            gf_v3_copy(st->rate.omega_dot_rad_s2, wd0);
-            gf_v3_copy(r.wd, wd1);
-            if (st->rate.cfg.strategy == GF_RATE_FUSED) {
-                gf_v3_sub(wd0, st->rate.kf.x + 3, wd0);
-                gf_v3_sub(wd1, r.kf_x + 3, wd1);
+    gf_sins_state nav = st->nav;
+    while (k < n && status == GF_OK) {
+        const size_t m = n - k < BLOCK ? n - k : BLOCK;
+        rate_step_result R[BLOCK];
+        double wd0[BLOCK][3], phi[BLOCK][3], dv_b[BLOCK][3], q_phi[BLOCK][4];
+        const rate_snapshot start = rate_save(&st->rate);
+        size_t got = 0;
+        for (; got < m; ++got) {
+            /* the rate's derivative at the interval's start, less the fused filter's bias */
+            gf_v3_copy(st->rate.omega_dot_rad_s2, wd0[got]);
+            if (fused)
+                gf_v3_sub(wd0[got], st->rate.kf.x + 3, wd0[got]);
+            status = rate_step(&st->rate, A + ns * (k + got), dt, R + got);
+            if (status != GF_OK)
+                break;
+            rate_commit(&st->rate, R + got);
+        }
+        const int had_prev = nav.have_prev;
+        if (hermite)
+            for (size_t j = had_prev ? 0 : 1; j < got; ++j) {
+                const double *w0 = j ? R[j - 1].w : nav.prev_gyro;
+                const double *f0 = j ? R[j - 1].f : nav.prev_accel;
+                double wd1[3];
+                gf_v3_copy(R[j].wd, wd1);
+                if (fused)
+                    gf_v3_sub(wd1, R[j].kf_x + 3, wd1);
+                hermite_increments(w0, wd0[j], f0, R[j].w, wd1, R[j].f, dt, phi[j], dv_b[j],
+                                   q_phi[j]);
             }
-            hermite_increments(nav.prev_gyro, wd0, nav.prev_accel, r.w, wd1, r.f, dt, phi, dv_b, q_phi);
+        size_t j = 0;
+        for (; j < got; ++j) {
+            const double he = h_ext ? h_ext[k + j] : NAN;
             /* the state was checked at the start of the call (gf_sins_state_valid) and is
              * written only by the mechanization since */
-            status = gf_sins_step_compensated_trusted(&nav, phi, q_phi, dv_b, r.w, r.f, dt, he);
-        } else {
-            status = gf_sins_step(&nav, r.w, r.f, dt, he);
+            const gf_status e =
+                hermite && (j || had_prev)
+                    ? gf_sins_step_compensated_trusted(&nav, phi[j], q_phi[j], dv_b[j], R[j].w,
+                                                       R[j].f, dt, he)
+                    : gf_sins_step(&nav, R[j].w, R[j].f, dt, he);
+            if (e != GF_OK) {
+                status = e;
+                break;
+            }
+            memcpy(q_bn + 4 * (k + j), nav.q_bn, sizeof nav.q_bn);
+            gf_v3_copy(nav.v_n_m_s, v_n + 3 * (k + j));
+            gf_sins_position(&nav, pos + 3 * (k + j));
+            if (w_out)
+                gf_v3_copy(R[j].w, w_out + 3 * (k + j));
+            if (f_out)
+                gf_v3_copy(R[j].f, f_out + 3 * (k + j));
+            if (flags)
+                flags[k + j] = R[j].flags;
         }
-        if (status != GF_OK)
-            break;
-        rate_commit(&st->rate, &r);
-        st->nav = nav;
-        memcpy(q_bn + 4 * k, nav.q_bn, sizeof nav.q_bn);
-        gf_v3_copy(nav.v_n_m_s, v_n + 3 * k);
-        gf_sins_position(&nav, pos + 3 * k);
-        if (w_out)
-            gf_v3_copy(r.w, w_out + 3 * k);
-        if (f_out)
-            gf_v3_copy(r.f, f_out + 3 * k);
-        if (flags)
-            flags[k] = r.flags;
+        if (j < got) { /* the mechanization refused sample k + j: rates up to k + j - 1 */
+            rate_restore(&st->rate, &start);
+            for (size_t i = 0; i < j; ++i)
+                rate_commit(&st->rate, R + i);
+        }
+        k += j;
     }
+    st->nav = nav;
     if (n_done)
         *n_done = k;
     return status;

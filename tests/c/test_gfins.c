@@ -2506,6 +2506,69 @@ static void test_gfnav(void)
           "gfnav: NULL output");
 }
 
+/* gf_gfnav_run works in blocks of samples (rates, then Hermite increments, then the
+ * mechanization); one sample per call is the plain sequence. Both must agree bit for bit
+ * on a varying motion, for the per-sample strategies and the fused one (whose w_dot
+ * carries the filter's bias), and a mechanization refusal inside a block must leave
+ * both states after the last good sample. */
+static void test_gfnav_blocks(void)
+{
+    enum { NB = 100, BAD = 45 };   /* 45: inside the run's second block of 32 */
+    const double l = 0.1, T = 0.01, L = 30.0 * DEG, h = 50.0;
+    layout Lq;
+    layout_qin9(l, &Lq);
+    gf_array_geometry g;
+    to_geometry(&Lq, &g);
+    static double A[NB * 9], q1[NB * 4], v1[NB * 3], p1[NB * 3], w1[NB * 3], f1[NB * 3];
+    static double q2[NB * 4], v2[NB * 3], p2[NB * 3], w2[NB * 3], f2[NB * 3];
+    uint8_t fl1[NB], fl2[NB];
+    for (int k = 0; k < NB; ++k) {   /* w = w0 + a sin(c t) per axis: w_dot = a c cos(c t) */
+        const double t = k * T;
+        const double w[3] = {0.8 + 0.3 * sin(2.0 * t), -0.5 + 0.2 * sin(3.0 * t), 1.1 + 0.4 * sin(1.5 * t)};
+        const double wd[3] = {0.6 * cos(2.0 * t), 0.6 * cos(3.0 * t), 0.6 * cos(1.5 * t)};
+        const double f[3] = {0.3 * sin(t), 0.1, 9.8};
+        outputs(&Lq, f, w, wd, A + 9 * k);
+    }
+    const int strategies[2] = {GF_RATE_SQRT, GF_RATE_FUSED};
+    for (int s = 0; s < 2; ++s) {
+        gf_sins_config sc;
+        gf_sins_config_default(&sc);
+        sc.input = GF_SINS_INPUT_RATES;
+        gf_rate_config rc = rate_cfg(strategies[s]);
+        const double w0[3] = {0.8, -0.5, 1.1}, q0[4] = {1, 0, 0, 0}, v0[3] = {0, 0, 0};
+        gf_gfnav_state one, many;
+        CHECK(gf_gfnav_init(&one, &g, &rc, w0, &sc, q0, v0, L, 0.1, h, 0.0, NULL) == GF_OK,
+              "blocks %d: init", s);
+        many = one;
+        size_t done = 0;
+        CHECK(gf_gfnav_run(&many, NB, A, T, NULL, q1, v1, p1, w1, f1, fl1, &done) == GF_OK && done == NB,
+              "blocks %d: one call", s);
+        int ok = 1;
+        for (int k = 0; k < NB; ++k)
+            ok &= gf_gfnav_run(&one, 1, A + 9 * k, T, NULL, q2 + 4 * k, v2 + 3 * k, p2 + 3 * k,
+                               w2 + 3 * k, f2 + 3 * k, fl2 + k, &done) == GF_OK;
+        CHECK(ok && gfnav_same(&one, &many), "blocks %d: states equal bit for bit", s);
+        CHECK(!memcmp(q1, q2, sizeof q1) && !memcmp(v1, v2, sizeof v1) && !memcmp(p1, p2, sizeof p1) &&
+                  !memcmp(w1, w2, sizeof w1) && !memcmp(f1, f2, sizeof f1) && !memcmp(fl1, fl2, sizeof fl1),
+              "blocks %d: outputs equal bit for bit", s);
+        /* sample BAD: a specific force the rate solver takes but the mechanization refuses */
+        gf_gfnav_state a, ref;
+        CHECK(gf_gfnav_init(&a, &g, &rc, w0, &sc, q0, v0, L, 0.1, h, 0.0, NULL) == GF_OK, "init");
+        ref = a;
+        double keep[9];
+        memcpy(keep, A + 9 * BAD, sizeof keep);
+        for (int i = 0; i < 9; ++i)
+            A[9 * BAD + i] *= 1e3;
+        CHECK(gf_gfnav_run(&a, NB, A, T, NULL, q1, v1, p1, NULL, NULL, NULL, &done) == GF_ERR_OUT_OF_RANGE &&
+                  done == BAD,
+              "blocks %d: refusal at sample %d (n_done %zu)", s, BAD, done);
+        CHECK(gf_gfnav_run(&ref, BAD, A, T, NULL, q2, v2, p2, NULL, NULL, NULL, &done) == GF_OK && done == BAD,
+              "blocks %d: reference run", s);
+        CHECK(gfnav_same(&a, &ref), "blocks %d: both states after the last good sample", s);
+        memcpy(A + 9 * BAD, keep, sizeof keep);
+    }
+}
+
 /* ---- the navigator's cubic Hermite increments ---------------------------------------- */
 
 static void ref_qmul(const double a[4], const double b[4], double o[4])
@@ -2949,6 +3012,7 @@ int main(void)
     test_rate_flags();
     test_rate_state_corrupted();
     test_gfnav();
+    test_gfnav_blocks();
     test_hermite_increments();
     test_coplanar_and_rotated();
     TEST_MAIN_END();

@@ -16,6 +16,9 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 # Tests exercise the installed package (with its compiled core and FMUs), never the
 # source folder: `python -m pytest` from the root would otherwise import ./gfins_fmi.
 sys.path[:] = [p for p in sys.path if pathlib.Path(p or ".").resolve() != ROOT]
+# Imported once here, before any test captures output: an editable install rebuilds the
+# core on first import and its build writes to the real stdout.
+import gfins_fmi  # noqa: E402,F401
 
 EPS = np.finfo(float).eps
 S2 = np.sqrt(0.5)

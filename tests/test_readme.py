@@ -18,5 +18,6 @@ def test_readme_has_examples():
 
 
 @pytest.mark.parametrize("name, index, block", BLOCKS, ids=[f"{n}-{i + 1}" for n, i, _ in BLOCKS])
-def test_doc_example_runs(name, index, block, capsys):
+def test_doc_example_runs(name, index, block, capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)   # files an example writes (figures) stay out of the checkout
     exec(compile(block, f"{name} python block {index + 1}", "exec"), {})

@@ -1,6 +1,7 @@
 /* gf_rotation.c — rotating IMU: mechanism, schedules, exact IMU outputs; see gf_rotation.h. */
 #include "gf_rotation.h"
 
+#include <float.h>
 #include <math.h>
 #include <string.h>
 
@@ -93,6 +94,20 @@ static int q_close(const double a[4], const double b[4], double tol)
     return dp < tol || dm < tol;
 }
 
+/* q normalised, or kept as it is when already unit to round-off: idempotent, so that
+ * gf_rot_state_check, which runs gf_rot_init again on the stored (normalised) schedule,
+ * derives the same tables bit for bit (found by fuzzing: normalising twice moved the
+ * last bit and a state gf_rot_init had made was refused) */
+static int unit_quaternion(const double q[4], double out[4])
+{
+    const double n2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
+    if (fabs(n2 - 1.0) <= 8.0 * DBL_EPSILON) {
+        memcpy(out, q, 4 * sizeof *q);
+        return 1;
+    }
+    return gf_q_normalize(q, out);
+}
+
 gf_status gf_rot_init(gf_rot_state *state, const gf_rot_schedule *s, double t0_s, int *bad)
 {
     if (bad)
@@ -111,7 +126,7 @@ gf_status gf_rot_init(gf_rot_state *state, const gf_rot_schedule *s, double t0_s
     }
     int which = 0;
     double q0[4];
-    if (!(fabs(gf_q_norm(s->q_mb0) - 1.0) <= 1e-6) || !gf_q_normalize(s->q_mb0, q0))
+    if (!(fabs(gf_q_norm(s->q_mb0) - 1.0) <= 1e-6) || !unit_quaternion(s->q_mb0, q0))
         which = GF_ROT_BAD_START;
     for (size_t k = 0; k < s->n_segments && !which; ++k)
         if (!segment_ok(&s->segment[k]))
@@ -168,6 +183,22 @@ gf_status gf_rot_init(gf_rot_state *state, const gf_rot_schedule *s, double t0_s
     }
     *state = st;
     return GF_OK;
+}
+
+/* The indices a caller's state uses to address arrays: the segment count and each
+ * segment's axes (a damaged struct must not index out of bounds; found by fuzzing: an
+ * axis of 55 wrote beyond a quaternion). O(segments): cheap beside one evaluation. */
+static int indices_valid(const gf_rot_state *st)
+{
+    if (st->sched.n_segments > GF_ROT_MAX_SEGMENTS)
+        return 0;
+    for (size_t k = 0; k < st->sched.n_segments; ++k) {
+        const gf_rot_segment *g = &st->sched.segment[k];
+        if (g->base_axis < GF_ROT_AXIS_NONE || g->base_axis > 2 || g->imu_axis < GF_ROT_AXIS_NONE ||
+            g->imu_axis > 2)
+            return 0;
+    }
+    return 1;
 }
 
 gf_status gf_rot_state_check(const gf_rot_state *state)
@@ -282,7 +313,7 @@ gf_status gf_rot_eval(const gf_rot_state *state, double t_s, gf_rot_pose *pose)
 {
     if (!state || !pose)
         return GF_ERR_NULL_POINTER;
-    if (state->sched.n_segments > GF_ROT_MAX_SEGMENTS)
+    if (!indices_valid(state))
         return GF_ERR_BAD_SIZE;
     if (!isfinite(t_s))
         return GF_ERR_NONFINITE_INPUT;
@@ -297,7 +328,7 @@ gf_status gf_rot_poses(const gf_rot_state *state, size_t n, const double *t_s, d
         *n_done = 0;
     if (!state || (n && !t_s))
         return GF_ERR_NULL_POINTER;
-    if (state->sched.n_segments > GF_ROT_MAX_SEGMENTS)
+    if (!indices_valid(state))
         return GF_ERR_BAD_SIZE;
     for (size_t k = 0; k < n; ++k) {
         if (!isfinite(t_s[k]))
@@ -388,12 +419,14 @@ gf_status gf_rot_imu_static(const gf_rot_state *state, const double *q_bn_base, 
         *n_done = 0;
     if (!state || !q_bn_base || (n && (!dtheta_rad || !dv_m_s)))
         return GF_ERR_NULL_POINTER;
-    if (state->sched.n_segments > GF_ROT_MAX_SEGMENTS)
+    if (!indices_valid(state))
         return GF_ERR_BAD_SIZE;
     if (!gf_all_finite(q_bn_base, 4) || !isfinite(lat_rad) || !isfinite(h_m) ||
         !isfinite(t_start_s) || !isfinite(accel_delay_s) || !isfinite(dt_s))
         return GF_ERR_NONFINITE_INPUT;
-    if (!(dt_s > 0.0))
+    /* an interval beyond GF_ROT_MAX_DT_S is no IMU sample (and would integrate millions
+     * of quadrature pieces; found by fuzzing: 1e300 s overflowed the piece count) */
+    if (!(dt_s > 0.0) || !(dt_s <= GF_ROT_MAX_DT_S))
         return GF_ERR_BAD_TIME;
     double qb[4];
     if (!(fabs(lat_rad) < LAT_MAX_RAD) || !(fabs(gf_q_norm(q_bn_base) - 1.0) <= 1e-6) ||
@@ -442,7 +475,7 @@ gf_status gf_rot_vehicle_step(const gf_rot_state *state, gf_vehicle_state *vehic
 {
     if (!state || !vehicle || !truth || !imu)
         return GF_ERR_NULL_POINTER;
-    if (state->sched.n_segments > GF_ROT_MAX_SEGMENTS)
+    if (!indices_valid(state))
         return GF_ERR_BAD_SIZE;
     if (!isfinite(t_end_s) || !(t_end_s > vehicle->time_s))
         return GF_ERR_BAD_TIME;

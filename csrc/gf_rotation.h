@@ -118,7 +118,7 @@ gf_status gf_rot_init(gf_rot_state *state, const gf_rot_schedule *schedule, doub
 
 /* The pose at t_s (before t0: the start pose, at rest; after a non-repeated schedule:
  * the end pose, at rest). Errors: GF_ERR_NULL_POINTER, GF_ERR_NONFINITE_INPUT,
- * GF_ERR_BAD_SIZE (a state whose n_segments is out of range). */
+ * GF_ERR_BAD_SIZE (a state whose n_segments or a segment axis is out of range). */
 gf_status gf_rot_eval(const gf_rot_state *state, double t_s, gf_rot_pose *pose);
 
 /* Poses at n times: q_mb (n x 4), w_bm (n x 3), gimbal (n x 2); each may be NULL. */
@@ -129,7 +129,8 @@ gf_status gf_rot_poses(const gf_rot_state *state, size_t n, const double *t_s, d
  * of increments dtheta (rad), dv (m/s) (n x 3 each) over the intervals
  * (t_start + k dt, t_start + (k + 1) dt]; dv delayed by accel_delay_s (|delay| <= dt_s).
  * Optional outputs at each interval's end: q_mn (n x 4, C_m^n), gimbal (n x 2).
- * Errors: GF_ERR_NULL_POINTER, GF_ERR_NONFINITE_INPUT, GF_ERR_BAD_TIME (dt_s <= 0),
+ * Errors: GF_ERR_NULL_POINTER, GF_ERR_NONFINITE_INPUT, GF_ERR_BAD_TIME (dt_s <= 0 or
+ * above GF_ROT_MAX_DT_S),
  * GF_ERR_BAD_PARAMETER (|lat| >= 89 deg, base quaternion not unit, |delay| > dt_s). */
 gf_status gf_rot_imu_static(const gf_rot_state *state, const double *q_bn_base, double lat_rad,
                             double h_m, double t_start_s, size_t n, double dt_s,
@@ -159,6 +160,10 @@ gf_status gf_rot_vehicle_step(const gf_rot_state *state, gf_vehicle_state *vehic
 gf_status gf_rot_vehicle_attitude(size_t n, const double *q_mn, const double *gimbal_rad,
                                   double *q_bn, size_t *n_done);
 /* CDEF END */
+
+/* Longest IMU sample interval of gf_rot_imu_static (s; outside the CDEF block: cffi
+ * takes integer constants only). */
+#define GF_ROT_MAX_DT_S 10.0
 
 /* Internal to the core: (4) at t_s for the base's rate w_b and specific force f_b (base
  * axes): the IMU's w_im^m, f^m and the pose at t_s. The caller has checked the state

@@ -79,8 +79,11 @@ static int config_check(const gf_syscal_config *c)
     if (!(c->gyro_arw_rad_sqrt_s >= 0.0) || !isfinite(c->gyro_arw_rad_sqrt_s) ||
         !(c->accel_vrw_m_s_sqrt_s >= 0.0) || !isfinite(c->accel_vrw_m_s_sqrt_s))
         return GF_SYSCAL_BAD_NOISE;
+    /* a variance that is a normal double; attitude errors within the small-angle model
+     * (found by fuzzing: a 1e6 rad attitude prior beside a 5e-324 one lost positivity) */
     for (int i = 0; i < c->n_states; ++i)
-        if (!(c->p0_std[i] > 0.0) || !isfinite(c->p0_std[i]))
+        if (!(c->p0_std[i] >= 1e-150 && c->p0_std[i] <= 1e150) ||
+            (i < GF_SYSCAL_IDX_DV && !(c->p0_std[i] <= 1.0)))
             return GF_SYSCAL_BAD_P0;
     if (!(c->max_rate_rad_s > 0.0) || !isfinite(c->max_rate_rad_s) ||
         !(c->max_specific_force_m_s2 > 0.0) || !isfinite(c->max_specific_force_m_s2) ||
@@ -284,6 +287,9 @@ static gf_status update(gf_syscal *s, gf_syscal_epoch *ep)
     gf_status st = gf_kalman_update_gated(&s->kf, 3, r, H, R, 0.0, &nis, &accepted);
     if (st != GF_OK)
         return GF_ERR_DIVERGED;
+    for (size_t i = 0; i < n; ++i)   /* the covariance kept its positive diagonal */
+        if (!(s->kf.P[i * n + i] > 0.0) || !isfinite(s->kf.P[i * n + i]))
+            return GF_ERR_DIVERGED;
     /* feedback (S304) */
     const double *x = s->kf.x;
     double qphi[4], q[4], v[3];

@@ -83,7 +83,7 @@ extern "C" {
 #define GF_SYSCAL_BAD_INTERVALS 3    /* prop_interval_s or update_interval_s <= 0 */
 #define GF_SYSCAL_BAD_VEL_STD 4
 #define GF_SYSCAL_BAD_NOISE 5
-#define GF_SYSCAL_BAD_P0 6           /* a prior std <= 0 */
+#define GF_SYSCAL_BAD_P0 6           /* a prior std outside [1e-150, 1e150], or an attitude one above 1 rad */
 #define GF_SYSCAL_BAD_PARAM0 7       /* initial parameters outside gf_imu_errors_check's range */
 #define GF_SYSCAL_BAD_LIMITS 8
 

@@ -220,6 +220,11 @@ static void test_static_closed_form(void)
               GF_ERR_BAD_PARAMETER, "a delay longer than the sample interval is refused");
     CHECK(gf_rot_imu_static(&st, q_base, 89.5 * DEG, h, 0.0, 1, dt, 0.0, dth, dv, NULL, NULL,
                             &done) == GF_ERR_BAD_PARAMETER, "latitude beyond 89 deg refused");
+    /* found by fuzzing: a 1e300 s interval overflowed the quadrature's piece count */
+    CHECK(gf_rot_imu_static(&st, q_base, lat, h, 0.0, 1, 1e300, 0.0, dth, dv, NULL, NULL, &done) ==
+              GF_ERR_BAD_TIME && gf_rot_imu_static(&st, q_base, lat, h, 0.0, 1, GF_ROT_MAX_DT_S * 1.01, 0.0,
+                                                   dth, dv, NULL, NULL, &done) == GF_ERR_BAD_TIME,
+          "a sample interval beyond GF_ROT_MAX_DT_S is refused");
 }
 
 static void test_on_vehicle(void)
@@ -314,6 +319,28 @@ static void test_repeat_and_bad(void)
         worst = fmax(worst, fabs(a.q_mb[i] - b.q_mb[i]));
     CHECK(worst < 1e-12, "period of the cycle: %.3g", worst);
     CHECK(a.moving == 1 && a.segment == 0, "moving in segment 0");
+
+    /* found by fuzzing: (1) a start quaternion off unit by round-off was normalised again
+     * by the check's re-initialisation, moved by an ulp, and the state gf_rot_init had
+     * made was refused; (2) a damaged segment axis indexed beyond a quaternion */
+    {
+        gf_rot_schedule s2 = s;
+        gf_rot_state st2;
+        /* 3e-9 off unit; normalising it twice moves the last bit (searched for) */
+        const double qn[4] = {0.62517791302802039, -0.19409713538051829, 0.52026388068787321,
+                              0.54845636066199477};
+        memcpy(s2.q_mb0, qn, sizeof qn);
+        CHECK(gf_rot_init(&st2, &s2, 0.0, NULL) == GF_OK && gf_rot_state_check(&st2) == GF_OK,
+              "a state made from a near-unit start quaternion passes the check");
+        st2 = st;
+        st2.sched.segment[0].imu_axis = 55;
+        gf_rot_pose p;
+        double t1 = 1.0, q1[4];
+        size_t done = 9;
+        CHECK(gf_rot_state_check(&st2) == GF_ERR_BAD_PARAMETER && gf_rot_eval(&st2, 37.3, &p) == GF_ERR_BAD_SIZE &&
+                  gf_rot_poses(&st2, 1, &t1, q1, NULL, NULL, &done) == GF_ERR_BAD_SIZE && done == 0,
+              "a damaged axis is refused, never used as an index");
+    }
 
     int bad = 0;
     s.segment[1].base_angle_rad = -REF_PI;

@@ -232,6 +232,15 @@ static void test_bad(void)
     b = c;
     b.p0_std[20] = 0.0;
     CHECK(gf_syscal_init(&filt, &b, q, NULL, 0.0, &bad) == GF_ERR_BAD_PARAMETER && bad == GF_SYSCAL_BAD_P0, "p0");
+    /* found by fuzzing: a 1e6 rad attitude prior (and a 5e-324 one) lost positivity */
+    b = c;
+    b.p0_std[1] = 2.0;
+    CHECK(gf_syscal_init(&filt, &b, q, NULL, 0.0, &bad) == GF_ERR_BAD_PARAMETER && bad == GF_SYSCAL_BAD_P0,
+          "an attitude prior beyond the small-angle model");
+    b = c;
+    b.p0_std[2] = 5e-324;
+    CHECK(gf_syscal_init(&filt, &b, q, NULL, 0.0, &bad) == GF_ERR_BAD_PARAMETER && bad == GF_SYSCAL_BAD_P0,
+          "a subnormal prior std");
     b = c;
     b.vel_std_m_s = -1.0;
     CHECK(gf_syscal_init(&filt, &b, q, NULL, 0.0, &bad) == GF_ERR_BAD_PARAMETER && bad == GF_SYSCAL_BAD_VEL_STD, "R");

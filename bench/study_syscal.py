@@ -56,6 +56,8 @@ def main(argv=None):
     ap.add_argument("--delay-ms", type=float, default=0.0, help="true accelerometer delay")
     ap.add_argument("--states", type=int, default=36)
     ap.add_argument("--passes", type=int, default=2)
+    ap.add_argument("--prop-interval", type=float, default=0.1, help="covariance propagation interval (s)")
+    ap.add_argument("--vel-std", type=float, default=1e-5, help="zero-velocity measurement std (m/s)")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--seed", type=int, default=12)
     ap.add_argument("--figures", default=None, help="folder for the figures of run 0")
@@ -68,7 +70,7 @@ def main(argv=None):
     print(f"path {a.path}: {len(sched.turns)} turns, {sched.duration_s:.0f} s, {truth.t_s.size} samples "
           f"at {1 / a.dt:g} Hz (exact increments in {time.perf_counter() - t0:.1f} s)")
     cfg = c36.SyscalConfig(gyro_arw_deg_sqrt_h=ARW_DEG_SQRT_H, accel_vrw_ug_sqrt_hz=ASD_UG_SQRT_HZ,
-                           vel_std_m_s=1e-5, estimate_delay=a.states == 37)
+                           vel_std_m_s=a.vel_std, estimate_delay=a.states == 37, prop_interval_s=a.prop_interval)
     n_p = a.states - 9
     n_true = 27                                  # the delay is fixed by --delay-ms
     keep = {}

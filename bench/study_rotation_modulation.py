@@ -12,6 +12,9 @@ of gfins_fmi.rotation. Three error sets:
   C. B on a vehicle that turns (10 m/s, a 180 deg turn every 30 min): rotation does not
      remove errors excited by the vehicle's own rates (seed 001's point).
 
+B and C are also run one error block at a time (gyro scale, gyro misalignment,
+accelerometer scale and misalignment) to say which error each residual comes from.
+
     python bench/study_rotation_modulation.py [--hours 8] [--dt 0.02] [--figure docs/figures/rotation_modulation.png]
 """
 from __future__ import annotations
@@ -37,12 +40,16 @@ def schemes():
             "continuous, one way": rot.continuous_scheme(6.0, 3.0, 120.0, reverse=False)}
 
 
+B_BLOCKS = {
+    "gyro scale": dict(gyro_scale_ppm=[10.0, -10.0, 10.0]),
+    "gyro misalignment": dict(gyro_misalignment_arcsec=[[0, 0, 0], [-10.0, 0, 0], [10.0, -10.0, 0]]),
+    "accelerometer scale + misalignment": dict(
+        accel_scale_ppm=[10.0, -10.0, 10.0],
+        accel_misalignment_arcsec=[[0, 10.0, -10.0], [-10.0, 0, 10.0], [10.0, -10.0, 0]]),
+}
 ERRORS = {
     "A": ImuErrors(gyro_bias_deg_h=[0.01, -0.01, 0.01], accel_bias_ug=[10.0, -10.0, 10.0]),
-    "B": ImuErrors(gyro_scale_ppm=[10.0, -10.0, 10.0],
-                   gyro_misalignment_arcsec=[[0, 0, 0], [-10.0, 0, 0], [10.0, -10.0, 0]],
-                   accel_scale_ppm=[10.0, -10.0, 10.0],
-                   accel_misalignment_arcsec=[[0, 10.0, -10.0], [-10.0, 0, 10.0], [10.0, -10.0, 0]]),
+    "B": ImuErrors(**{k: v for b in B_BLOCKS.values() for k, v in b.items()}),
 }
 
 
@@ -72,7 +79,7 @@ def linear_prediction(rec, errors: ImuErrors, step_s: float = 1.0):
     t = np.r_[0.0, rec.t_s[k]]
     u = np.c_[u[:, :1], u]
     r = control.forced_response(sys, t, u)
-    return t, r.outputs[5], r.outputs[6]
+    return t, r.outputs[5], r.outputs[6], u[:3].mean(axis=1) / DEG_H
 
 
 def main(argv=None):
@@ -94,14 +101,23 @@ def main(argv=None):
             err, dn, de = horizontal_error(rot.navigate(rec, th, dv), LAT, rec.lon_rad)
             lin = ""
             if ek == "A":
-                tl, ln, le = linear_prediction(rec, ERRORS["A"])
-                lin = f"{np.hypot(ln[-1], le[-1]):.4g}"
+                tl, ln, le, mb = linear_prediction(rec, ERRORS["A"])
+                lin = f"{np.hypot(ln[-1], le[-1]):.4g} (mean C_m^n b_g: {mb[0]:.1e}, {mb[1]:.1e}, {mb[2]:.1e} deg/h)"
                 res[name] = {"t": rec.t_s, "err": err, "lin_t": tl, "lin": np.hypot(ln, le)}
             print(f"| {ek} | {name} | {err.max():.4g} | {err[-1]:.4g} | {lin} |", flush=True)
         print(f"|   | {name}: error-free IMU (algorithm) | {ref.max():.3g} | {ref[-1]:.3g} | "
               f"({time.perf_counter() - t0:.0f} s) |", flush=True)
     fixed, idx = res["fixed IMU"]["err"][-1], res["16-position indexing"]["err"][-1]
     print(f"A: 8 h error fixed / 16-position indexing = {fixed / idx:.0f}x")
+    # B block by block: which of the errors the schemes leave
+    print("| B, one block at a time | scheme | max horizontal error (m) | at the end (m) |")
+    print("|---|---|---|---|")
+    for name in ("fixed IMU", "8-position indexing", "16-position indexing", "continuous, reversing"):
+        rec = rot.simulate_static(schemes()[name], T, a.dt, LAT, H)
+        for bk, kw in B_BLOCKS.items():
+            th, dv = ImuErrors(**kw).apply_increments(rec.dtheta_rad, rec.dv_m_s, rec.dt_s)
+            err, _, _ = horizontal_error(rot.navigate(rec, th, dv), LAT, rec.lon_rad)
+            print(f"| {bk} | {name} | {err.max():.4g} | {err[-1]:.4g} |", flush=True)
     # C: the vehicle turns
     segs = [Segment(60.0, dspeed_m_s=10.0)]
     while sum(s.duration_s for s in segs) < T - 1900.0:
@@ -111,15 +127,19 @@ def main(argv=None):
     for name in ("fixed IMU", "16-position indexing"):
         sched = schemes()[name]
         rec = rot.simulate_on_vehicle(sched, prof, T, a.dt)
-        th, dv = ERRORS["B"].apply_increments(rec.dtheta_rad, rec.dv_m_s, rec.dt_s)
-        sol = rot.navigate(rec, th, dv)
         v = rec.vehicle
-        dn = (sol.imu.lat_rad - v["lat_rad"]) * R_E
-        de = (sol.imu.lon_rad - v["lon_rad"]) * R_E * np.cos(LAT)
-        e = np.hypot(dn, de)
-        sol0 = rot.navigate(rec)
-        e0 = np.hypot((sol0.imu.lat_rad - v["lat_rad"]) * R_E, (sol0.imu.lon_rad - v["lon_rad"]) * R_E * np.cos(LAT))
+
+        def err_on_vehicle(errors):
+            th, dv = (rec.dtheta_rad, rec.dv_m_s) if errors is None else \
+                errors.apply_increments(rec.dtheta_rad, rec.dv_m_s, rec.dt_s)
+            sol = rot.navigate(rec, th, dv)
+            return np.hypot((sol.imu.lat_rad - v["lat_rad"]) * R_E,
+                            (sol.imu.lon_rad - v["lon_rad"]) * R_E * np.cos(LAT))
+        e, e0 = err_on_vehicle(ERRORS["B"]), err_on_vehicle(None)
         print(f"| C | {name} | {e.max():.4g} | {e[-1]:.4g} | error-free {e0.max():.3g} |", flush=True)
+        for bk, kw in B_BLOCKS.items():
+            e = err_on_vehicle(ImuErrors(**kw))
+            print(f"| C, {bk} only | {name} | {e.max():.4g} | {e[-1]:.4g} | |", flush=True)
     if a.figure:
         import matplotlib
         matplotlib.use("Agg")

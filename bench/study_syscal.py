@@ -13,6 +13,7 @@ convergence and residual figures of run 0.
 
     python bench/study_syscal.py [--runs 50] [--path seed|turntable19] [--repeats 2]
         [--delay-ms 0] [--states 36|37] [--workers 2] [--figures docs/figures] [--json out.json]
+        [--npz runs.npz]
 """
 from __future__ import annotations
 
@@ -33,6 +34,9 @@ from gfins_fmi.imu_errors import UG
 LAT, H = np.radians(40.0), 50.0
 ARW_DEG_SQRT_H, ASD_UG_SQRT_HZ = 0.002, 10.0
 UNITS = np.array([u[1] for u in c36.PARAM_UNITS])
+# parameter blocks for the NEES breakdown: gyro (9), accelerometer (12), K_a2, lever arms, delay
+BLOCKS = [np.arange(0, 9), np.arange(9, 21), np.arange(21, 24), np.arange(24, 27), np.arange(27, 28)]
+BLOCK_NAMES = ["gyro", "accelerometer", "K_a2", "lever arms", "delay"]
 
 
 def path(name: str, repeats: int) -> rot.RotationSchedule:
@@ -52,10 +56,13 @@ def main(argv=None):
     ap.add_argument("--delay-ms", type=float, default=0.0, help="true accelerometer delay")
     ap.add_argument("--states", type=int, default=36)
     ap.add_argument("--passes", type=int, default=2)
+    ap.add_argument("--prop-interval", type=float, default=0.1, help="covariance propagation interval (s)")
+    ap.add_argument("--vel-std", type=float, default=1e-5, help="zero-velocity measurement std (m/s)")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--seed", type=int, default=12)
     ap.add_argument("--figures", default=None, help="folder for the figures of run 0")
     ap.add_argument("--json", default=None)
+    ap.add_argument("--npz", default=None, help="per-run errors and covariances (for analysis)")
     a = ap.parse_args(argv)
     sched = path(a.path, a.repeats)
     t0 = time.perf_counter()
@@ -63,7 +70,7 @@ def main(argv=None):
     print(f"path {a.path}: {len(sched.turns)} turns, {sched.duration_s:.0f} s, {truth.t_s.size} samples "
           f"at {1 / a.dt:g} Hz (exact increments in {time.perf_counter() - t0:.1f} s)")
     cfg = c36.SyscalConfig(gyro_arw_deg_sqrt_h=ARW_DEG_SQRT_H, accel_vrw_ug_sqrt_hz=ASD_UG_SQRT_HZ,
-                           vel_std_m_s=1e-5, estimate_delay=a.states == 37)
+                           vel_std_m_s=a.vel_std, estimate_delay=a.states == 37, prop_interval_s=a.prop_interval)
     n_p = a.states - 9
     n_true = 27                                  # the delay is fixed by --delay-ms
     keep = {}
@@ -88,7 +95,9 @@ def main(argv=None):
         if k == 0:
             keep["report"], keep["truth"] = rep, p_all
         R = P / np.outer(rep.std, rep.std)
+        blocks = np.array([e[b] @ np.linalg.solve(P[np.ix_(b, b)], e[b]) for b in BLOCKS if b[-1] < n_p])
         return {"z": e / rep.std, "nees": np.array(e @ np.linalg.solve(P, e)), "std": rep.std,
+                "nees_block": blocks, "e": e, "P": P,
                 "time_s": np.array(el), "nis": np.array(rep.epochs["nis"].mean()),
                 "trR2": np.array(np.trace(R @ R))}
 
@@ -111,6 +120,10 @@ def main(argv=None):
           f"effective dof per run): [{lo_c:.3f}, {hi_c:.3f}]")
     print(f"average NEES {nees.mean():.2f} for {n_p} dof (99% band over {a.runs} runs: "
           f"[{lo_n:.2f}, {hi_n:.2f}]); mean NIS {r['nis'].mean():.3f} (3 dof)")
+    for k, nb in enumerate(r["nees_block"].mean(axis=0)):
+        b = BLOCKS[k]
+        lo, hi = chi2_band(b.size, a.runs, 0.99)
+        print(f"  NEES of the {BLOCK_NAMES[k]} block: {nb:.2f} for {b.size} dof (99% band [{lo:.2f}, {hi:.2f}])")
     print(f"time per calibration ({a.passes} passes): median {np.median(r['time_s']):.2f} s")
     std = r["std"].mean(axis=0) / UNITS[:n_p]
     print("| parameter | unit | prior 1-sigma | mean final 1-sigma | mean z^2 |")
@@ -125,6 +138,8 @@ def main(argv=None):
            "nees_mean": float(nees.mean()), "nees_band": [lo_n, hi_n], "max_abs_z": float(np.abs(z).max()),
            "time_s_median": float(np.median(r["time_s"])), "std_units": std.tolist(),
            "per_param_mean_z2": np.mean(z ** 2, axis=0).tolist()}
+    if a.npz:
+        np.savez(a.npz, e=r["e"], P=r["P"], z=z, nees=nees)
     if a.json:
         with open(a.json, "w") as f:
             json.dump(out, f, indent=1)

@@ -313,12 +313,16 @@ def indexing_scheme(positions: int = 8, dwell_s: float = 10.0, rate_deg_s: float
     """A repeated dual-axis indexing scheme of 180 deg turns, each followed by a rest of
     ``dwell_s``:
 
-    * 8 positions (the classic symmetric sequence: inner +180, middle +180, inner -180,
-      middle -180, middle -180, inner -180, middle +180, inner +180): every axis turns
-      both ways, and the second half mirrors the first, so that the turns' own errors
-      (scale factor times the turn, misalignment) cancel over a cycle;
+    * 8 positions (the classic sequence: inner +180, middle +180, inner -180, middle
+      -180, middle -180, inner -180, middle +180, inner +180): every axis turns both
+      ways and every IMU axis spends equal time up and down, so constant biases cancel
+      over a cycle. The inner turns do not cancel: each -180 is made with the inner axis
+      pointing down, so all four turn the IMU the same way about the vertical, and the z
+      gyro's scale factor error leaves 4 pi dK_gz of heading per cycle (126 urad for
+      10 ppm; bench/study_rotation_modulation.py: 61 km in 8 h);
     * 16 positions: the 8 followed by the 8 with the roles of the axes exchanged (middle
-      first), which also cancels what the order of the axes leaves.
+      first), which cancels the turns' scale-factor errors as well (net attitude error
+      of a cycle zero to round-off).
     """
     if positions not in (8, 16):
         raise ValueError(f"positions must be 8 or 16; got {positions!r}")

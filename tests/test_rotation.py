@@ -79,6 +79,23 @@ def test_indexing_schemes_average_the_imu_axes_to_zero(positions):
     assert min(np.abs(q[0] - q[1]).max(), np.abs(q[0] + q[1]).max()) < 1e-9
 
 
+@pytest.mark.parametrize("positions, want_urad", [(8, 4e6 * np.pi * 10e-6), (16, 0.0)])
+def test_indexing_schemes_and_the_turns_scale_factor_error(positions, want_urad):
+    """A z-gyro scale factor error dK (10 ppm) adds dK dtheta_z to every increment; the
+    attitude error it leaves after one cycle is the sum of C_m^n dK dtheta_z (the
+    increments' own rotation and the Earth rate's share: 10 ppm x 15 deg/h x 4 min =
+    0.05 urad). In the 8-position sequence the inner axis points down for both of its
+    -180 deg turns, so the four inner turns all turn the IMU by +180 deg about the vertical:
+    4 pi dK of heading per cycle (126 urad), derived by hand; the 16-position sequence
+    cancels it. Tolerance 0.5 urad: the Earth-rate share and the 1 s ramps' quadrature."""
+    s = rot.indexing_scheme(positions, dwell_s=10.0)
+    tr = rot.simulate_static(s, s.duration_s, 0.01, np.radians(40.0), 0.0)
+    C = np.array([_dcm(q) for q in tr.q_mn])
+    err = (C[:, :, 2] * (10e-6 * tr.dtheta_rad[:, 2])[:, None]).sum(axis=0)     # sum of C e_z dK dtheta_z
+    np.testing.assert_allclose(err[2] * 1e6, want_urad, atol=0.5)
+    np.testing.assert_allclose(err[:2] * 1e6, 0.0, atol=0.5)
+
+
 def test_continuous_scheme_rates():
     s = rot.continuous_scheme(inner_rate_deg_s=6.0, middle_rate_deg_s=3.0, half_cycle_s=120.0)
     p = s.poses([60.0])

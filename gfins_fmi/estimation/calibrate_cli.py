@@ -78,7 +78,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--delay", action="store_true",
                    help="estimate the accelerometer sample delay (37th state)")
     p.add_argument("--passes", type=int, default=2, choices=range(1, 11), metavar="N",
-                   help="filter passes, each from the previous estimates (default 2)")
+                   help="filter passes, each linearised about the previous estimates, the prior kept (default 2)")
     p.add_argument("--prior", type=_prior, action="append", default=[], metavar="NAME=VALUE",
                    help="prior 1-sigma (calibration36.Prior field, its unit), e.g. gyro_bias_deg_h=0.05")
     p.add_argument("--report", type=pathlib.Path, help="write the report (markdown) here")

@@ -530,9 +530,14 @@ def calibrate(record, lat_rad: float, h_m: float, *, lon_rad: float = 0.0,
         turntable or the rotating INS's own mechanism, starting at rest.
     lat_rad, h_m, lon_rad : the site (known; seed 001 S501), |lat| < 89 deg.
     config : SyscalConfig (noise densities, prior, 36 or 37 states).
-    passes : runs of the filter; each pass starts from the previous estimates
-        (iterated linearisation; the prior's width stays that of ``config.prior``).
-    params0 : initial parameter estimates (SI, 27 or 28; default 0).
+    passes : runs of the filter; each pass is linearised about the previous pass's
+        estimates (iterated linearisation), with the prior of ``config.prior`` centred on
+        ``params0``: a pass that starts from estimates x_lin has its prior centred there
+        instead, and its result is re-centred exactly (linear-Gaussian posterior:
+        x += P_pp P0^-1 (params0 - x_lin)); without this the prior would be replaced by
+        the previous pass's estimates, the data counted twice where the prior matters
+        (weakly observed parameters: their reported sigma too small).
+    params0 : prior mean of the parameters, SI, 27 or 28 (default 0: nominal IMU).
     rate_threshold_deg_s, min_static_s : segmentation (:func:`segment_record`).
     min_align_s : shortest first static interval (the coarse alignment).
     max_angle_per_sample_deg : turning faster than this per sample is refused.
@@ -567,6 +572,8 @@ def calibrate(record, lat_rad: float, h_m: float, *, lon_rad: float = 0.0,
     if params0 is not None:
         v = as_array("params0", params0, (None,), "SI")
         p[:v.size] = v
+    mu = p.copy()                                   # the prior's mean
+    prior_var = config.prior.params_std()[:n_p] ** 2
     first = next(s for s in segs if s.kind == "static")
     notes = []
     t0 = float(t_end[0] - dt[0])
@@ -579,10 +586,15 @@ def calibrate(record, lat_rad: float, h_m: float, *, lon_rad: float = 0.0,
         q0 = attitude_from_gravity_and_earth_rate(f_c.sum(axis=0), w_c.sum(axis=0))
         filt = SyscalFilter(config, lat, h, q0, lon_rad=lon_rad, params0=p, t0_s=t0)
         filt.run(t_end, dth, dv)
+        P = filt.covariance()
+        # the filter's prior was N(p, P0); the prior is N(mu, P0): the parameters are
+        # constant states, so moving the prior's mean by d moves the posterior mean by
+        # P_pp P0^-1 d (the covariance does not change)
+        d = mu[:n_p] - p[:n_p]
         p = filt.params
+        p[:n_p] += P[9:, 9:] @ (d / prior_var)
         pass_epochs.append(filt.epochs())
-    est = filt.params[:n_p]
-    P = filt.covariance()
+    est = p[:n_p].copy()
     std = np.sqrt(np.diag(P))[9:]
     prior = config.prior.params_std()[:n_p]
     ep = pass_epochs[-1]
@@ -594,7 +606,7 @@ def calibrate(record, lat_rad: float, h_m: float, *, lon_rad: float = 0.0,
         rms = float(np.sqrt(np.mean(ep["residual_m_s"][m] ** 2))) if m.any() else float("nan")
         positions.append({"t0_s": s.t0_s, "t1_s": s.t1_s, "rms_residual_m_s": rms})
     return CalibrationReport(est, std, prior, PARAM_NAMES[:n_p], params_to_imu_errors(est),
-                             float(filt.params[-1]) if config.estimate_delay else 0.0, ep, segs,
+                             float(p[-1]) if config.estimate_delay else 0.0, ep, segs,
                              positions, passes, q0, P, pass_epochs, notes)
 
 

@@ -226,3 +226,54 @@ def test_bad_subsamples_and_errors_name_the_sample():
     nav.run(tr.dtheta_rad[:5], tr.dv_m_s[:5], dt_s=0.01)
     with pytest.raises(ValueError, match="not a multiple of subsamples = 2"):
         nav.run(tr.dtheta_rad[5:9], tr.dv_m_s[5:9], dt_s=0.01)
+
+
+@pytest.mark.parametrize("fmt", ["csv", "npz"])
+def test_cli_navigate_subsamples(tmp_path, capsys, fmt):
+    """`gfins navigate --subsamples 3`: one row per update, equal to Strapdown.run with
+    the same configuration (full-precision output: bitwise), in chunks of a multiple of
+    N (--chunk 7 -> 9); a record of 201 increments ends with a short update."""
+    from gfins_fmi.cli import main
+    tr = tj.sample(tj.Circle(), 2.01, 0.01)
+    t = tr.t_s[1:].copy()
+    e = np.degrees(gf.quat_to_euler(tr.q_bn[0]))
+    init = ["--lat0", repr(float(np.degrees(tr.lat_rad[0]))), "--lon0",
+            repr(float(np.degrees(tr.lon_rad[0]))), "--h0", repr(float(tr.h_m[0])),
+            "--heading0", repr(float(e[0])), "--pitch0", repr(float(e[1])), "--roll0",
+            repr(float(e[2])), "--v0=" + ",".join(repr(float(x)) for x in tr.v_n_m_s[0])]
+    rec = np.c_[t, tr.dtheta_rad, tr.dv_m_s]
+    src, dst = tmp_path / f"rec.{fmt}", tmp_path / f"sol.{fmt}"
+    if fmt == "csv":
+        np.savetxt(src, rec, delimiter=",", fmt="%.17g")
+    else:
+        np.savez(src, t=rec[:, 0], gx=rec[:, 1], gy=rec[:, 2], gz=rec[:, 3], ax=rec[:, 4],
+                 ay=rec[:, 5], az=rec[:, 6])
+    assert main(["navigate", str(src), str(dst), "--subsamples", "3", "--chunk", "7", *init]) == 0
+    assert "67 updates of 3 samples navigated" in capsys.readouterr().out
+    if fmt == "csv":
+        out = np.loadtxt(dst, delimiter=",", skiprows=1)
+    else:
+        z = np.load(dst)
+        out = np.column_stack([z[k] for k in z.files])
+    ref = gf.Strapdown(gf.NavState.from_trajectory(tr, 0), gf.SinsConfig(subsamples=3)).run(
+        tr.dtheta_rad, tr.dv_m_s, t_s=t)
+    assert out.shape == (67, 14) and len(ref) == 67
+    assert np.array_equal(out[:, 0], ref.t_s) and np.array_equal(out[:, 10:14], ref.q_bn)
+    assert main(["navigate", str(src), str(dst), "--subsamples", "2", "--input-kind", "rates",
+                 *init]) != 0
+    assert "--subsamples 2 needs --input-kind increments" in capsys.readouterr().err
+
+
+def test_one_update_per_sample_navigators_refuse_subsamples():
+    """The SINS FMU (one sample per communication step) and the gyro-free navigator (one
+    update per array sample) have no subsample groups: asked for them, they say so."""
+    from gfins_fmi.fmu import run_gfnav_fmu, run_sins_fmu
+    tr = tj.sample(tj.Circle(), 0.1, 0.01)
+    x0 = gf.NavState.from_trajectory(tr, 0)
+    with pytest.raises(ValueError, match="the SINS FMU takes one sample per communication step"):
+        run_sins_fmu(tr.dtheta_rad, tr.dv_m_s, 0.01, x0, config=gf.SinsConfig(subsamples=2))
+    g = gf.layout("qin9", 0.1)
+    with pytest.raises(ValueError, match="sins.subsamples = 2: the gyro-free navigator"):
+        gf.GyroFreeNavigator(g, x0, "sqrt", tr.gyro_rad_s[0], sins=gf.SinsConfig(subsamples=2))
+    with pytest.raises(ValueError, match="sins.subsamples = 2: the gyro-free navigator FMU"):
+        run_gfnav_fmu("qin9", tr.array_outputs(g), 0.01, x0, sins=gf.SinsConfig(subsamples=2))

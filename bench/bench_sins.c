@@ -13,7 +13,9 @@
  * Prints, per N, the smallest and the median CPU time of the repeats
  * (CLOCK_PROCESS_CPUTIME_ID: robust to a busy machine) in ns per input sample and
  * M samples/s, and the throughput relative to N = 1. Instruction counts, which no load
- * changes: valgrind --tool=callgrind --toggle-collect=gf_sins_run ./bench_sins 200000 1 N */
+ * changes: valgrind --tool=callgrind --toggle-collect=gf_sins_run ./bench_sins 200000 1 N
+ * Built on a core from before the subsample option (-I and sources of that tree) it times
+ * that core's one-sample update: the baseline of the issue's "today's throughput". */
 #define _POSIX_C_SOURCE 199309L
 #include <math.h>
 #include <stdio.h>
@@ -22,6 +24,11 @@
 #include <time.h>
 
 #include "gf_sins.h"
+
+#ifndef GF_SINS_MAX_SUBSAMPLES /* a core from before the option: N = 1 only (the baseline) */
+#define GF_SINS_MAX_SUBSAMPLES 1
+#define BASELINE_CORE 1
+#endif
 
 static double cpu_s(void)
 {
@@ -86,7 +93,9 @@ int main(int argc, char **argv)
         gf_sins_config_default(&cfg);
         cfg.vertical = GF_SINS_VERTICAL_HOLD;
         cfg.hold_height_m = 100.0;
+#ifndef BASELINE_CORE
         cfg.subsamples = N;
+#endif
         double times[99];
         double checksum = 0.0;
         for (int r = 0; r < repeats; ++r) {

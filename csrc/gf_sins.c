@@ -385,8 +385,9 @@ static const double k_subsample[GF_SINS_MAX_SUBSAMPLES + 1][GF_SINS_MAX_SUBSAMPL
 /* One update of *s by m (2..4) increments g, a (m x 3, processing order, gyro already
  * negated for reverse navigation) over sub-intervals dt[i]. Checks before writes; on
  * an error *bad = the sample's index in the group (m: not a sample's fault). */
-static gf_status group_update(gf_sins_state *s, int m, const double *g, const double *a,
-                              const double *dt, double h_ext_m, int *bad)
+static inline gf_status group_update_m(gf_sins_state *s, int m, const double *g,
+                                       const double *a, const double *dt, double h_ext_m,
+                                       int *bad)
 {
     const gf_sins_config *cfg = &s->cfg;
     *bad = m;
@@ -447,6 +448,17 @@ static gf_status group_update(gf_sins_state *s, int m, const double *g, const do
     s->time_s += s->earth_rate_sign > 0 ? T : -T;
     s->n_samples += (uint64_t)m;
     return GF_OK;
+}
+
+/* group_update_m with m a constant in each branch, so that its loops unroll */
+static gf_status group_update(gf_sins_state *s, int m, const double *g, const double *a,
+                              const double *dt, double h_ext_m, int *bad)
+{
+    switch (m) {
+    case 2: return group_update_m(s, 2, g, a, dt, h_ext_m, bad);
+    case 3: return group_update_m(s, 3, g, a, dt, h_ext_m, bad);
+    default: return group_update_m(s, 4, g, a, dt, h_ext_m, bad);
+    }
 }
 
 /* The navigation update of one interval from its compensated increments: the rotation
@@ -746,10 +758,15 @@ static gf_status run_groups(gf_sins_state *state, size_t n, const double *gyro,
         const size_t j = backward ? n_groups - 1 - gdone : gdone;
         const size_t a0 = j * N, m = n - a0 < N ? n - a0 : N;
         double g[3 * GF_SINS_MAX_SUBSAMPLES], dt[GF_SINS_MAX_SUBSAMPLES];
-        const double *a = accel + 3 * a0;
+        const double *a = accel + 3 * a0, *gp = g;
         double ab[3 * GF_SINS_MAX_SUBSAMPLES];
-        size_t k_last = 0;
-        for (size_t i = 0; i < m; ++i) {
+        size_t k_last = a0 + m - 1;
+        if (!backward && !t_s) { /* the usual case: the record's own rows, no copies */
+            gp = gyro + 3 * a0;
+            for (size_t i = 0; i < m; ++i)
+                dt[i] = dt_s;
+        }
+        for (size_t i = 0; (backward || t_s) && i < m; ++i) {
             const size_t k = backward ? a0 + m - 1 - i : a0 + i; /* processing order */
             const double *gk = gyro + 3 * k;
             if (backward) {
@@ -777,10 +794,10 @@ static gf_status run_groups(gf_sins_state *state, size_t n, const double *gyro,
             break;
         const double h = h_ext_m ? h_ext_m[k_last] : NAN;
         if (m == 1) {
-            status = sins_update(&s, g, backward ? ab : a, dt[0], h);
+            status = sins_update(&s, gp, backward ? ab : a, dt[0], h);
         } else {
             int bad;
-            status = group_update(&s, (int)m, g, backward ? ab : a, dt, h, &bad);
+            status = group_update(&s, (int)m, gp, backward ? ab : a, dt, h, &bad);
         }
         if (status != GF_OK)
             break;

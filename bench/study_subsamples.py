@@ -111,22 +111,14 @@ def sine_errors(N: int, rate_hz: float, tr=None, dur_s: float = 600.0):
 
 def main() -> None:
     rates = (100.0, 200.0, 400.0)
-    print("1. coning, a = 1 deg, cone 10 Hz, 12 s, fixed frame: drift about the cone axis, rad/s "
-          "(measured / theory)")
-    for N in (1, 2, 3, 4):
-        cells = []
-        for r in rates:
-            m, th = coning_drift(N, r)
-            cells.append(f"{m:.3e} / {th:.3e}")
-        print(f"  N = {N}: " + "   ".join(f"{r:.0f} Hz: {c}" for r, c in zip(rates, cells)))
-    print("2. sculling, a = 0.01 rad, A = 10 m/s^2, 10 Hz, 24 s: missed acceleration, m/s^2 "
-          "(measured / theory)")
-    for N in (1, 2, 3, 4):
-        cells = []
-        for r in rates:
-            m, th = sculling_drift(N, r)
-            cells.append(f"{m:.3e} / {th:.3e}")
-        print(f"  N = {N}: " + "   ".join(f"{r:.0f} Hz: {c}" for r, c in zip(rates, cells)))
+    for title, fn in (("1. coning, a = 1 deg, cone 10 Hz, 12 s, fixed frame: drift about the cone "
+                       "axis, rad/s (measured / theory)", coning_drift),
+                      ("2. sculling, a = 0.01 rad, A = 10 m/s^2, 10 Hz, 24 s: missed acceleration, "
+                       "m/s^2 (measured / theory)", sculling_drift)):
+        print(title)
+        for N in (1, 2, 3, 4):
+            cells = ["{:.3e} / {:.3e}".format(*fn(N, r)) for r in rates]
+            print(f"  N = {N}: " + "   ".join(f"{r:.0f} Hz: {c}" for r, c in zip(rates, cells)))
     print("3. sine velocity, 10 min, WGS-84, height held: max horizontal m, velocity m/s, attitude rad")
     for r in (100.0, 200.0):
         tr = tj.sample(SINE, 600.0, 1.0 / r)

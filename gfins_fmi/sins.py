@@ -483,19 +483,21 @@ class Strapdown:
         idx = range(g1 - 1, g0 - 1, -1) if self._backward else range(g0, g1)
         cfg = self.config
         for k in idx:
+            # the sample's interval as the core takes it: from the previous sample, the
+            # first from the state's time (backward: from the navigator's initial time)
+            h = dt
+            if tt is not None:
+                h = tt[k] - (tt[k - 1] if k > 0 else
+                             (self._origin_t_s if self._backward else float(self._state.time_s)))
             if status == lib.GF_ERR_NONFINITE_INPUT:
                 if (not np.all(np.isfinite(g[k])) or not np.all(np.isfinite(a[k]))
                         or (tt is not None and not np.isfinite(tt[k]))
                         or (he is not None and np.isinf(he[k]))):
                     return k
             elif status == lib.GF_ERR_BAD_TIME and tt is not None:
-                prev = tt[k - 1] if k > 0 else (self._origin_t_s if self._backward else None)
-                if prev is None:
-                    prev = float(self._state.time_s)
-                if not tt[k] - prev > 0:
+                if not h > 0:
                     return k
             elif status == lib.GF_ERR_OUT_OF_RANGE:
-                h = dt if tt is None else ((tt[k] - tt[k - 1]) if k > 0 else dt)
                 if (np.linalg.norm(g[k]) > cfg.max_rate_rad_s * h
                         or np.linalg.norm(a[k]) > cfg.max_specific_force_m_s2 * h):
                     return k

@@ -13,7 +13,7 @@ import pytest
 
 import gfins_fmi as gf
 from gfins_fmi import trajectory as tj
-from conftest import attitude_error_rad, horizontal_error_m
+from conftest import attitude_error_rad, horizontal_error_m, navigate_init_args
 
 # the published sets (Savage's 2/3; the optimised 3- and 4-sample sets; N = 1: the
 # previous sample's 1/12), typed here independently of the core
@@ -236,11 +236,7 @@ def test_cli_navigate_subsamples(tmp_path, capsys, fmt):
     from gfins_fmi.cli import main
     tr = tj.sample(tj.Circle(), 2.01, 0.01)
     t = tr.t_s[1:].copy()
-    e = np.degrees(gf.quat_to_euler(tr.q_bn[0]))
-    init = ["--lat0", repr(float(np.degrees(tr.lat_rad[0]))), "--lon0",
-            repr(float(np.degrees(tr.lon_rad[0]))), "--h0", repr(float(tr.h_m[0])),
-            "--heading0", repr(float(e[0])), "--pitch0", repr(float(e[1])), "--roll0",
-            repr(float(e[2])), "--v0=" + ",".join(repr(float(x)) for x in tr.v_n_m_s[0])]
+    init = navigate_init_args(tr)
     rec = np.c_[t, tr.dtheta_rad, tr.dv_m_s]
     src, dst = tmp_path / f"rec.{fmt}", tmp_path / f"sol.{fmt}"
     if fmt == "csv":
@@ -277,3 +273,14 @@ def test_one_update_per_sample_navigators_refuse_subsamples():
         gf.GyroFreeNavigator(g, x0, "sqrt", tr.gyro_rad_s[0], sins=gf.SinsConfig(subsamples=2))
     with pytest.raises(ValueError, match="sins.subsamples = 2: the gyro-free navigator FMU"):
         run_gfnav_fmu("qin9", tr.array_outputs(g), 0.01, x0, sins=gf.SinsConfig(subsamples=2))
+
+
+def test_bad_time_inside_a_group_is_named():
+    tr = tj.sample(tj.Circle(), 1.0, 0.01)
+    t = tr.t_s[1:].copy()
+    t[6] = t[5]
+    with pytest.raises(gf.SampleError, match=r"sample 6: sample times must be strictly increasing "
+                                              r"\(in the update of samples 6\.\.7\)") as e:
+        gf.Strapdown(gf.NavState.from_trajectory(tr, 0), gf.SinsConfig(subsamples=2)).run(
+            tr.dtheta_rad, tr.dv_m_s, t_s=t)
+    assert len(e.value.partial) == 3 and e.value.index == 6

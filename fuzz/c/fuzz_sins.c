@@ -99,6 +99,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         cfg.max_rate_rad_s = fz_pos(&d, 50.0);
         cfg.max_specific_force_m_s2 = fz_pos(&d, 1000.0);
     }
+    if ((fz_u8(&d) & 3) == 0) /* subsamples 0..5 (0 and 5 and rates with > 1 are refused) */
+        cfg.subsamples = fz_u8(&d) % 6;
     double euler[3], q[4], v[3];
     fz_nums(&d, euler, 3, 3.2);
     if (gf_euler_to_quat(euler, q) != GF_OK || (fz_u8(&d) & 7) == 0)
@@ -148,11 +150,14 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                              (opt & 16) ? to : NULL, &done);
             FZ_STATUS(st, "gf_sins_run");
             FZ_REQUIRE(done <= n && (st != GF_OK || done == n), "gf_sins_run n_done %zu of %zu", done, n);
-            /* rows done: the first done, or the last done of a backward run */
-            const size_t r0 = ((opt >> 2) & 1) ? n - done : 0;
-            FZ_REQUIRE(fz_all_finite(qo + 4 * r0, 4 * done) && fz_all_finite(vo + 3 * r0, 3 * done) &&
-                           fz_all_finite(po + 3 * r0, 3 * done) &&
-                           (!(opt & 16) || fz_all_finite(to + r0, done)),
+            /* rows done: the first done, or the last done of a backward run; with
+             * subsamples N one row per group of N samples (the last group shorter) */
+            const size_t N = (size_t)s.cfg.subsamples, rows = (n + N - 1) / N;
+            const size_t rd = (done + N - 1) / N;
+            const size_t r0 = ((opt >> 2) & 1) ? rows - rd : 0;
+            FZ_REQUIRE(fz_all_finite(qo + 4 * r0, 4 * rd) && fz_all_finite(vo + 3 * r0, 3 * rd) &&
+                           fz_all_finite(po + 3 * r0, 3 * rd) &&
+                           (!(opt & 16) || fz_all_finite(to + r0, rd)),
                        "gf_sins_run: a non-finite row among those done (status %d, %zu of %zu, "
                        "options %d, earth %d)", (int)st, done, n, opt, s.cfg.earth);
             if (st == GF_OK)

@@ -92,15 +92,18 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     cfg.coning = (pick >> 2) % 3 == 2 ? (int)fz_u32(&d) : (pick >> 2) % 3;
     cfg.vertical = (pick >> 4) & 3;
     cfg.earth = (pick >> 6) == 3 ? (int)fz_u32(&d) : (pick >> 6) & 1;
-    if (fz_u8(&d) & 1) {
+    const uint8_t more = fz_u8(&d);
+    /* subsamples 1..5 (5, and rates with > 1, refused) from bits the older inputs of the
+     * corpus left unused, so that they decode as before unless bits 1 and 2 are set */
+    if ((more & 6) == 6)
+        cfg.subsamples = 1 + (more >> 3) % 5;
+    if (more & 1) {
         cfg.flat_gravity_m_s2 = fz_num(&d, 10.0);
         cfg.hold_height_m = fz_num(&d, 1e3);
         cfg.baro_tau_s = fz_pos(&d, 10.0);
         cfg.max_rate_rad_s = fz_pos(&d, 50.0);
         cfg.max_specific_force_m_s2 = fz_pos(&d, 1000.0);
     }
-    if ((fz_u8(&d) & 3) == 0) /* subsamples 0..5 (0 and 5 and rates with > 1 are refused) */
-        cfg.subsamples = fz_u8(&d) % 6;
     double euler[3], q[4], v[3];
     fz_nums(&d, euler, 3, 3.2);
     if (gf_euler_to_quat(euler, q) != GF_OK || (fz_u8(&d) & 7) == 0)

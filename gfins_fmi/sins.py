@@ -64,7 +64,8 @@ class SinsConfig:
         N h from N consecutive increments with the N-sample coning and sculling set
         (2/3 for N = 2; 9/20, 27/20 and 54/105, 92/105, 214/105 for N = 3, 4; see
         ``csrc/gf_sins.h`` and docs/sins.md for the derivation and accuracy): the usual
-        processing of a high-rate IMU, 1.9x (N = 2) to 3.4x (N = 4) the throughput.
+        processing of a high-rate IMU, 1.9x (N = 2) to 3.1-3.7x (N = 4) the throughput
+        (docs/benchmarks.md).
         :meth:`Strapdown.run` then returns one row per update (``ceil(n / N)`` rows;
         the last update takes the samples left when N does not divide n). Increments
         only (``input="increments"``).

@@ -1,11 +1,14 @@
 """Cost of the FMUs under a master: one doStep from a minimal C master, and a 600 s,
 100 Hz vehicle + navigator co-simulation through fmpy.
 
-    python bench/bench_cosim.py [--seconds 600] [--profile]
+    python bench/bench_cosim.py [--seconds 600] [--profile] [--steps-only] [--runs 5]
 
 1. bench/fmu_master.c (compiled here with cc) dlopens an FMU's FMI 2.0 binary and times
    {fmi2SetReal(inputs); fmi2DoStep; fmi2GetReal(outputs)} per sample, with the inputs
    recorded from the C vehicle model (seed 001's run): the cost a system tool pays.
+   Every navigator FMU the build makes (gfins_fmi.fmu.MODELS: sins, ins_gnss and the
+   gyro-free gfnav_*), plus the accel9 solver and the vehicle; CPU time of the master
+   process (best and median of --runs). --steps-only stops after this part.
 2. The vehicle FMU + gyro-free navigator FMU co-simulated for --seconds at 100 Hz by
    gfins_fmi.cosim.CoSimulation (FMI 2.0 and 3.0), fmpy's SSP simulator and fmpy's
    container FMU; with --profile, cProfile of the Python master says where the time goes.
@@ -70,6 +73,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seconds", type=float, default=600.0)
     ap.add_argument("--profile", action="store_true")
+    ap.add_argument("--steps-only", action="store_true", help="only the C-master step timings")
+    ap.add_argument("--runs", type=int, default=5, help="runs of the C master per FMU (best, median)")
     args = ap.parse_args()
     cpu = next((line.split(":", 1)[1].strip() for line in open("/proc/cpuinfo")
                 if line.startswith("model name")), platform.processor())
@@ -82,17 +87,24 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmpd:
         tmp = pathlib.Path(tmpd)
         exe = _build_master(tmp)
-        print(f"1. one doStep from a C master (dlopen, FMI 2.0), {n} steps of {h} s:")
+        os.environ["FMU_MASTER_RUNS"] = str(args.runs)
+        print(f"1. one doStep from a C master (dlopen, FMI 2.0), {n} steps of {h} s, CPU time:")
+        from gfins_fmi.fmu import MODELS
+        print(f"  FMUs built: {', '.join(sorted(MODELS))}")
         outs = ["q", "v", "lat", "lon", "h"]
-        _time_fmu(exe, "gfnav_qin9", {"A": A9}, outs, n, h, tmp, "sqrt strategy")
+        _time_fmu(exe, "gfnav_qin9", {"A": A9}, outs, n, h, tmp, "default strategy")
         _time_fmu(exe, "gfnav_cube6", {"A": rec.array_outputs(gf.layout("cube6", 0.1))}, outs, n, h,
-                  tmp, "integrate strategy")
+                  tmp, "default strategy")
+        _time_fmu(exe, "gfnav_12", {"A": rec.array_outputs(gf.layout("12", 0.1))}, outs, n, h,
+                  tmp, "default strategy")
         inc = np.vstack([np.zeros((1, 3)), rec.dtheta_rad]), np.vstack([np.zeros((1, 3)), rec.dv_m_s])
         _time_fmu(exe, "sins", {"dtheta": inc[0], "dv": inc[1]}, outs, n, h, tmp, "increments, coning")
         _time_fmu(exe, "ins_gnss", {"dtheta": inc[0], "dv": inc[1]}, outs, n, h, tmp,
                   "EKF, P every 0.1 s")
         _time_fmu(exe, "vehicle", {}, ["A", "dtheta", "dv", "q", "v", "lat", "lon", "h"], n, h, tmp,
                   "seed 001 run, outputs")
+        if args.steps_only:
+            return
         print(f"2. vehicle + gfnav_qin9 co-simulation, {args.seconds:g} s at 100 Hz ({n} steps):")
         system = cosim.vehicle_navigation("gfnav_qin9", prof, stop_s=args.seconds)
         for version in (2, 3):

@@ -20,6 +20,7 @@ gf_status gf_sins_config_default(gf_sins_config *cfg)
     cfg->baro_tau_s = 10.0;
     cfg->max_rate_rad_s = 50.0;
     cfg->max_specific_force_m_s2 = 1000.0;
+    cfg->subsamples = 1;
     return GF_OK;
 }
 
@@ -34,7 +35,9 @@ static int config_is_valid(const gf_sins_config *c)
            c->hold_height_m < GF_WGS84_A_M / 3.0 && /* gf_earth's range */
            c->baro_tau_s > 0.0 && isfinite(c->baro_tau_s) &&
            c->max_rate_rad_s > 0.0 && isfinite(c->max_rate_rad_s) &&
-           c->max_specific_force_m_s2 > 0.0 && isfinite(c->max_specific_force_m_s2);
+           c->max_specific_force_m_s2 > 0.0 && isfinite(c->max_specific_force_m_s2) &&
+           c->subsamples >= 1 && c->subsamples <= GF_SINS_MAX_SUBSAMPLES &&
+           (c->subsamples == 1 || c->input == GF_SINS_INPUT_INCREMENTS);
 }
 
 /* ---- attitude conventions (seed 002) ---------------------------------------------- */
@@ -368,6 +371,96 @@ static gf_status sins_update(gf_sins_state *s, const double gyro[3], const doubl
     return status;
 }
 
+/* Coning and sculling weights of the m-subsample update (gf_sins.h): the last subsample
+ * is crossed with sum_(i<m) k_i dtheta_i; derived in docs/sins.md (sympy) and equal to
+ * PSINS' conefactors. Row m. */
+static const double k_subsample[GF_SINS_MAX_SUBSAMPLES + 1][GF_SINS_MAX_SUBSAMPLES - 1] = {
+    {0.0, 0.0, 0.0},
+    {0.0, 0.0, 0.0},
+    {2.0 / 3.0, 0.0, 0.0},
+    {9.0 / 20.0, 27.0 / 20.0, 0.0},
+    {54.0 / 105.0, 92.0 / 105.0, 214.0 / 105.0},
+};
+
+/* One update of *s by m (2..4) increments g, a (m x 3, processing order, gyro already
+ * negated for reverse navigation) over sub-intervals dt[i]. Checks before writes; on
+ * an error *bad = the sample's index in the group (m: not a sample's fault). */
+static inline gf_status group_update_m(gf_sins_state *s, int m, const double *g,
+                                       const double *a, const double *dt, double h_ext_m,
+                                       int *bad)
+{
+    const gf_sins_config *cfg = &s->cfg;
+    *bad = m;
+    if (isinf(h_ext_m))
+        return GF_ERR_NONFINITE_INPUT;
+    double T = 0.0, th[3] = {0, 0, 0}, V[3] = {0, 0, 0}, cg[3] = {0, 0, 0}, ca[3] = {0, 0, 0};
+    const double *k = k_subsample[m];
+    for (int i = 0; i < m; ++i) {
+        const double *gi = g + 3 * i, *ai = a + 3 * i;
+        *bad = i;
+        if (!v3_finite(gi) || !v3_finite(ai))
+            return GF_ERR_NONFINITE_INPUT;
+        if (!(dt[i] > 0.0 && isfinite(dt[i])))
+            return GF_ERR_BAD_TIME;
+        const double wmax = cfg->max_rate_rad_s * dt[i], fmax_ = cfg->max_specific_force_m_s2 * dt[i];
+        if (!(gf_v3_dot(gi, gi) <= wmax * wmax) || !(gf_v3_dot(ai, ai) <= fmax_ * fmax_))
+            return GF_ERR_OUT_OF_RANGE;
+        T += dt[i];
+        for (int j = 0; j < 3; ++j) {
+            th[j] += gi[j];
+            V[j] += ai[j];
+        }
+        if (i < m - 1)
+            for (int j = 0; j < 3; ++j) {
+                cg[j] += k[i] * gi[j];
+                ca[j] += k[i] * ai[j];
+            }
+    }
+    *bad = m;
+    if (!isfinite(T))
+        return GF_ERR_BAD_TIME;
+    const double *gl = g + 3 * (m - 1), *al = a + 3 * (m - 1);
+    double phi[3], dv_b[3], t1[3];
+    gf_v3_cross(th, V, t1);
+    if (cfg->coning) {
+        double cone[3], s1[3], s2[3];
+        gf_v3_cross(cg, gl, cone);
+        gf_v3_cross(cg, al, s1);
+        gf_v3_cross(ca, gl, s2);
+        for (int j = 0; j < 3; ++j) {
+            phi[j] = th[j] + cone[j];
+            dv_b[j] = V[j] + 0.5 * t1[j] + (s1[j] + s2[j]);
+        }
+    } else {
+        for (int j = 0; j < 3; ++j) {
+            phi[j] = th[j];
+            dv_b[j] = V[j] + 0.5 * t1[j];
+        }
+    }
+    double qb[4];
+    gf_q_from_rotvec_fast(phi, qb);
+    const gf_status status = nav_update(s, qb, dv_b, T, h_ext_m);
+    if (status != GF_OK)
+        return status;
+    gf_v3_copy(gl, s->prev_gyro);
+    gf_v3_copy(al, s->prev_accel);
+    s->have_prev = 1;
+    s->time_s += s->earth_rate_sign > 0 ? T : -T;
+    s->n_samples += (uint64_t)m;
+    return GF_OK;
+}
+
+/* group_update_m with m a constant in each branch, so that its loops unroll */
+static gf_status group_update(gf_sins_state *s, int m, const double *g, const double *a,
+                              const double *dt, double h_ext_m, int *bad)
+{
+    switch (m) {
+    case 2: return group_update_m(s, 2, g, a, dt, h_ext_m, bad);
+    case 3: return group_update_m(s, 3, g, a, dt, h_ext_m, bad);
+    default: return group_update_m(s, 4, g, a, dt, h_ext_m, bad);
+    }
+}
+
 /* The navigation update of one interval from its compensated increments: the rotation
  * qb = q(phi) (phi: body at the start -> body at the end, coning included) and velocity
  * increment dv_b (specific force integrated over the interval in the body frame at its
@@ -566,7 +659,7 @@ gf_status gf_sins_step(gf_sins_state *state, const double *gyro, const double *a
 {
     if (!state || !gyro || !accel)
         return GF_ERR_NULL_POINTER;
-    if (!state_is_valid(state))
+    if (!state_is_valid(state) || state->cfg.subsamples != 1)
         return GF_ERR_BAD_PARAMETER;
     if (state->earth_rate_sign < 0) {
         /* reverse navigation: the caller hands samples in reverse order; the gyro is
@@ -575,6 +668,28 @@ gf_status gf_sins_step(gf_sins_state *state, const double *gyro, const double *a
         return sins_update(state, g, accel, dt_s, h_ext_m);
     }
     return sins_update(state, gyro, accel, dt_s, h_ext_m);
+}
+
+gf_status gf_sins_step_group(gf_sins_state *state, size_t m, const double *gyro,
+                             const double *accel, double dt_s, double h_ext_m)
+{
+    if (!state || !gyro || !accel)
+        return GF_ERR_NULL_POINTER;
+    if (!state_is_valid(state) || state->cfg.input != GF_SINS_INPUT_INCREMENTS || m < 1 ||
+        m > GF_SINS_MAX_SUBSAMPLES)
+        return GF_ERR_BAD_PARAMETER;
+    const double sign = state->earth_rate_sign < 0 ? -1.0 : 1.0;
+    if (m == 1) {
+        const double g1[3] = {sign * gyro[0], sign * gyro[1], sign * gyro[2]};
+        return sins_update(state, g1, accel, dt_s, h_ext_m);
+    }
+    double g[3 * GF_SINS_MAX_SUBSAMPLES], dt[GF_SINS_MAX_SUBSAMPLES];
+    for (size_t i = 0; i < 3 * m; ++i)
+        g[i] = sign * gyro[i];
+    for (size_t i = 0; i < m; ++i)
+        dt[i] = dt_s / (double)m;
+    int bad;
+    return group_update(state, (int)m, g, accel, dt, h_ext_m, &bad);
 }
 
 int gf_sins_state_valid(const gf_sins_state *state)
@@ -628,6 +743,79 @@ gf_status gf_sins_step_compensated_trusted(gf_sins_state *state, const double *p
     return status;
 }
 
+/* gf_sins_run with cfg.subsamples = N > 1 (increments; gf_sins.h): one update per group
+ * of N samples in recorded order, one output row per group. */
+static gf_status run_groups(gf_sins_state *state, size_t n, const double *gyro,
+                            const double *accel, double dt_s, const double *t_s,
+                            const double *h_ext_m, int backward, double *q_bn,
+                            double *v_n_m_s, double *pos, double *time_s, size_t *n_done)
+{
+    gf_sins_state s = *state;
+    const size_t N = (size_t)s.cfg.subsamples, n_groups = (n + N - 1) / N;
+    gf_status status = GF_OK;
+    size_t done = 0;
+    for (size_t gdone = 0; gdone < n_groups; ++gdone) {
+        const size_t j = backward ? n_groups - 1 - gdone : gdone;
+        const size_t a0 = j * N, m = n - a0 < N ? n - a0 : N;
+        double g[3 * GF_SINS_MAX_SUBSAMPLES], dt[GF_SINS_MAX_SUBSAMPLES];
+        const double *a = accel + 3 * a0, *gp = g;
+        double ab[3 * GF_SINS_MAX_SUBSAMPLES];
+        size_t k_last = a0 + m - 1;
+        if (!backward && !t_s) { /* the usual case: the record's own rows, no copies */
+            gp = gyro + 3 * a0;
+            for (size_t i = 0; i < m; ++i)
+                dt[i] = dt_s;
+        }
+        for (size_t i = 0; (backward || t_s) && i < m; ++i) {
+            const size_t k = backward ? a0 + m - 1 - i : a0 + i; /* processing order */
+            const double *gk = gyro + 3 * k;
+            if (backward) {
+                g[3 * i] = -gk[0]; g[3 * i + 1] = -gk[1]; g[3 * i + 2] = -gk[2];
+                gf_v3_copy(accel + 3 * k, ab + 3 * i);
+            } else {
+                g[3 * i] = gk[0]; g[3 * i + 1] = gk[1]; g[3 * i + 2] = gk[2];
+            }
+            dt[i] = dt_s;
+            if (t_s) {
+                if (!isfinite(t_s[k])) {
+                    status = GF_ERR_NONFINITE_INPUT;
+                    break;
+                }
+                /* as gf_sins_run with N = 1: forward, sample 0 from the state's time;
+                 * backward, interval 0 is dt_s */
+                if (!backward)
+                    dt[i] = k == 0 ? t_s[0] - s.time_s : t_s[k] - t_s[k - 1];
+                else
+                    dt[i] = k >= 1 ? t_s[k] - t_s[k - 1] : dt_s;
+            }
+            k_last = k;
+        }
+        if (status != GF_OK)
+            break;
+        const double h = h_ext_m ? h_ext_m[k_last] : NAN;
+        if (m == 1) {
+            status = sins_update(&s, gp, backward ? ab : a, dt[0], h);
+        } else {
+            int bad;
+            status = group_update(&s, (int)m, gp, backward ? ab : a, dt, h, &bad);
+        }
+        if (status != GF_OK)
+            break;
+        done += m;
+        memcpy(q_bn + 4 * j, s.q_bn, sizeof s.q_bn);
+        gf_v3_copy(s.v_n_m_s, v_n_m_s + 3 * j);
+        if (backward)
+            gf_v3_scale(v_n_m_s + 3 * j, -1.0, v_n_m_s + 3 * j); /* true-time velocity */
+        gf_sins_position(&s, pos + 3 * j);
+        if (time_s)
+            time_s[j] = s.time_s;
+    }
+    *state = s;
+    if (n_done)
+        *n_done = done;
+    return status;
+}
+
 gf_status gf_sins_run(gf_sins_state *state, size_t n, const double *gyro, const double *accel,
                       double dt_s, const double *t_s, const double *h_ext_m, int backward,
                       double *q_bn, double *v_n_m_s, double *pos, double *time_s,
@@ -643,6 +831,9 @@ gf_status gf_sins_run(gf_sins_state *state, size_t n, const double *gyro, const 
         return GF_ERR_BAD_PARAMETER; /* backward runs need gf_sins_reverse() first */
     if (!t_s && !(dt_s > 0.0 && isfinite(dt_s)))
         return GF_ERR_BAD_TIME;
+    if (state->cfg.subsamples > 1)
+        return run_groups(state, n, gyro, accel, dt_s, t_s, h_ext_m, backward, q_bn, v_n_m_s,
+                          pos, time_s, n_done);
     gf_sins_state s = *state;
     gf_status status = GF_OK;
     size_t done = 0;

@@ -25,6 +25,39 @@
  * dtheta = T (w0 + w1)/2, C = T^2 w0 x w1 / 12, S = T^2 (w0 x f1 + f0 x w1) / 12 are
  * exact. With coning off ("one-sample") C = S = 0.
  *
+ * Subsamples (cfg.subsamples = N, 1..4; increments only). gf_sins_run can make one
+ * navigation update of T = N h from N consecutive increments (dtheta_i, dv_i),
+ * i = 1..N, of equal sub-intervals h (the usual processing of a high-rate IMU: the
+ * navigation update, Earth and transport rates, gravity and the position run at 1/N of
+ * the sample rate). With the sums Theta = sum dtheta_i, V = sum dv_i:
+ *   rotation vector  phi  = Theta + C,           C = (sum_(i<N) k_i dtheta_i) x dtheta_N
+ *   velocity (body)  dv_b = V + Theta x V / 2 + S,
+ *                    S = (sum_(i<N) k_i dtheta_i) x dv_N + (sum_(i<N) k_i dv_i) x dtheta_N
+ *   k (N = 2) = 2/3;  k (N = 3) = 9/20, 27/20;  k (N = 4) = 54/105, 92/105, 214/105
+ * These are the coning algorithms, optimised for pure coning, of the class in which the
+ * last subsample is crossed with a weighted sum of the earlier ones (the class of
+ * Ignagni, "Efficient class of optimized coning compensation algorithms", J. Guidance
+ * 19(2), 1996; Savage, Strapdown Analytics, sec. 7.1.1.1; N = 2: Savage's
+ * (2/3) dtheta_1 x dtheta_2; the numbers are PSINS' conefactors); the sculling terms take
+ * the same coefficients by Ignagni's duality ("Duality of optimal strapdown sculling
+ * and coning compensation algorithms", Navigation 45(2), 1998). Derived here (sympy,
+ * docs/sins.md, and checked by tests/test_sins_subsamples.py): under classic coning
+ * (half-angle a, rate W, lambda = W h) the cone-axis component of
+ * dtheta_i x dtheta_j is 4 sin^2 a sin^2(lambda/2) sin((j-i) lambda), the exact (Bortz)
+ * rotation per update is 1/2 sin^2 a (N lambda - sin N lambda), and the k_i cancel
+ * the Taylor terms lambda^3 .. lambda^(2N-1) of the difference. Truncation: the
+ * residual per update is sin^2 a lambda^(2N+1) / {30, 280/3, 315} for N = 2, 3, 4
+ * (leading terms lambda^5/30, 3 lambda^7/280, lambda^9/315), i.e. a coning drift of
+ * W sin^2 a lambda^(2N) / {60, 280, 1260}; the N = 1 update with the previous sample's
+ * terms (above) leaves lambda^5/60 per update, the same drift W sin^2 a lambda^4/60 as
+ * N = 2. Sculling (a rotation a sin(W t) about one axis with a specific force
+ * A sin(W t) along another) leaves the same function of lambda times a A / W in
+ * velocity per update (docs/sins.md). cfg.subsamples = 1 is the update above, sample by
+ * sample (bit for bit the same as before the option existed). A record whose length
+ * is not a multiple of N ends with one update of the M < N samples left, with the
+ * M-sample set (M = 1: the one-sample update with the previous sample's terms, as
+ * N = 1). The rows of gf_sins_run are then one per update (see there).
+ *
  * Latitude limit. The ENU frame's north reference turns at w_en,z = v_E tan(L) / (R + h)
  * and the longitude rate v_E / ((R + h) cos L) grows without bound at the poles: the
  * mechanization holds for |L| < GF_SINS_LAT_LIMIT_MDEG (89.9 deg, 11 km from a pole).
@@ -56,6 +89,8 @@ extern "C" {
 /* CDEF BEGIN */
 #define GF_SINS_LAT_LIMIT_MDEG 89900 /* |latitude| limit of the ENU mechanization, millidegrees */
 
+#define GF_SINS_MAX_SUBSAMPLES 4     /* increments per navigation update, at most */
+
 #define GF_SINS_INPUT_INCREMENTS 0   /* dtheta (rad), dv (m/s) per interval */
 #define GF_SINS_INPUT_RATES 1        /* rate (rad/s), specific force (m/s^2) at sample times */
 
@@ -86,6 +121,8 @@ typedef struct gf_sins_config {
     double baro_tau_s;               /* BARO loop time constant, > 0 */
     double max_rate_rad_s;           /* |w| above this is an absurd sample (default 50) */
     double max_specific_force_m_s2;  /* |f| above this is an absurd sample (default 1000) */
+    int subsamples;                  /* increments per navigation update in gf_sins_run,
+                                        1..4 (default 1; > 1 needs INPUT_INCREMENTS) */
 } gf_sins_config;
 
 /* Navigation state. Pointer-free: copying it copies the navigator. */
@@ -108,7 +145,7 @@ typedef struct gf_sins_state {
 } gf_sins_state;
 
 /* Defaults: increments, coning on, free vertical channel, WGS-84, tau 10 s, limits
- * 50 rad/s and 1000 m/s^2. */
+ * 50 rad/s and 1000 m/s^2, one sample per update. */
 gf_status gf_sins_config_default(gf_sins_config *cfg);
 
 /* Euler angles (heading, pitch, roll; rad) <-> quaternion q_b^n, conventions above.
@@ -138,9 +175,23 @@ gf_status gf_sins_init(gf_sins_state *state, const gf_sins_config *cfg, const do
  * the external height at the new state time for the BARO mode (NaN: none this
  * sample). The state is
  * changed only on GF_OK. Errors: GF_ERR_NONFINITE_INPUT, GF_ERR_OUT_OF_RANGE (|w| or
- * |f| beyond the limits), GF_ERR_BAD_TIME (dt_s <= 0), GF_ERR_DIVERGED. */
+ * |f| beyond the limits), GF_ERR_BAD_TIME (dt_s <= 0), GF_ERR_DIVERGED,
+ * GF_ERR_BAD_PARAMETER (cfg.subsamples > 1: one sample is not an update then; use
+ * gf_sins_step_group or gf_sins_run). */
 gf_status gf_sins_step(gf_sins_state *state, const double *gyro, const double *accel,
                        double dt_s, double h_ext_m);
+
+/* One navigation update from m (1..4) consecutive increments (gyro, accel: m x 3, in
+ * time order; dtheta rad, dv m/s) over sub-intervals of dt_s / m each, with the m-sample
+ * coning and sculling set above (m = 1: gf_sins_step's update); h_ext_m as there, at the
+ * end of the update. Needs INPUT_INCREMENTS; any cfg.subsamples (the update is m
+ * samples whatever the configuration says for gf_sins_run). Reverse navigation: the
+ * samples in reverse time order, as gf_sins_step takes them (gyro negated here).
+ * Errors as gf_sins_step (each sample checked against the limits over dt_s / m),
+ * GF_ERR_BAD_PARAMETER (m outside 1..4, rates input); the state is changed only on
+ * GF_OK. */
+gf_status gf_sins_step_group(gf_sins_state *state, size_t m, const double *gyro,
+                             const double *accel, double dt_s, double h_ext_m);
 
 /* One interval of a rate record from increments the caller computed with its own,
  * higher-order model of the motion over the interval (the gyro-free navigator's cubic
@@ -190,7 +241,19 @@ gf_status gf_sins_reverse(gf_sins_state *state);
  * v_n_m_s (n x 3), pos (n x 3: lat rad, lon rad, h m; EARTH_FLAT: position in m),
  * time_s (n, may be NULL).
  * On an error the run stops: *n_done = samples processed (in processing order),
- * their rows are valid and *state is the state after the last good one. */
+ * their rows are valid and *state is the state after the last good one.
+ * Subsamples (cfg.subsamples = N > 1): samples are grouped in recorded order, group
+ * j = samples jN .. min(n, jN + N) - 1 (the last one shorter when N does not divide n),
+ * one update per group (gf_sins_step_group); the outputs have one row per group,
+ * ceil(n / N) rows: row j is the state after group j (backward: the state at the start
+ * of group j, processed last group first). h_ext_m is read once per update, at the
+ * group's last sample in processing order (as gf_sins_step reads a sample's); values
+ * at the other samples are not used. With t_s the sub-intervals
+ * are taken from the times (each must be > 0) and the update's interval is their sum;
+ * the coefficients assume equal sub-intervals. *n_done counts the samples of the
+ * completed updates (a multiple of N except after the short group); on an error the
+ * group that failed (samples from *n_done on, in processing order) is not applied. A
+ * record cut into pieces at multiples of N gives the same result as one call. */
 gf_status gf_sins_run(gf_sins_state *state, size_t n, const double *gyro, const double *accel,
                       double dt_s, const double *t_s, const double *h_ext_m, int backward,
                       double *q_bn, double *v_n_m_s, double *pos, double *time_s,

@@ -173,18 +173,20 @@ def _reader(args, what: str):
                        header_hint=_HEADER_HINT)
 
 
-def _stream(args, reader, names, dtypes, solve, verb: str) -> tuple[int, int]:
+def _stream(args, reader, names, dtypes, solve, verb: str, group: int = 1) -> tuple[int, int]:
     """Read, solve and write a record chunk by chunk: ``solve(start, block)`` gives the
     output columns of the rows of ``block`` (the first is row ``start``) or raises
     :class:`_Refused`. The output is written beside ``args.output`` and renamed into
     place at the end; after a refused sample it holds the rows before it, and when
     there is none, it is not written (an existing file stays as it was).
 
-    Returns (status, rows written): status 0, or 1 after a refused sample.
+    Returns (status, rows written): status 0, or 1 after a refused sample. ``group``:
+    input rows per output row (the last output row takes the rows left).
     """
     from gfins_fmi.io.tables import TableWriter
     status, error = 0, None
-    with reader, TableWriter(args.output, names, dtypes, rows=reader.n_rows) as writer, \
+    with reader, TableWriter(args.output, names, dtypes,
+                             rows=None if reader.n_rows is None else -(-reader.n_rows // group)) as writer, \
             _progress(args, reader, verb) as bar:
         for start, block in reader:
             try:
@@ -255,6 +257,9 @@ def _navigate(args) -> int:
     from gfins_fmi import NavState, SinsConfig, Strapdown
     from gfins_fmi._lib import NonFiniteInputError
     from gfins_fmi.sins import SampleError
+    N = args.subsamples
+    if N > 1:   # chunks of a multiple of N keep the groups of the whole record
+        args.chunk = -(-args.chunk // N) * N
     reader = _reader(args, "strapdown record")
     if reader.n_columns not in (7, 8):
         raise ValueError(f"{args.input}: expected 7 or 8 columns (t, gyro x y z, accel x y z "
@@ -265,7 +270,10 @@ def _navigate(args) -> int:
     times = _TimeColumn(args.input, fixed=False)
     deg = np.pi / 180
     cfg = SinsConfig(input=args.input_kind, coning=not args.no_coning, vertical=args.vertical,
-                     baro_tau_s=args.baro_tau)
+                     baro_tau_s=args.baro_tau, subsamples=args.subsamples)
+    if args.subsamples > 1 and args.input_kind != "increments":
+        raise ValueError(f"--subsamples {args.subsamples} needs --input-kind increments (rate "
+                         "samples are navigated one update per sample)")
     nav = None
 
     def solve(start, block):
@@ -292,11 +300,12 @@ def _navigate(args) -> int:
             raise _Refused(exc, _nav_columns(exc.partial), len(exc.partial)) from None
         return _nav_columns(sol)
 
-    status, rows = _stream(args, reader, _NAV_COLUMNS, None, solve, "navigated")
+    status, rows = _stream(args, reader, _NAV_COLUMNS, None, solve, "navigated", group=N)
     for note in times.notes():   # the navigator takes any intervals; a gap is worth knowing about
         print(f"note: {note}", file=sys.stderr)
     if rows:
-        print(f"{rows} samples navigated -> {args.output}")
+        what = f"{rows} samples" if N == 1 else f"{rows} updates of {N} samples"
+        print(f"{what} navigated -> {args.output}")
     return status
 
 
@@ -626,6 +635,10 @@ def main(argv: list[str] | None = None) -> int:
                    help="time of the initial state, s (default: one interval before the first "
                         "increment, or the first rate sample)")
     p.add_argument("--no-coning", action="store_true", help="one-sample algorithm")
+    p.add_argument("--subsamples", type=int, choices=[1, 2, 3, 4], default=1, metavar="N",
+                   help="increments per navigation update, 1..4 (default 1); N > 1 writes one "
+                        "row per update (every N-th increment's time; the last row takes the "
+                        "increments left)")
     p.set_defaults(func=_navigate)
 
     p = parsers["gfnav"] = sub.add_parser(

@@ -343,6 +343,11 @@ def run_sins_fmu(gyro, accel, dt_s: float, initial, *, config=None, h_ext_m=None
     cfg = config or SinsConfig()
     if cfg.earth != "wgs84":
         raise ValueError("the SINS FMU navigates on WGS-84 only (earth='wgs84')")
+    if cfg.checked_subsamples() != 1:
+        raise ValueError(f"subsamples = {cfg.subsamples}: the SINS FMU takes one sample per "
+                         "communication step and makes one navigation update of it (the master's "
+                         "step is the update interval); navigate subsampled records with "
+                         "Strapdown.run")
     x0 = initial.checked()    # the same checks and messages as Strapdown
     cfg._c(x0.h_m)
     g = as_rows("gyro", gyro, 3, "rad or rad/s")
@@ -422,6 +427,9 @@ def run_gfnav_fmu(layout_name: str, A_m_s2, dt_s: float, initial, *, l_m: float 
     n_in = {"cube6": 6, "qin9": 9, "12": 12}[layout_name]
     A = as_rows("A_m_s2", A_m_s2, n_in, "m/s^2")
     sc = sins or SinsConfig()
+    if sc.subsamples != 1:
+        raise ValueError(f"sins.subsamples = {sc.subsamples!r}: the gyro-free navigator FMU "
+                         "makes one update per array sample; use subsamples=1")
     flat = sc.earth == "flat"
     x0 = initial.checked(flat)    # the same checks and messages as GyroFreeNavigator
     sc._c(x0.h_m)

@@ -830,6 +830,10 @@ class GyroFreeNavigator:
         self.geometry = geometry
         cfg = _rate_config(strategy, accel_noise_m_s2, bias_walk_rad_s2_sqrt_s, init_std_rad_s,
                            init_bias_std_rad_s2)
+        if sins is not None and sins.subsamples != 1:
+            raise ValueError(f"sins.subsamples = {sins.subsamples!r}: the gyro-free navigator "
+                             "makes one update per array sample (its rates are solved sample by "
+                             "sample); use subsamples=1")
         sc = dataclasses.replace(sins or SinsConfig(), input="rates")
         self._flat = sc.earth == "flat"
         x0 = initial.checked(self._flat)

@@ -58,6 +58,17 @@ class SinsConfig:
         000's simulation. Vertical modes apply to "wgs84" only.
     flat_gravity_m_s2 : float
         Gravity of the flat frame (m/s^2, >= 0).
+    subsamples : int
+        Increments per navigation update, 1 to 4 (default 1: one update per sample, with
+        the previous sample's coning and sculling terms). N > 1 makes one update of
+        N h from N consecutive increments with the N-sample coning and sculling set
+        (2/3 for N = 2; 9/20, 27/20 and 54/105, 92/105, 214/105 for N = 3, 4; see
+        ``csrc/gf_sins.h`` and docs/sins.md for the derivation and accuracy): the usual
+        processing of a high-rate IMU, 1.9x (N = 2) to 3.1-3.7x (N = 4) the throughput
+        (docs/benchmarks.md).
+        :meth:`Strapdown.run` then returns one row per update (``ceil(n / N)`` rows;
+        the last update takes the samples left when N does not divide n). Increments
+        only (``input="increments"``).
     """
 
     input: str = "increments"
@@ -69,6 +80,18 @@ class SinsConfig:
     max_specific_force_m_s2: float = 1000.0
     earth: str = "wgs84"
     flat_gravity_m_s2: float = 0.0
+    subsamples: int = 1
+
+    def checked_subsamples(self) -> int:
+        """``subsamples`` checked: an integer in 1..4, and 1 with rate input."""
+        n = self.subsamples
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 1 <= n <= 4:
+            raise ValueError(f"subsamples must be an integer from 1 to 4 (increments per "
+                             f"navigation update); got {n!r}")
+        if n > 1 and self.input != "increments":
+            raise ValueError(f"subsamples = {n} needs input='increments' (rate samples are "
+                             "navigated one update per sample): use subsamples=1 with rates")
+        return int(n)
 
     def held_height_m(self, initial_h_m: float | None) -> float:
         """The height held with ``vertical="hold"`` for an initial height (m)."""
@@ -96,6 +119,7 @@ class SinsConfig:
         if self.hold_height_m is not None:
             as_scalar("hold_height_m", hold, "m", above=-0.5 * _A_M)
         as_scalar("flat_gravity_m_s2", self.flat_gravity_m_s2, "m/s^2", at_least=0.0)
+        subsamples = self.checked_subsamples()
         c = ffi.new("gf_sins_config *")
         lib.gf_sins_config_default(c)
         c.input = _INPUTS[self.input]
@@ -107,6 +131,7 @@ class SinsConfig:
         c.max_specific_force_m_s2 = self.max_specific_force_m_s2
         c.earth = _EARTH[self.earth]
         c.flat_gravity_m_s2 = float(self.flat_gravity_m_s2)
+        c.subsamples = subsamples
         return c
 
 
@@ -205,7 +230,8 @@ class NavState:
 
 @dataclass
 class NavSolution:
-    """Navigation solution, row k = the state after sample k.
+    """Navigation solution, row k = the state after sample k (with
+    ``SinsConfig(subsamples=N)``: after update k, i.e. after sample min(n, N (k + 1)) - 1).
 
     Attributes: t_s (n,), q_bn (n, 4), v_n_m_s (n, 3), lat_rad, lon_rad, h_m (n,);
     with ``earth="flat"``, ``pos_m`` (n, 3) instead (the geodetic columns are NaN);
@@ -266,6 +292,7 @@ class Strapdown:
                          "flat position")
         self._backward = False
         self._origin_t_s = x0.t_s   # where a backward increment record starts
+        self._pending_short = 0     # subsamples > 1: a run ended in a short group
 
     @property
     def state(self) -> NavState:
@@ -282,6 +309,7 @@ class Strapdown:
         samples are given in their recorded order and processed last to first)."""
         check_status(lib.gf_sins_reverse(self._state), "gf_sins_reverse")
         self._backward = not self._backward
+        self._pending_short = 0
 
     def run(self, gyro, accel, dt_s: float | None = None, t_s=None, h_ext_m=None,
             progress: bool = False, chunk: int = 1_000_000, *, start_index: int = 0) -> NavSolution:
@@ -311,6 +339,16 @@ class Strapdown:
         For a backward run of increments with ``t_s``, interval 0 is taken to start at
         the navigator's initial time (its ``initial.t_s``).
 
+        With ``config.subsamples = N > 1`` the samples are grouped in recorded order
+        (group j: samples N j .. N j + N - 1; the last group shorter when N does not
+        divide n), one navigation update per group, and the solution has one row per
+        group (``ceil(n / N)`` rows; backward: the state at the start of each group).
+        ``chunk`` is rounded up to a multiple of N, and a record navigated in pieces
+        gives the same result as one call when every piece but the record's last has a
+        multiple of N samples (forward, a piece after a shorter one is refused; backward,
+        give the pieces last to first). ``h_ext_m`` is used at the
+        update times only (the group's last sample in processing order).
+
         Raises
         ------
         NonFiniteInputError, SampleError
@@ -328,6 +366,14 @@ class Strapdown:
         if self.config.vertical == "baro" and h_ext_m is None:
             raise ValueError('vertical="baro" needs h_ext_m, the external height per sample '
                              "(NaN where there is none)")
+        N = int(self._state.cfg.subsamples)      # as the C state was initialised
+        rows = -(-n // N)
+        if N > 1:
+            chunk = -(-chunk // N) * N
+            if self._pending_short and not self._backward:
+                raise ValueError(f"the previous run ended with {self._pending_short} samples "
+                                 f"(not a multiple of subsamples = {N}): it was the end of the "
+                                 "record; give records in pieces of a multiple of N samples")
         if (dt_s is None) == (t_s is None):
             raise ValueError("give exactly one of dt_s (fixed interval, s) and t_s (sample times, s)")
         dt = 0.0
@@ -336,21 +382,29 @@ class Strapdown:
         # NaN is data here (h_ext_m: no height at that sample) or is located by the core
         tt = None if t_s is None else as_array("t_s", t_s, (n,), "s", finite=False)
         he = None if h_ext_m is None else as_array("h_ext_m", h_ext_m, (n,), "m", finite=False)
-        sol = NavSolution(np.empty(n), np.empty((n, 4)), np.empty((n, 3)), np.empty(n),
-                          np.empty(n), np.empty(n))
-        pos = np.empty((n, 3))
+        sol = NavSolution(np.empty(rows), np.empty((rows, 4)), np.empty((rows, 3)),
+                          np.empty(rows), np.empty(rows), np.empty(rows))
+        pos = np.empty((rows, 3))
         done_total = 0
         bar = None
         if progress:
             from tqdm import tqdm
             bar = tqdm(total=n, unit="sample", unit_scale=True, desc="navigating")
-        order = range(n, 0, -chunk) if self._backward else range(0, n, chunk)
+        if N == 1:
+            order = range(n, 0, -chunk) if self._backward else range(0, n, chunk)
+        else:   # chunk boundaries at multiples of N from the record's start, both ways
+            order = reversed(range(0, n, chunk)) if self._backward else range(0, n, chunk)
         status = lib.GF_OK
         done = ffi.new("size_t *")
         try:
             for start in order:
-                lo, hi = (max(0, start - chunk), start) if self._backward else (start, min(n, start + chunk))
+                if N == 1:
+                    lo, hi = ((max(0, start - chunk), start) if self._backward
+                              else (start, min(n, start + chunk)))
+                else:
+                    lo, hi = start, min(n, start + chunk)
                 m = hi - lo
+                r0, r1 = lo // N, -(-hi // N)       # output rows of this chunk
                 # a chunk continues the previous one: times come from the state, so t_s
                 # must include the sample before the chunk for interval lengths
                 tptr, dt_chunk = ffi.NULL, dt
@@ -363,8 +417,8 @@ class Strapdown:
                 status = lib.gf_sins_run(
                     self._state, m, ptr(g[lo:hi], 3 * m), ptr(a[lo:hi], 3 * m), dt_chunk, tptr,
                     ptr(he[lo:hi], m) if he is not None else ffi.NULL, int(self._backward),
-                    ptr(sol.q_bn[lo:hi], 4 * m), ptr(sol.v_n_m_s[lo:hi], 3 * m),
-                    ptr(pos[lo:hi], 3 * m), ptr(sol.t_s[lo:hi], m), done)
+                    ptr(sol.q_bn[r0:r1], 4 * (r1 - r0)), ptr(sol.v_n_m_s[r0:r1], 3 * (r1 - r0)),
+                    ptr(pos[r0:r1], 3 * (r1 - r0)), ptr(sol.t_s[r0:r1], r1 - r0), done)
                 done_total += int(done[0])
                 if bar:
                     bar.update(int(done[0]))
@@ -379,19 +433,36 @@ class Strapdown:
             sol.lat_rad[:] = sol.lon_rad[:] = sol.h_m[:] = np.nan
         else:
             sol.lat_rad[:], sol.lon_rad[:], sol.h_m[:] = pos[:, 0], pos[:, 1], pos[:, 2]
+        if N > 1 and status == lib.GF_OK:
+            self._pending_short = n % N
+        group = ""
         if status != lib.GF_OK:
-            good = slice(bad + 1, n) if self._backward else slice(0, bad)
-            partial = sol._rows(good)
-            done = (done_before(len(partial), s0 + bad + 1, "navigated") if self._backward
-                    else done_before(len(partial), s0, "navigated"))
+            if N == 1:
+                good = slice(bad + 1, n) if self._backward else slice(0, bad)
+                partial = sol._rows(good)
+                done = (done_before(len(partial), s0 + bad + 1, "navigated") if self._backward
+                        else done_before(len(partial), s0, "navigated"))
+            else:
+                # the update that failed: the group holding sample `bad` (the first sample
+                # it did not complete, in processing order); its rows are not written
+                g0 = (bad // N) * N
+                g1 = min(n, g0 + N)
+                good = slice(g0 // N + 1, rows) if self._backward else slice(0, g0 // N)
+                partial = sol._rows(good)
+                bad = self._culprit(g, a, tt, dt, he, g0, g1, int(status))
+                group = f" (in the update of samples {s0 + g0}..{s0 + g1 - 1})"
+                lo_s, n_s = (g1, n - g1) if self._backward else (0, g0)
+                done = (f"{len(partial)} updates of samples {s0 + lo_s}..{s0 + lo_s + n_s - 1} "
+                        "were navigated (see .partial)" if n_s else
+                        "no sample was navigated before it (.partial is empty)")
             if status == lib.GF_ERR_NONFINITE_INPUT:
                 for name, arr in (("gyro", g), ("accel", a)):
                     col = first_nonfinite(arr, bad)
                     if col >= 0:
                         raise NonFiniteInputError(f"{name}[{s0 + bad}, {col}] = {arr[bad, col]} is "
-                                                  f"not finite; {done}", s0 + bad, col, partial)
+                                                  f"not finite{group}; {done}", s0 + bad, col, partial)
                 raise NonFiniteInputError(f"sample {s0 + bad}: time or external height is not "
-                                          f"finite; {done}", s0 + bad, -1, partial)
+                                          f"finite{group}; {done}", s0 + bad, -1, partial)
             hints = {
                 lib.GF_ERR_OUT_OF_RANGE: (f"sample {s0 + bad} exceeds |w| <= {self.config.max_rate_rad_s} "
                                           f"rad/s or |f| <= {self.config.max_specific_force_m_s2} m/s^2 "
@@ -402,5 +473,33 @@ class Strapdown:
                                       "(pole reached or absurd height)"),
             }
             msg = hints.get(status, f"sample {s0 + bad}: {status_text(status)}")
-            raise SampleError(f"{msg}; {done}", int(status), s0 + bad, partial)
+            raise SampleError(f"{msg}{group}; {done}", int(status), s0 + bad, partial)
         return sol
+
+    def _culprit(self, g, a, tt, dt, he, g0: int, g1: int, status: int) -> int:
+        """The sample of group [g0, g1) (recorded order) that made its update fail:
+        the first, in processing order, that is not finite, has a bad interval or exceeds
+        the limits; the group's last sample in processing order when no single sample is
+        at fault (a diverged update)."""
+        idx = range(g1 - 1, g0 - 1, -1) if self._backward else range(g0, g1)
+        cfg = self.config
+        for k in idx:
+            # the sample's interval as the core takes it: from the previous sample, the
+            # first from the state's time (backward: from the navigator's initial time)
+            h = dt
+            if tt is not None:
+                h = tt[k] - (tt[k - 1] if k > 0 else
+                             (self._origin_t_s if self._backward else float(self._state.time_s)))
+            if status == lib.GF_ERR_NONFINITE_INPUT:
+                if (not np.all(np.isfinite(g[k])) or not np.all(np.isfinite(a[k]))
+                        or (tt is not None and not np.isfinite(tt[k]))
+                        or (he is not None and np.isinf(he[k]))):
+                    return k
+            elif status == lib.GF_ERR_BAD_TIME and tt is not None:
+                if not h > 0:
+                    return k
+            elif status == lib.GF_ERR_OUT_OF_RANGE:
+                if (np.linalg.norm(g[k]) > cfg.max_rate_rad_s * h
+                        or np.linalg.norm(a[k]) > cfg.max_specific_force_m_s2 * h):
+                    return k
+        return idx[-1]

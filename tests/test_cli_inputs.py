@@ -12,7 +12,7 @@ import pytest
 import gfins_fmi as gf
 from gfins_fmi import trajectory as tj
 from gfins_fmi.cli import main
-from conftest import W0, numpy_outputs, paper_layout, smooth_motion
+from conftest import W0, navigate_init_args, numpy_outputs, paper_layout, smooth_motion
 
 L, DT = 0.1, 0.01
 
@@ -205,11 +205,7 @@ def test_gfnav_names_the_bad_row(case, tmp_path, record9, capsys):
 def test_navigate_checks_times_reports_gaps_and_writes_full_precision(tmp_path, capsys):
     tr = tj.sample(tj.Circle(), 2.0, DT)
     t = tr.t_s[1:].copy()
-    e = np.degrees(gf.quat_to_euler(tr.q_bn[0]))
-    init = ["--lat0", repr(float(np.degrees(tr.lat_rad[0]))), "--lon0",
-            repr(float(np.degrees(tr.lon_rad[0]))), "--h0", repr(float(tr.h_m[0])),
-            "--heading0", repr(float(e[0])), "--pitch0", repr(float(e[1])), "--roll0",
-            repr(float(e[2])), "--v0=" + ",".join(repr(float(x)) for x in tr.v_n_m_s[0])]
+    init = navigate_init_args(tr)
     src, dst = tmp_path / "rec.csv", tmp_path / "sol.csv"
 
     def navigate(times):

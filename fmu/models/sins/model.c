@@ -227,6 +227,8 @@ const char *model_validate_state(const ModelData *d)
         return why;
     if (gf_sins_state_check(&d->nav) != GF_OK)
         return "the navigation state (configuration, attitude, position) is invalid";
+    if (d->nav.cfg.subsamples != 1) /* the FMU steps one sample per update */
+        return "the navigation state's subsamples is not 1";
     if (d->imu_comp != 0 && d->imu_comp != 1)
         return "imu_comp is not 0 or 1";
     if (d->rotating != 0 && d->rotating != 1)

@@ -179,3 +179,26 @@ def test_measurement_at_initial_time_is_applied(auv):
     sol = IntegratedNavigator(config(), init).run(imu, baro=b)
     assert list(sol.innovations["status"]) == [lib.GF_INS_ACCEPTED]
     assert sol.innovations["t_s"][0] == init.nav.t_s
+
+
+def test_cli_align(auv, tmp_path, capsys):
+    """`gfins align motion` on CSV records: one line per pass and the pass table; static
+    mode refuses motion in its window (a turn at 3 deg/s: mean |w| above its 0.05 rad/s
+    limit); missing inputs are refused at parse time."""
+    from gfins_fmi.cli import main
+    imu, tach, depth, init = records(auv, t_end=60.0)
+    imu.to_csv(tmp_path / "imu.csv")
+    tach.to_csv(tmp_path / "speed.csv")
+    depth.to_csv(tmp_path / "depth.csv")
+    e = quat_to_euler(init.nav.q_bn) / DEG
+    ini = f"30,114,-50,{e[0]},{e[1]},{e[2]}"
+    out = tmp_path / "passes.csv"
+    rc = main(["align", "motion", str(tmp_path / "imu.csv"), str(tmp_path / "speed.csv"), "--initial", ini,
+               "--depth", str(tmp_path / "depth.csv"), "--passes", "1", "--output", str(out)])
+    text = capsys.readouterr().out
+    assert rc == 0 and text.count("pass ") == 3 and out.exists(), text
+    rc = main(["align", "static", str(tmp_path / "imu.csv"), "--position", "30,114,-50", "--window", "20,50"])
+    err = capsys.readouterr().err
+    assert rc == 2 and "motion during the static alignment" in err, err
+    with pytest.raises(SystemExit):
+        main(["align", "motion", str(tmp_path / "imu.csv")])

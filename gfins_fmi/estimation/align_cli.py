@@ -9,12 +9,15 @@ then with --fine the zero-velocity fine alignment over the whole record. motion:
 seed-003 in-motion alignment with a speed sensor (OdometerRecord CSV: t_s, speed_m_s,
 std_m_s) and optionally depth (BaroRecord CSV, h_m = -depth), forward-backward passes
 over the stored record; prints the attitude after each pass and writes the pass table.
+Exit status 0 when aligned, 1 when the alignment reports that it has not converged (the
+pass table is written all the same), 2 on bad input.
 """
 from __future__ import annotations
 
 import argparse
 import math
 import pathlib
+import sys
 
 from gfins_fmi.estimation.cli import _GRADES, _floats, _nonneg, _positive
 
@@ -148,4 +151,8 @@ def run(args) -> int:
             w.write(cols)
             w.commit()
         print(f"{len(al.passes)} passes -> {args.output}")
+    if not al.converged:
+        print("gfins align: warning: the alignment has not converged (see the note above); exit status 1",
+              file=sys.stderr)
+        return 1
     return 0

@@ -345,7 +345,13 @@ class InMotionAlignment:
         navigates on to the present
     rows : with ``keep_rows=True``, the solution of each pass (IntegratedSolution; rows
         of backward passes are in recorded order), else None
-    notes : what was found (rejected speed updates, low speed)
+    converged : the alignment's own verdict: the heading sigma after the first forward
+        pass (each datum used once) is below ``convergence_tol_rad`` and, with passes, the
+        heading moved less than ``max(3 sigma, convergence_tol_rad)`` over the last
+        forward-backward pass
+    heading_change_rad : heading change between the last two forward passes (NaN with
+        passes=0)
+    notes : what was found (rejected speed updates, low speed, not converged)
     """
     t_s: float
     q_bn: np.ndarray
@@ -358,6 +364,8 @@ class InMotionAlignment:
     innovations: np.ndarray
     navigator: object
     rows: Optional[list]
+    converged: bool
+    heading_change_rad: float
     notes: list
 
 
@@ -379,7 +387,8 @@ def _time_slice(rec, lo: float, hi: float):
 
 def align_in_motion(imu, speed, *, config, initial, depth=None, gnss=None, odometer=None,
                     passes: int = 0, keep_rows: bool = False, min_duration_s: float = 10.0,
-                    max_rejected_fraction: float = 0.5, progress: bool = False) -> InMotionAlignment:
+                    max_rejected_fraction: float = 0.5, max_initial_heading_std_rad: float = np.radians(10.0),
+                    convergence_tol_rad: float = np.radians(0.5), progress: bool = False) -> InMotionAlignment:
     """In-motion alignment with a speed sensor (seed 003): the integrated-navigation filter
     started from a coarse attitude (``initial``: its ``attitude_std_rad`` must cover the
     coarse heading error, its velocity the speed along that heading) and updated with the
@@ -402,7 +411,13 @@ def align_in_motion(imu, speed, *, config, initial, depth=None, gnss=None, odome
         Latitude beyond 85 deg (no heading from the Earth rate), a record shorter than
         ``min_duration_s`` (too short for the requested passes), a filter start after the
         record's first sample, or a speed sensor that disagrees grossly with the INS (more
-        than ``max_rejected_fraction`` of its updates gated out in the last pass).
+        than ``max_rejected_fraction`` of its updates gated out in the last pass), an
+        initial heading sigma above ``max_initial_heading_std_rad`` (the EKF's small-angle
+        error model: measured with 300 s and 5 passes, a 30 deg start left heading errors of
+        10-30 deg in some runs that were not refused; docs/alignment.md).
+
+    The result's ``converged`` flag and notes report an alignment that has not settled
+    (e.g. seed 003's 30 s): check it before navigating on.
     """
     from gfins_fmi.estimation.ins_gnss import IntegratedNavigator, MEAS_TYPES
     from gfins_fmi._lib import lib
@@ -414,6 +429,12 @@ def align_in_motion(imu, speed, *, config, initial, depth=None, gnss=None, odome
                              "sensor needs it (use a heading reference: GNSS velocity, a compass)")
     if isinstance(passes, bool) or not isinstance(passes, (int, np.integer)) or passes < 0:
         raise AlignmentError(f"passes must be an integer >= 0 (forward-backward passes); got {passes!r}")
+    att_std = np.broadcast_to(np.asarray(initial.attitude_std_rad, float), (3,))
+    if not att_std[2] <= max_initial_heading_std_rad:
+        raise AlignmentError(f"initial heading sigma {np.degrees(att_std[2]):.3g} deg is above "
+                             f"{np.degrees(max_initial_heading_std_rad):.3g} deg: the filter's small-angle error "
+                             "model needs a coarse heading (a compass, a previous alignment) within a few "
+                             "degrees; the speed magnitude cannot find an unknown heading")
     if speed is None or len(np.asarray(speed.t_s)) == 0:
         raise AlignmentError("align_in_motion needs a speed record (tachometer/odometer speeds)")
     t = np.asarray(imu.t_s, float)
@@ -495,8 +516,24 @@ def align_in_motion(imu, speed, *, config, initial, depth=None, gnss=None, odome
             notes.append(f"{low} of {len(sp)} speed updates of the last pass refused below "
                          f"{config.speed_min_m_s} m/s")
     q = table["q_bn"][-1].copy()
+    pe = quat_to_euler(table["q_bn"])
+    # the first forward pass is the honest one (each datum used once): its heading sigma
+    # judges whether the data hold the heading at all; passes over too short a record
+    # settle on a wrong fixed point with a small sigma (seed 003's 30 s, measured)
+    hstd1, hstd = float(table["std9"][0, 8]), float(table["std9"][-1, 8])
+    converged = hstd1 <= convergence_tol_rad
+    dpsi = float("nan")
+    if passes > 0:
+        dpsi = float((pe[-1, 0] - pe[-3, 0] + np.pi) % (2 * np.pi) - np.pi)
+        converged &= abs(dpsi) <= max(3 * hstd, convergence_tol_rad)
+    if not converged:
+        notes.append(f"NOT CONVERGED: heading sigma after the first forward pass {np.degrees(hstd1):.3g} deg "
+                     f"(limit {np.degrees(convergence_tol_rad):.3g} deg)" +
+                     (f", heading moved {np.degrees(dpsi):.3g} deg over the last forward-backward pass"
+                      if passes > 0 else "") + "; store a longer period with turns (passes reuse the same data "
+                     "and cannot make up for it)")
     return InMotionAlignment(t_s=float(table["t_s"][-1]), q_bn=q, euler_rad=quat_to_euler(q),
                              attitude_std_rad=table["std9"][-1, 6:9].copy(), covariance=nav.covariance,
-                             sensors=table["sensors"][-1].copy(), passes=table,
-                             pass_euler_rad=quat_to_euler(table["q_bn"]), innovations=inn, navigator=nav,
-                             rows=rows, notes=notes)
+                             sensors=table["sensors"][-1].copy(), passes=table, pass_euler_rad=pe,
+                             innovations=inn, navigator=nav, rows=rows, converged=bool(converged),
+                             heading_change_rad=dpsi, notes=notes)

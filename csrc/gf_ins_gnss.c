@@ -113,6 +113,8 @@ static int config_check(const gf_ins_config *c)
         return 35;
     if (!nonneg_finite(c->speed_min_m_s))
         return 36;
+    if (!(fabs(c->odo_mount_rad[0]) < GF_HALF_PI) || !(fabs(c->odo_mount_rad[1]) < GF_HALF_PI))
+        return 37;
     return 0;
 }
 
@@ -943,15 +945,31 @@ static void hyp_rate(const gf_ins_filter *f, const nav_hyp *hy, const double w_c
     gf_v3_sub(w_ib, w_ie_b, w_eb);
 }
 
-/* body velocity of the odometer point: C^T v + w_eb x l */
+/* C_b^m of the odometer's mounting: the transpose of C_m^b = Rz(-heading_m) Rx(pitch_m)
+ * (the Euler convention of gf_sins.h without roll); identity for zero angles (exactly:
+ * cos 0 = 1, sin 0 = 0, so the products below keep their bits) */
+static void odo_mount(const gf_ins_filter *f, double M[3][3])
+{
+    const double sp = sin(f->cfg.odo_mount_rad[0]), cp = cos(f->cfg.odo_mount_rad[0]);
+    const double sh = sin(f->cfg.odo_mount_rad[1]), ch = cos(f->cfg.odo_mount_rad[1]);
+    /* rows of C_b^m = columns of C_m^b: the odometer's x, y (forward), z axes in body */
+    M[0][0] = ch;       M[0][1] = -sh;      M[0][2] = 0.0;
+    M[1][0] = sh * cp;  M[1][1] = ch * cp;  M[1][2] = sp;
+    M[2][0] = -sh * sp; M[2][1] = -ch * sp; M[2][2] = cp;
+}
+
+/* velocity of the odometer point in the odometer's axes: C_b^m (C^T v + w_eb x l) */
 static void odo_point_velocity(const gf_ins_filter *f, const nav_hyp *hy, const double w_comp[3],
                                double out[3])
 {
-    double w_ib[3], w_eb[3], vb[3], wl[3];
+    double w_ib[3], w_eb[3], vb[3], wl[3], ub[3], M[3][3];
     hyp_rate(f, hy, w_comp, w_ib, w_eb);
     gf_m3t_mul_v3(&hy->C, hy->v, vb);
     gf_v3_cross(w_eb, f->cfg.odo_lever_m, wl);
-    gf_v3_add(vb, wl, out);
+    gf_v3_add(vb, wl, ub);
+    odo_mount(f, M);
+    for (int i = 0; i < 3; ++i)
+        out[i] = M[i][0] * ub[0] + M[i][1] * ub[1] + M[i][2] * ub[2];
 }
 
 /* The full (nonlinear) prediction of a measurement from a hypothesis; positions in the
@@ -1069,8 +1087,9 @@ static void meas_jacobian(const gf_ins_filter *f, const local_frame *lf, const n
         break;
     case GF_INS_MEAS_ODO:
     case GF_INS_MEAS_NHC: {
-        /* u = C^T v + w_eb x l: du = C^T dv - C^T [v x] phi - [l x] dw */
-        double Vx[3][3], Lx[3][3], CtV[3][3];
+        /* u = C_b^m (C^T v + w_eb x l): du = C_b^m (C^T dv - C^T [v x] phi - [l x] dw)
+         * (the mounting M = C_b^m is a fixed parameter) */
+        double Vx[3][3], Lx[3][3], CtV[3][3], M[3][3], MCt[3][3], MCtV[3][3], MLx[3][3];
         skew_rows(nom->v, Vx);
         skew_rows(f->cfg.odo_lever_m, Lx);
         for (int i = 0; i < 3; ++i)
@@ -1080,17 +1099,24 @@ static void meas_jacobian(const gf_ins_filter *f, const local_frame *lf, const n
                     acc += nom->C.m[k][i] * Vx[k][j];
                 CtV[i][j] = acc;
             }
+        odo_mount(f, M);
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) {
+                MCt[i][j] = M[i][0] * nom->C.m[j][0] + M[i][1] * nom->C.m[j][1] + M[i][2] * nom->C.m[j][2];
+                MCtV[i][j] = M[i][0] * CtV[0][j] + M[i][1] * CtV[1][j] + M[i][2] * CtV[2][j];
+                MLx[i][j] = M[i][0] * Lx[0][j] + M[i][1] * Lx[1][j] + M[i][2] * Lx[2][j];
+            }
         const int rows_odo[1] = {1}, rows_nhc[2] = {0, 2};
         const int *rows = type == GF_INS_MEAS_ODO ? rows_odo : rows_nhc;
         const double k1 = type == GF_INS_MEAS_ODO ? 1.0 + nom->s[S_ODO] : 1.0;
         for (int r = 0; r < m; ++r) {
             const int a = rows[r];
             for (int j = 0; j < 3; ++j) {
-                HH(r, IV + j) = k1 * nom->C.m[j][a];
-                HH(r, IA + j) = -k1 * CtV[a][j];
-                HH(r, IBG + j) = -k1 * Lx[a][j];
+                HH(r, IV + j) = k1 * MCt[a][j];
+                HH(r, IA + j) = -k1 * MCtV[a][j];
+                HH(r, IBG + j) = -k1 * MLx[a][j];
                 if (f->idx_sg >= 0)
-                    HH(r, f->idx_sg + j) = -k1 * Lx[a][j] * w[j];
+                    HH(r, f->idx_sg + j) = -k1 * MLx[a][j] * w[j];
             }
         }
         if (type == GF_INS_MEAS_ODO && f->idx_odo >= 0) {

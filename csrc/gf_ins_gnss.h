@@ -57,8 +57,10 @@
  * Measurements (docs/estimation.md; z_err = prediction from the nominal - measurement):
  *   GNSS position: antenna at lever arm l_gnss (body), p_ant = p + C_b^n l (ENU metres).
  *   GNSS velocity: v_ant = v + C_b^n (w_eb^b x l),  w_eb^b = w_ib^b - C_n^b w_ie^n.
- *   barometer: h + b_baro.  odometer: (1 + k) [C_n^b v + w_eb^b x l_odo]_y (forward).
- *   non-holonomic: [C_n^b v + w_eb^b x l_odo]_x,z = 0.  ZUPT: v = 0.
+ *   barometer: h + b_baro.  odometer: (1 + k) [C_b^m (C_n^b v + w_eb^b x l_odo)]_y
+ *   (forward), C_m^b = Rz(-heading_m) Rx(pitch_m) the odometer's mounting (boresight,
+ *   odo_mount_rad; identity by default).  non-holonomic: [C_b^m (C_n^b v + w_eb^b x
+ *   l_odo)]_x,z = 0.  ZUPT: v = 0.
  *   ZARU: w_ib^b - C_n^b w_ie^n = 0 (mean over the standstill detector's window).
  *   speed (tachometer, seed 003 section 1.2.2, its eq. 7-8 linearised; the scan lost the
  *   equations, so derived here): y = (1 + k) sqrt(v_E^2 + v_N^2), k the odometer scale
@@ -206,6 +208,9 @@ typedef struct gf_ins_config {
                                        older ones, and all past ones with 0, are stale */
     double speed_min_m_s;           /* GF_INS_MEAS_SPEED refused at or below this INS
                                        horizontal speed, m/s (>= 0; default 0.5) */
+    double odo_mount_rad[2];        /* odometer boresight, fixed: pitch (nose-up +) and
+                                       heading (clockwise +) of its measuring axes in the
+                                       body frame, rad, |.| < pi/2; 0, 0: body axes */
 } gf_ins_config;
 
 typedef struct gf_ins_meas {

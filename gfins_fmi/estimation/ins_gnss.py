@@ -52,7 +52,7 @@ _BAD_FIELD = {1: "input", 2: "coning", 3: "filter", 4: "scale_factors/baro_bias/
               30: "gnss_lever_arm_m/odometer_lever_arm_m", 31: "gate_probability",
               32: "nhc_std_m_s/nhc_interval_s", 33: "zupt_std_m_s/zaru_std_rad_s/zupt_interval_s",
               34: "standstill_window_s/standstill_accel_std_m_s2/standstill_gyro_rad_s",
-              35: "max_latency_s", 36: "speed_min_m_s"}
+              35: "max_latency_s", 36: "speed_min_m_s", 37: "odometer_mount_rad"}
 
 
 class FilterError(GfinsError, ValueError):
@@ -102,6 +102,9 @@ class FilterConfig:
         the odometer, with their std/tau.
     gnss_lever_arm_m, odometer_lever_arm_m : IMU -> antenna and IMU -> wheel contact point,
         body axes (right, front, up), m.
+    odometer_mount_rad : (pitch, heading) of the odometer's measuring axes in the body
+        frame (boresight, fixed parameters; nose-up and clockwise positive, |.| < 90 deg):
+        the odometer and the non-holonomic constraints then act along those axes.
     gate_probability : NIS gate (chi-square probability; None: no gate).
     gate_reset_count : after this many consecutive gate rejections of one measurement kind
         the next one is applied anyway (logged as "forced"), so that a filter that has
@@ -142,6 +145,7 @@ class FilterConfig:
     odometer_scale_tau_s: float = 0.0
     gnss_lever_arm_m: tuple = (0.0, 0.0, 0.0)
     odometer_lever_arm_m: tuple = (0.0, 0.0, 0.0)
+    odometer_mount_rad: tuple = (0.0, 0.0)
     gate_probability: Optional[float] = 0.9999
     gate_reset_count: int = 5
     nhc: bool = False
@@ -178,6 +182,11 @@ class FilterConfig:
                 raise ValueError(f"{f.name} must be finite and >= 0; got {v!r}")
         self.gnss_lever_arm_m = tuple(_vec3("gnss_lever_arm_m", self.gnss_lever_arm_m, "m"))
         self.odometer_lever_arm_m = tuple(_vec3("odometer_lever_arm_m", self.odometer_lever_arm_m, "m"))
+        mount = np.asarray(self.odometer_mount_rad, dtype=float)
+        if mount.shape != (2,) or not np.all(np.abs(mount) < np.pi / 2):
+            raise ValueError(f"odometer_mount_rad must be (pitch, heading) in rad, each inside (-pi/2, pi/2); "
+                             f"got {self.odometer_mount_rad!r}")
+        self.odometer_mount_rad = tuple(float(x) for x in mount)
         self._c()   # the C checks, with messages naming the field
 
     @property
@@ -230,6 +239,7 @@ class FilterConfig:
             setattr(cfg.noise, k, float(v))
         cfg.gnss_lever_m = list(self.gnss_lever_arm_m)
         cfg.odo_lever_m = list(self.odometer_lever_arm_m)
+        cfg.odo_mount_rad = list(self.odometer_mount_rad)
         cfg.gate_prob = float(self.gate_probability or 0.0)
         if isinstance(self.gate_reset_count, bool) or not isinstance(self.gate_reset_count, (int, np.integer)) \
                 or self.gate_reset_count < 0:
@@ -600,18 +610,8 @@ class IntegratedNavigator:
             With ``index`` (IMU sample) and ``partial`` (the solution before it).
         """
         cfg = self.config
-        t = np.ascontiguousarray(np.asarray(imu.t_s, dtype=float))
-        g = np.ascontiguousarray(np.asarray(imu.gyro, dtype=float))
-        a = np.ascontiguousarray(np.asarray(imu.accel, dtype=float))
+        t, g, a = self._record(imu)
         n = t.shape[0]
-        if t.ndim != 1 or g.shape != (n, 3) or a.shape != (n, 3):
-            raise ValueError(f"imu.t_s must be (n,) and imu.gyro, imu.accel (n, 3); got "
-                             f"{t.shape}, {g.shape}, {a.shape}")
-        kind = getattr(imu, "kind", cfg.input)
-        if kind != cfg.input:
-            raise ValueError(f"the IMU record holds {kind!r} but the filter is configured for "
-                             f"input={cfg.input!r}: convert the record (to_increments()/to_rates()) "
-                             "or change FilterConfig.input")
         if isinstance(chunk, bool) or not isinstance(chunk, (int, np.integer)) or chunk < 1:
             raise ValueError(f"chunk must be an integer >= 1; got {chunk!r}")
         if self.reversed:
@@ -725,7 +725,8 @@ class IntegratedNavigator:
         kind = getattr(imu, "kind", cfg.input)
         if kind != cfg.input:
             raise ValueError(f"the IMU record holds {kind!r} but the filter is configured for "
-                             f"input={cfg.input!r}")
+                             f"input={cfg.input!r}: convert the record (to_increments()/to_rates()) "
+                             "or change FilterConfig.input")
         return t, g, a
 
     def _log(self, n_entries: int):

@@ -3,6 +3,8 @@
  * gf_ins_run_backward) and the forward-backward driver (gf_ins_forward_backward).
  *
  * Truth never comes from the code under test:
+ *   - odometer boresight: the speed and non-holonomic components of a body moving straight
+ *     ahead seen along rotated axes, and the innovation variance, written out here;
  *   - speed update: the scalar Kalman update written out here (H = [vE, vN]/|v| on dv,
  *     -|v| on the scale state, K = P H^T / (H P H^T + R)), on a filter whose covariance is
  *     the P0 given (a measurement at the filter's initial time, applied before any
@@ -147,6 +149,58 @@ static void test_speed_update(void)
         CHECK(gf_ins_init(&f, &c, 0.0, q, v, 0.5, 1.0, 0.0, NULL, P, &bad) == GF_ERR_BAD_PARAMETER && bad == 36,
               "speed_min_m_s < 0 refused (bad %d)", bad);
     }
+}
+
+/* Odometer boresight: a body moving straight ahead at 5 m/s (heading 0, level: C = I) seen
+ * by an odometer pitched by tm and turned by hm. Its axes in body (C_m^b = Rz(-hm) Rx(tm)):
+ * forward (sin hm cos tm, cos hm cos tm, sin tm), x (cos hm, -sin hm, 0),
+ * z (-sin tm sin hm, -sin tm cos hm, cos tm); so the predicted speed is 5 cos hm cos tm and
+ * the non-holonomic components -5 sin hm and -5 sin tm cos hm. The innovation's variance:
+ * H on dv is the forward axis, on phi the forward axis times -[v x] (C = I):
+ * (-5 sin tm, 0, 5 sin hm cos tm); no lever arm, no bias terms. */
+static void test_odometer_mounting(void)
+{
+    const double tm = 1.5 * DEG, hm = -2.0 * DEG, V = 5.0;
+    gf_ins_config c = base_config();
+    c.odo_mount_rad[0] = tm;
+    c.odo_mount_rad[1] = hm;
+    c.nhc = 1;
+    c.nhc_std_m_s = 0.05;
+    c.gate_prob = 0.0;
+    gf_ins_filter f;
+    int32_t bad;
+    double P[15 * 15];
+    diag_P(15, kStd, P);
+    const double q[4] = {1, 0, 0, 0}, v[3] = {0.0, V, 0.0};
+    CHECK(gf_ins_init(&f, &c, 0.0, q, v, 30 * DEG, 114 * DEG, 0.0, NULL, P, &bad) == GF_OK, "init");
+    gf_ins_meas m = {GF_INS_MEAS_ODO, 0.0, {0.0, 0, 0}, {0.02, 0, 0}};
+    gf_ins_innovation e[4];
+    gf_ins_log log = {4, 0, 0, e};
+    const double g[3] = {0, 0, 0}, a[3] = {0, 0, 0};
+    /* the odometer at the initial time (P = P0, nominal = initial) with the first sample */
+    CHECK(gf_ins_step(&f, 0.01, g, a, 1, &m, NULL, &log) == GF_OK && log.count == 1, "odometer update");
+    const double fwd[3] = {sin(hm) * cos(tm), cos(hm) * cos(tm), sin(tm)};
+    const double hphi[3] = {-V * sin(tm), 0.0, V * sin(hm) * cos(tm)};
+    double S = 0.02 * 0.02;
+    for (int j = 0; j < 3; ++j)
+        S += fwd[j] * fwd[j] * kStd[j] * kStd[j] + hphi[j] * hphi[j] * kStd[6 + j] * kStd[6 + j];
+    CHECK_CLOSE(e[0].r[0], V * cos(hm) * cos(tm), 1e-12, "predicted odometer speed with boresight");
+    CHECK_CLOSE(e[0].s_std[0], sqrt(S), 1e-12, "innovation std with boresight");
+    /* NHC on the regular grid (0.1 s): a fresh filter, ten samples of straight motion */
+    CHECK(gf_ins_init(&f, &c, 0.0, q, v, 30 * DEG, 114 * DEG, 0.0, NULL, P, &bad) == GF_OK, "init");
+    log.count = 0;
+    for (int k = 1; k <= 10; ++k) {
+        const double dv[3] = {0.0, 0.0, 9.7936 * 0.01};
+        CHECK(gf_ins_step(&f, 0.01 * k, g, dv, 0, NULL, NULL, &log) == GF_OK, "step");
+    }
+    CHECK(log.count == 1 && e[0].type == GF_INS_MEAS_NHC, "one NHC update (%zu)", log.count);
+    /* the nominal moved over 0.1 s by gravity mismatch and Earth terms: ~1e-3 m/s */
+    CHECK_CLOSE(e[0].r[0], -V * sin(hm), 2e-3, "NHC lateral with boresight");
+    CHECK_CLOSE(e[0].r[1], -V * sin(tm) * cos(hm), 2e-3, "NHC vertical with boresight");
+    CHECK(fabs(e[0].r[0]) > 0.1 && fabs(e[0].r[1]) > 0.1, "boresight seen by the NHC");
+    c.odo_mount_rad[1] = 1.6;
+    CHECK(gf_ins_init(&f, &c, 0.0, q, v, 0.5, 1.0, 0.0, NULL, P, &bad) == GF_ERR_BAD_PARAMETER && bad == 37,
+          "mounting angle beyond 90 deg refused");
 }
 
 static void test_reverse_signs(void)
@@ -354,6 +408,7 @@ static void test_forward_backward_driver(void)
 int main(void)
 {
     test_speed_update();
+    test_odometer_mounting();
     test_reverse_signs();
     test_round_trip();
     test_forward_backward_driver();

@@ -1949,6 +1949,36 @@ gf_status gf_ins_forward_backward(gf_ins_filter *f, size_t n, const double *t_s,
     return GF_OK;
 }
 
+/* ---- coarse alignment at rest (for the FMU's alignment phase) ----------------------------- */
+
+gf_status gf_ins_coarse_align(const double *f_b_m_s2, const double *w_b_rad_s, double *q_bn)
+{
+    if (!f_b_m_s2 || !w_b_rad_s || !q_bn)
+        return GF_ERR_NULL_POINTER;
+    if (!gf_all_finite(f_b_m_s2, 3) || !gf_all_finite(w_b_rad_s, 3))
+        return GF_ERR_NONFINITE_INPUT;
+    const double fn = gf_v3_norm(f_b_m_s2), wn = gf_v3_norm(w_b_rad_s);
+    if (!(fn > 5.0 && fn < 15.0))
+        return GF_ERR_SINGULAR_GEOMETRY;
+    double e[3], u[3], nn[3];
+    gf_v3_cross(w_b_rad_s, f_b_m_s2, e);
+    const double en = gf_v3_norm(e);
+    if (!(en > 1e-3 * wn * fn) || !(wn > 0.0))
+        return GF_ERR_SINGULAR_GEOMETRY;
+    gf_v3_scale(e, 1.0 / en, e);
+    gf_v3_scale(f_b_m_s2, 1.0 / fn, u);
+    gf_v3_cross(u, e, nn);
+    gf_mat3 C;
+    for (int j = 0; j < 3; ++j) {
+        C.m[0][j] = e[j];
+        C.m[1][j] = nn[j];
+        C.m[2][j] = u[j];
+    }
+    gf_q_from_dcm(&C, q_bn);
+    gf_q_normalize(q_bn, q_bn);
+    return GF_OK;
+}
+
 /* ---- smoother and helpers ------------------------------------------------------------------ */
 
 gf_status gf_ins_smooth(size_t n, const gf_ins_epochs *ep, double *xs, double *Ps)

@@ -411,6 +411,16 @@ gf_status gf_ins_forward_backward(gf_ins_filter *f, size_t n, const double *t_s,
                                   const gf_ins_meas *meas, int32_t n_fb, gf_ins_pass *passes,
                                   gf_ins_log *log, int32_t *n_passes_done);
 
+/* Coarse alignment at rest for any orientation (TRIAD on gravity and the Earth rate; the
+ * same as gfins_fmi.estimation.alignment.attitude_from_gravity_and_earth_rate): from the
+ * mean specific force f_b (m/s^2) and the mean angular rate w_b (rad/s) over a window at
+ * rest, in body axes, up = f / |f|, east = (w x f) / |w x f|, north = up x east, and
+ * C_b^n has the rows east, north, up (in body axes); q_bn its quaternion. The heading
+ * error is ~ east gyro bias / (Omega cos L): the gyros must see the Earth rate. Errors:
+ * GF_ERR_NONFINITE_INPUT, GF_ERR_SINGULAR_GEOMETRY (|f| not in (5, 15) m/s^2 — not at
+ * rest on the Earth —, or w x f below 1e-3 |w| |f|: a pole, or no Earth rate seen). */
+gf_status gf_ins_coarse_align(const double *f_b_m_s2, const double *w_b_rad_s, double *q_bn);
+
 /* The continuous error model at the filter's nominal state with specific force f_b and
  * rate w_ib_b (body): F (n x n), G (n x (n - 3)) and the noise intensities q (n - 3):
  * noise inputs = accelerometer white noise (3), gyro white noise (3), one per sensor

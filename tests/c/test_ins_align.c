@@ -203,6 +203,46 @@ static void test_odometer_mounting(void)
           "mounting angle beyond 90 deg refused");
 }
 
+/* Coarse alignment: the specific force and Earth rate of a known attitude at rest,
+ * written here from their definitions (f^n = (0, 0, g), w_ie^n = (0, W cos L, W sin L),
+ * body = C^T navigation), give the attitude back to round-off; gravity parallel to the
+ * rate (a pole) and an absurd |f| are refused. */
+static void test_coarse_align(void)
+{
+    const double W = 7.292115e-5, g = 9.79, L = 30 * DEG;
+    double worst = 0.0;
+    for (int c = 0; c < 8; ++c) {
+        const double e[3] = {(37.0 + 45.0 * c) * DEG, (c % 3 - 1) * 20.0 * DEG, (c % 5 - 2) * 40.0 * DEG};
+        double q[4], q2[4];
+        gf_euler_to_quat(e, q);
+        const double q0 = q[0], q1 = q[1], q2_ = q[2], q3 = q[3];
+        double C[3][3] = {{q0 * q0 + q1 * q1 - q2_ * q2_ - q3 * q3, 2 * (q1 * q2_ - q0 * q3), 2 * (q1 * q3 + q0 * q2_)},
+                          {2 * (q1 * q2_ + q0 * q3), q0 * q0 - q1 * q1 + q2_ * q2_ - q3 * q3, 2 * (q2_ * q3 - q0 * q1)},
+                          {2 * (q1 * q3 - q0 * q2_), 2 * (q2_ * q3 + q0 * q1), q0 * q0 - q1 * q1 - q2_ * q2_ + q3 * q3}};
+        const double fn[3] = {0, 0, g}, wn[3] = {0, W * cos(L), W * sin(L)};
+        double fb[3], wb[3];
+        for (int i = 0; i < 3; ++i) {
+            fb[i] = C[0][i] * fn[0] + C[1][i] * fn[1] + C[2][i] * fn[2];
+            wb[i] = C[0][i] * wn[0] + C[1][i] * wn[1] + C[2][i] * wn[2];
+        }
+        CHECK(gf_ins_coarse_align(fb, wb, q2) == GF_OK, "coarse align %d", c);
+        /* angle between them: 2 |vector part of q^* q2| */
+        const double *a = q, *b = q2;
+        const double x = a[0] * b[1] - a[1] * b[0] - a[2] * b[3] + a[3] * b[2];
+        const double y = a[0] * b[2] + a[1] * b[3] - a[2] * b[0] - a[3] * b[1];
+        const double z = a[0] * b[3] - a[1] * b[2] + a[2] * b[1] - a[3] * b[0];
+        worst = fmax(worst, 2.0 * sqrt(x * x + y * y + z * z));
+    }
+    printf("coarse alignment from exact gravity and Earth rate: worst angle %.3g rad\n", worst);
+    /* round-off: the east axis is w x f with |w| ~ 7e-5 of |f| scale, normalised: a few
+     * 1e-16 relative on every axis; bound 1e-13 */
+    CHECK(worst < 1e-13, "coarse alignment angle error %.3g rad", worst);
+    const double f_up[3] = {0, 0, 9.8}, w_up[3] = {0, 0, 7e-5}, f_bad[3] = {0, 0, 30.0}, w[3] = {0, 7e-5, 0};
+    double q[4];
+    CHECK(gf_ins_coarse_align(f_up, w_up, q) == GF_ERR_SINGULAR_GEOMETRY, "rate parallel to gravity");
+    CHECK(gf_ins_coarse_align(f_bad, w, q) == GF_ERR_SINGULAR_GEOMETRY, "absurd specific force");
+}
+
 static void test_reverse_signs(void)
 {
     gf_ins_config c = base_config();
@@ -409,6 +449,7 @@ int main(void)
 {
     test_speed_update();
     test_odometer_mounting();
+    test_coarse_align();
     test_reverse_signs();
     test_round_trip();
     test_forward_backward_driver();

@@ -52,6 +52,7 @@ gf_status gf_ins_config_default(gf_ins_config *cfg)
     cfg->still_window_s = 0.5;
     cfg->still_accel_std_m_s2 = 0.05;
     cfg->still_gyro_rad_s = 0.01;
+    cfg->speed_min_m_s = 0.5;
     return GF_OK;
 }
 
@@ -110,6 +111,10 @@ static int config_check(const gf_ins_config *c)
         return 34;
     if (!nonneg_finite(c->max_latency_s))
         return 35;
+    if (!nonneg_finite(c->speed_min_m_s))
+        return 36;
+    if (!(fabs(c->odo_mount_rad[0]) < GF_HALF_PI) || !(fabs(c->odo_mount_rad[1]) < GF_HALF_PI))
+        return 37;
     return 0;
 }
 
@@ -193,6 +198,12 @@ static double wrap_pi(double a)
     else if (a <= -GF_PI)
         a += 2.0 * GF_PI;
     return a;
+}
+
+/* +1 forward in time, -1 after gf_ins_reverse (the nominal's Earth-rate sign) */
+static inline double dir_of(const gf_ins_filter *f)
+{
+    return f->nav.earth_rate_sign < 0.0 ? -1.0 : 1.0;
 }
 
 /* dx of a hypothesis about a nominal: the inverse of hyp_from_error */
@@ -334,10 +345,10 @@ typedef struct earth_terms {
 } earth_terms;
 
 static void earth_terms_of(double sin_lat, double cos_lat, double h, const double v[3],
-                           earth_terms *e)
+                           double earth_rate_sign, earth_terms *e)
 {
     gf_earth ea;
-    gf_earth_from_sincos(&ea, sin_lat, cos_lat, h, v, 1.0);
+    gf_earth_from_sincos(&ea, sin_lat, cos_lat, h, v, earth_rate_sign);
     e->sL = ea.sin_lat;
     e->cL = ea.cos_lat;
     e->tL = ea.tan_lat;
@@ -407,8 +418,10 @@ static void error_model(const gf_ins_filter *f, const gf_mat3 *C, const double v
     memset(mask, 0, (size_t)n * sizeof *mask);
 #define FF(i, j) (*f_entry(F, s, mask, (i), (j)))
     earth_terms e;
-    earth_terms_of(sin_lat, cos_lat, h, v, &e);
-    const double W = GF_WGS84_OMEGA_IE_RAD_S;
+    /* reverse-time filtering: the Earth rate with the nominal's sign (see the header) */
+    const double er_sign = dir_of(f);
+    earth_terms_of(sin_lat, cos_lat, h, v, er_sign, &e);
+    const double W = er_sign * GF_WGS84_OMEGA_IE_RAD_S;
     const double vE = v[0], vN = v[1];
     double w_in[3], f_n[3];
     gf_v3_add(e.w_ie, e.w_en, w_in);
@@ -727,8 +740,7 @@ static gf_status coarse_step(const gf_ins_filter *f, const nav_hyp *hy, const do
     gf_sins_state s = f->nav0;
     s.cfg.input = GF_SINS_INPUT_INCREMENTS;
     s.cfg.coning = 0;
-    s.have_prev = 0;
-    s.earth_rate_sign = 1.0;
+    s.have_prev = 0;          /* the Earth-rate sign is the nominal's (reverse filtering) */
     gf_status st = gf_sins_set_navigation(&s, hy->q, hy->v, hy->lat, hy->lon, hy->h);
     if (st != GF_OK)
         return GF_ERR_DIVERGED;
@@ -742,7 +754,7 @@ static gf_status coarse_step(const gf_ins_filter *f, const nav_hyp *hy, const do
         g[i] = dth[i] - dbg * T - dsg * dth[i];
         a[i] = dv[i] - dba * T - dsa * dv[i];
     }
-    st = gf_sins_step(&s, g, a, T, NAN);
+    st = gf_sins_step_trusted(&s, g, a, T);   /* increments already in the filter's direction */
     if (st != GF_OK)
         return GF_ERR_DIVERGED;
     *out = *hy;
@@ -886,6 +898,7 @@ static int meas_rows(int32_t type)
         return 2;
     case GF_INS_MEAS_BARO:
     case GF_INS_MEAS_ODO:
+    case GF_INS_MEAS_SPEED:
         return 1;
     default:
         return 0;
@@ -925,22 +938,38 @@ static void hyp_rate(const gf_ins_filter *f, const nav_hyp *hy, const double w_c
         const double dsg = hy->s[S_SG + i] - f->sensors[S_SG + i];
         w_ib[i] = w_comp[i] - dbg - dsg * w_comp[i];
     }
-    const double W = GF_WGS84_OMEGA_IE_RAD_S;
+    const double W = dir_of(f) * GF_WGS84_OMEGA_IE_RAD_S;
     const double w_ie[3] = {0.0, W * cos(hy->lat), W * sin(hy->lat)};
     double w_ie_b[3];
     gf_m3t_mul_v3(&hy->C, w_ie, w_ie_b);
     gf_v3_sub(w_ib, w_ie_b, w_eb);
 }
 
-/* body velocity of the odometer point: C^T v + w_eb x l */
+/* C_b^m of the odometer's mounting: the transpose of C_m^b = Rz(-heading_m) Rx(pitch_m)
+ * (the Euler convention of gf_sins.h without roll); identity for zero angles (exactly:
+ * cos 0 = 1, sin 0 = 0, so the products below keep their bits) */
+static void odo_mount(const gf_ins_filter *f, double M[3][3])
+{
+    const double sp = sin(f->cfg.odo_mount_rad[0]), cp = cos(f->cfg.odo_mount_rad[0]);
+    const double sh = sin(f->cfg.odo_mount_rad[1]), ch = cos(f->cfg.odo_mount_rad[1]);
+    /* rows of C_b^m = columns of C_m^b: the odometer's x, y (forward), z axes in body */
+    M[0][0] = ch;       M[0][1] = -sh;      M[0][2] = 0.0;
+    M[1][0] = sh * cp;  M[1][1] = ch * cp;  M[1][2] = sp;
+    M[2][0] = -sh * sp; M[2][1] = -ch * sp; M[2][2] = cp;
+}
+
+/* velocity of the odometer point in the odometer's axes: C_b^m (C^T v + w_eb x l) */
 static void odo_point_velocity(const gf_ins_filter *f, const nav_hyp *hy, const double w_comp[3],
                                double out[3])
 {
-    double w_ib[3], w_eb[3], vb[3], wl[3];
+    double w_ib[3], w_eb[3], vb[3], wl[3], ub[3], M[3][3];
     hyp_rate(f, hy, w_comp, w_ib, w_eb);
     gf_m3t_mul_v3(&hy->C, hy->v, vb);
     gf_v3_cross(w_eb, f->cfg.odo_lever_m, wl);
-    gf_v3_add(vb, wl, out);
+    gf_v3_add(vb, wl, ub);
+    odo_mount(f, M);
+    for (int i = 0; i < 3; ++i)
+        out[i] = M[i][0] * ub[0] + M[i][1] * ub[1] + M[i][2] * ub[2];
 }
 
 /* The full (nonlinear) prediction of a measurement from a hypothesis; positions in the
@@ -991,6 +1020,10 @@ static void meas_predict(const gf_ins_filter *f, const local_frame *lf, const na
         gf_v3_copy(w_eb, y);
         break;
     }
+    case GF_INS_MEAS_SPEED:
+        /* seed 003 eq. 7: the SINS horizontal speed, scaled by the speed-scale estimate */
+        y[0] = (1.0 + hy->s[S_ODO]) * hypot(hy->v[0], hy->v[1]);
+        break;
     default:
         break;
     }
@@ -1054,8 +1087,9 @@ static void meas_jacobian(const gf_ins_filter *f, const local_frame *lf, const n
         break;
     case GF_INS_MEAS_ODO:
     case GF_INS_MEAS_NHC: {
-        /* u = C^T v + w_eb x l: du = C^T dv - C^T [v x] phi - [l x] dw */
-        double Vx[3][3], Lx[3][3], CtV[3][3];
+        /* u = C_b^m (C^T v + w_eb x l): du = C_b^m (C^T dv - C^T [v x] phi - [l x] dw)
+         * (the mounting M = C_b^m is a fixed parameter) */
+        double Vx[3][3], Lx[3][3], CtV[3][3], M[3][3], MCt[3][3], MCtV[3][3], MLx[3][3];
         skew_rows(nom->v, Vx);
         skew_rows(f->cfg.odo_lever_m, Lx);
         for (int i = 0; i < 3; ++i)
@@ -1065,17 +1099,24 @@ static void meas_jacobian(const gf_ins_filter *f, const local_frame *lf, const n
                     acc += nom->C.m[k][i] * Vx[k][j];
                 CtV[i][j] = acc;
             }
+        odo_mount(f, M);
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) {
+                MCt[i][j] = M[i][0] * nom->C.m[j][0] + M[i][1] * nom->C.m[j][1] + M[i][2] * nom->C.m[j][2];
+                MCtV[i][j] = M[i][0] * CtV[0][j] + M[i][1] * CtV[1][j] + M[i][2] * CtV[2][j];
+                MLx[i][j] = M[i][0] * Lx[0][j] + M[i][1] * Lx[1][j] + M[i][2] * Lx[2][j];
+            }
         const int rows_odo[1] = {1}, rows_nhc[2] = {0, 2};
         const int *rows = type == GF_INS_MEAS_ODO ? rows_odo : rows_nhc;
         const double k1 = type == GF_INS_MEAS_ODO ? 1.0 + nom->s[S_ODO] : 1.0;
         for (int r = 0; r < m; ++r) {
             const int a = rows[r];
             for (int j = 0; j < 3; ++j) {
-                HH(r, IV + j) = k1 * nom->C.m[j][a];
-                HH(r, IA + j) = -k1 * CtV[a][j];
-                HH(r, IBG + j) = -k1 * Lx[a][j];
+                HH(r, IV + j) = k1 * MCt[a][j];
+                HH(r, IA + j) = -k1 * MCtV[a][j];
+                HH(r, IBG + j) = -k1 * MLx[a][j];
                 if (f->idx_sg >= 0)
-                    HH(r, f->idx_sg + j) = -k1 * Lx[a][j] * w[j];
+                    HH(r, f->idx_sg + j) = -k1 * MLx[a][j] * w[j];
             }
         }
         if (type == GF_INS_MEAS_ODO && f->idx_odo >= 0) {
@@ -1089,9 +1130,20 @@ static void meas_jacobian(const gf_ins_filter *f, const local_frame *lf, const n
         for (int i = 0; i < 3; ++i)
             HH(i, IV + i) = 1.0;
         break;
+    case GF_INS_MEAS_SPEED: {
+        /* seed 003 eq. 8 (Taylor expansion at the nominal), derived in the header:
+         * dy = (1 + k) (v_E dv_E + v_N dv_N) / |v_h| - |v_h| dk; update_at has refused
+         * |v_h| < speed_min_m_s */
+        const double sp = hypot(nom->v[0], nom->v[1]), k1 = 1.0 + nom->s[S_ODO];
+        HH(0, IV + 0) = k1 * nom->v[0] / sp;
+        HH(0, IV + 1) = k1 * nom->v[1] / sp;
+        if (f->idx_odo >= 0)
+            HH(0, f->idx_odo) = -sp;
+        break;
+    }
     case GF_INS_MEAS_ZARU: {
         /* y = w_ib - C^T w_ie: dy = dw + C^T [w_ie x] phi */
-        const double W = GF_WGS84_OMEGA_IE_RAD_S;
+        const double W = dir_of(f) * GF_WGS84_OMEGA_IE_RAD_S;
         const double w_ie[3] = {0.0, W * cos(nom->lat), W * sin(nom->lat)};
         double Wx[3][3];
         skew_rows(w_ie, Wx);
@@ -1155,6 +1207,11 @@ static gf_status update_at(gf_ins_filter *f, int32_t type, const gf_ins_meas *ms
                            gf_ins_log *log)
 {
     const int n = f->n_states, m = meas_rows(type);
+    if (type == GF_INS_MEAS_SPEED && !(hypot(ref->v_n_m_s[0], ref->v_n_m_s[1]) > f->cfg.speed_min_m_s)) {
+        f->n_rejected++;
+        log_entry(log, ms ? ms->t_s : f->t_s, type, GF_INS_REJECTED_LOW_SPEED, m, NAN, NULL, NULL);
+        return GF_OK;
+    }
     local_frame lf;
     local_frame_of(ref, &lf);
     const double zero[NMAX] = {0};
@@ -1331,7 +1388,7 @@ static void standstill_update(gf_ins_filter *f, double T)
 
 static int meas_type_external(int32_t type)
 {
-    return type >= GF_INS_MEAS_GNSS_POS && type <= GF_INS_MEAS_ODO;
+    return (type >= GF_INS_MEAS_GNSS_POS && type <= GF_INS_MEAS_ODO) || type == GF_INS_MEAS_SPEED;
 }
 
 static gf_status meas_check(const gf_ins_meas *ms)
@@ -1402,7 +1459,7 @@ static gf_status past_measurement(gf_ins_filter *f, const gf_ins_meas *ms, gf_in
 {
     gf_sins_state ref;
     double w[3];
-    if (f->cfg.max_latency_s > 0.0 && f->t_s - ms->t_s <= f->cfg.max_latency_s &&
+    if (f->cfg.max_latency_s > 0.0 && dir_of(f) > 0.0 && f->t_s - ms->t_s <= f->cfg.max_latency_s &&
         history_at(f, ms->t_s, &ref, w)) {
         const gf_status st = propagate(f, ep);
         if (st != GF_OK)
@@ -1447,7 +1504,7 @@ gf_status gf_ins_filter_check(const gf_ins_filter *f)
         return GF_ERR_BAD_SIZE;
     if ((f->have_sample & ~1) || (f->standstill & ~1))
         return GF_ERR_BAD_PARAMETER;
-    for (int i = 0; i < 8; ++i)
+    for (int i = 0; i < GF_INS_N_MEAS_KINDS; ++i)
         if (f->gate_run[i] < 0)
             return GF_ERR_BAD_PARAMETER;
     if (gf_sins_state_check(&f->nav) != GF_OK || gf_sins_state_check(&f->nav0) != GF_OK ||
@@ -1463,27 +1520,46 @@ gf_status gf_ins_filter_check(const gf_ins_filter *f)
     return GF_OK;
 }
 
-/* gf_ins_step after its checks of the pointers and of the filter's layout (gf_ins_run
- * makes them once for its whole record: nothing in a step changes the layout) */
-static gf_status ins_step(gf_ins_filter *f, double t_s, const double *gyro, const double *accel,
-                          size_t n_meas, const gf_ins_meas *meas, gf_ins_epochs *epochs,
-                          gf_ins_log *log)
+/* the measurement as the filter uses it: in reverse (gf_ins_reverse) velocities change
+ * sign (GNSS velocity, odometer forward speed); positions, heights and the tachometer's
+ * speed magnitude do not */
+static void meas_directed(const gf_ins_filter *f, const gf_ins_meas *in, gf_ins_meas *out)
 {
-    if (!isfinite(t_s) || !gf_all_finite(gyro, 3) || !gf_all_finite(accel, 3))
+    *out = *in;
+    if (dir_of(f) < 0.0 && (in->type == GF_INS_MEAS_GNSS_VEL || in->type == GF_INS_MEAS_ODO))
+        for (int i = 0; i < 3; ++i)
+            out->z[i] = -in->z[i];
+}
+
+/* gf_ins_step after its checks of the pointers and of the filter's layout (gf_ins_run
+ * makes them once for its whole record: nothing in a step changes the layout). The
+ * measurements are meas[0], meas[stride], ... (stride -1: a backward walk over a record
+ * stored in increasing time). Times are compared in the filter's direction: with
+ * dir = -1 (reversed) time decreases, and every difference below is dir * (a - b). */
+static gf_status ins_step(gf_ins_filter *f, double t_s, const double *gyro_in, const double *accel,
+                          size_t n_meas, const gf_ins_meas *meas, ptrdiff_t stride,
+                          gf_ins_epochs *epochs, gf_ins_log *log)
+{
+    if (!isfinite(t_s) || !gf_all_finite(gyro_in, 3) || !gf_all_finite(accel, 3))
         return GF_ERR_NONFINITE_INPUT;
+    const double dir = dir_of(f);
+    /* reverse navigation: the gyro increments (or rates) change sign, dv does not */
+    const double gyro[3] = {dir * gyro_in[0], dir * gyro_in[1], dir * gyro_in[2]};
     const int rates = f->cfg.input == GF_SINS_INPUT_RATES;
     const int first_rate = rates && !f->have_sample;
     const double t_prev = f->t_s;
-    const double T = t_s - t_prev;
+    const double T = dir * (t_s - t_prev);
     if (!first_rate && !(T > 0.0 && T <= f->cfg.max_imu_gap_s))
         return GF_ERR_BAD_TIME;
-    if (first_rate && t_s < t_prev)
+    if (first_rate && T < 0.0)
         return GF_ERR_BAD_TIME;
+#define MS(j) (meas + (ptrdiff_t)(j) * stride)
     for (size_t j = 0; j < n_meas; ++j) {
-        const gf_status st = meas_check(meas + j);
+        const gf_status st = meas_check(MS(j));
         if (st != GF_OK)
             return st;
-        if (meas[j].t_s > t_s + GF_INS_TIME_EPS_S || (j && meas[j].t_s < meas[j - 1].t_s))
+        if (dir * (MS(j)->t_s - t_s) > GF_INS_TIME_EPS_S ||
+            (j && dir * (MS(j)->t_s - MS(j - 1)->t_s) < 0.0))
             return GF_ERR_BAD_TIME;
     }
     if (epochs && (epochs->count > epochs->capacity ||
@@ -1502,15 +1578,19 @@ static gf_status ins_step(gf_ins_filter *f, double t_s, const double *gyro, cons
         /* a rate record's first sample starts it: no interval, no motion */
         double g[3], a[3];
         compensate(f, gyro, accel, 0.0, g, a);
-        st = gf_sins_step(&f->nav, g, a, 0.0, NAN);
+        st = gf_sins_step_trusted(&f->nav, g, a, 0.0);
         if (st != GF_OK)
             return st;
         gf_v3_copy(g, f->w_ib_b_rad_s);
         gf_v3_copy(a, f->f_b_m_s2);
         f->t_s = t_s;
         f->nav.time_s = t_s;
-        for (size_t j = 0; j < n_meas && st == GF_OK; ++j)
-            st = past_measurement(f, meas + j, epochs, log);
+        for (size_t j = 0; j < n_meas && st == GF_OK; ++j) {
+            gf_ins_meas ms;
+            meas_directed(f, MS(j), &ms);
+            st = fabs(ms.t_s - f->t_s) <= GF_INS_TIME_EPS_S ? update(f, ms.type, &ms, 0.0, epochs, log)
+                                                            : past_measurement(f, &ms, epochs, log);
+        }
         if (st != GF_OK)
             return st;
     } else {
@@ -1520,24 +1600,34 @@ static gf_status ins_step(gf_ins_filter *f, double t_s, const double *gyro, cons
         double t_cur = t_prev;
         int done = 0;
         for (size_t j = 0; j < n_meas && st == GF_OK; ++j) {
-            const gf_ins_meas *ms = meas + j;
-            if (ms->t_s <= t_prev + GF_INS_TIME_EPS_S) {
-                st = past_measurement(f, ms, epochs, log);
+            gf_ins_meas msd;
+            meas_directed(f, MS(j), &msd);
+            const gf_ins_meas *ms = &msd;
+            if (dir * (ms->t_s - t_prev) <= GF_INS_TIME_EPS_S) {
+                /* valid at the filter's time (the first sample of a record whose first
+                 * measurement is at its start): applied there; earlier: delayed or stale */
+                if (fabs(ms->t_s - t_prev) <= GF_INS_TIME_EPS_S) {
+                    st = propagate(f, epochs);
+                    if (st == GF_OK)
+                        st = update(f, ms->type, ms, 0.0, epochs, log);
+                } else {
+                    st = past_measurement(f, ms, epochs, log);
+                }
                 continue;
             }
-            if (!done && ms->t_s < t_s - GF_INS_TIME_EPS_S) {
-                if (ms->t_s > t_cur + GF_INS_TIME_EPS_S) {
+            if (!done && dir * (ms->t_s - t_s) < -GF_INS_TIME_EPS_S) {
+                if (dir * (ms->t_s - t_cur) > GF_INS_TIME_EPS_S) {
                     /* split the interval at the time of validity */
-                    const double dt = ms->t_s - t_cur;
+                    const double dt = dir * (ms->t_s - t_cur);
                     double pg[3], pa[3];
                     if (rates) {
-                        const double u = (ms->t_s - t_prev) / T;
+                        const double u = dir * (ms->t_s - t_prev) / T;
                         for (int i = 0; i < 3; ++i) {
                             pg[i] = f->prev_gyro_raw[i] + u * (gyro[i] - f->prev_gyro_raw[i]);
                             pa[i] = f->prev_accel_raw[i] + u * (accel[i] - f->prev_accel_raw[i]);
                         }
                     } else {
-                        const double u = dt / (t_s - t_cur);
+                        const double u = dt / (dir * (t_s - t_cur));
                         for (int i = 0; i < 3; ++i) {
                             pg[i] = u * rem_g[i];
                             pa[i] = u * rem_a[i];
@@ -1549,7 +1639,7 @@ static gf_status ins_step(gf_ins_filter *f, double t_s, const double *gyro, cons
                     t_cur = ms->t_s;
                 }
             } else if (!done) {
-                st = mech_part(f, rem_g, rem_a, t_s - t_cur, t_s);
+                st = mech_part(f, rem_g, rem_a, dir * (t_s - t_cur), t_s);
                 t_cur = t_s;
                 done = 1;
             }
@@ -1559,22 +1649,22 @@ static gf_status ins_step(gf_ins_filter *f, double t_s, const double *gyro, cons
                 st = update(f, ms->type, ms, 0.0, epochs, log);
         }
         if (st == GF_OK && !done)
-            st = mech_part(f, rem_g, rem_a, t_s - t_cur, t_s);
+            st = mech_part(f, rem_g, rem_a, dir * (t_s - t_cur), t_s);
         if (st != GF_OK)
             return st;
         if (f->cfg.zupt)
             standstill_update(f, T);
         /* the regular grid: measurement instants propagate too, but do not move it */
-        if (t_s - f->last_regular_t_s >= f->cfg.prop_interval_s - GF_INS_TIME_EPS_S) {
+        if (dir * (t_s - f->last_regular_t_s) >= f->cfg.prop_interval_s - GF_INS_TIME_EPS_S) {
             f->last_regular_t_s = t_s;
             st = propagate(f, epochs);
             if (st == GF_OK && f->cfg.nhc &&
-                t_s - f->last_nhc_t_s >= f->cfg.nhc_interval_s - GF_INS_TIME_EPS_S) {
+                dir * (t_s - f->last_nhc_t_s) >= f->cfg.nhc_interval_s - GF_INS_TIME_EPS_S) {
                 f->last_nhc_t_s = t_s;
                 st = update(f, GF_INS_MEAS_NHC, NULL, f->cfg.nhc_std_m_s, epochs, log);
             }
             if (st == GF_OK && f->cfg.zupt && f->standstill &&
-                t_s - f->last_zupt_t_s >= f->cfg.zupt_interval_s - GF_INS_TIME_EPS_S) {
+                dir * (t_s - f->last_zupt_t_s) >= f->cfg.zupt_interval_s - GF_INS_TIME_EPS_S) {
                 f->last_zupt_t_s = t_s;
                 st = update(f, GF_INS_MEAS_ZUPT, NULL, f->cfg.zupt_std_m_s, epochs, log);
                 if (st == GF_OK && f->cfg.zaru_std_rad_s > 0.0)
@@ -1584,11 +1674,12 @@ static gf_status ins_step(gf_ins_filter *f, double t_s, const double *gyro, cons
                 return st;
         }
     }
+#undef MS
     gf_v3_copy(gyro, f->prev_gyro_raw);
     gf_v3_copy(accel, f->prev_accel_raw);
     f->have_sample = 1;
     f->n_imu++;
-    if (f->cfg.max_latency_s > 0.0)
+    if (f->cfg.max_latency_s > 0.0 && dir > 0.0)
         history_push(f);
     return GF_OK;
 }
@@ -1601,23 +1692,84 @@ gf_status gf_ins_step(gf_ins_filter *f, double t_s, const double *gyro, const do
         return GF_ERR_NULL_POINTER;
     if (!layout_is_valid(f))
         return GF_ERR_BAD_PARAMETER;
-    return ins_step(f, t_s, gyro, accel, n_meas, meas, epochs, log);
+    return ins_step(f, t_s, gyro, accel, n_meas, meas, 1, epochs, log);
 }
 
+/* row k of the outputs: true-time velocity and gyro bias (reverse filtering negates them) */
 static void write_output(const gf_ins_filter *f, const gf_ins_output *out, size_t k)
 {
+    const double dir = dir_of(f);
     out->t_s[k] = f->t_s;
     memcpy(out->q_bn + 4 * k, f->nav.q_bn, 4 * sizeof(double));
-    gf_v3_copy(f->nav.v_n_m_s, out->v_n_m_s + 3 * k);
+    gf_v3_scale(f->nav.v_n_m_s, dir, out->v_n_m_s + 3 * k);
     out->pos[3 * k] = f->nav.lat_rad;
     out->pos[3 * k + 1] = f->nav.lon_rad;
     out->pos[3 * k + 2] = f->nav.h_m;
     if (out->std)
         memcpy(out->std + 9 * k, f->std9, sizeof f->std9);
-    if (out->sensors)
-        memcpy(out->sensors + GF_INS_N_SENSORS * k, f->sensors, sizeof f->sensors);
+    if (out->sensors) {
+        double *s = out->sensors + GF_INS_N_SENSORS * k;
+        memcpy(s, f->sensors, sizeof f->sensors);
+        gf_v3_scale(f->sensors + S_BG, dir, s + S_BG);
+    }
     if (out->standstill)
         out->standstill[k] = (int8_t)f->standstill;
+}
+
+static int output_ok(const gf_ins_output *out)
+{
+    return !out || (out->t_s && out->q_bn && out->v_n_m_s && out->pos);
+}
+
+/* Forward over samples 0..n-1 in the order given (gf_ins_run), or backward over a record
+ * stored in increasing time (gf_ins_run_backward: sample k = n-1 .. 0 takes the state to
+ * t_s[k-1], t_start_s for k = 0, with increments; to t_s[k] with rates). out may be NULL. */
+static gf_status walk(gf_ins_filter *f, int backward, size_t n, const double *t_s,
+                      const double *gyro, const double *accel, double t_start_s, size_t n_meas,
+                      const gf_ins_meas *meas, const gf_ins_output *out, gf_ins_epochs *epochs,
+                      gf_ins_log *log, size_t *n_done, size_t *meas_done)
+{
+    size_t k = 0, used = 0;
+    gf_status st = GF_OK;
+    if (!backward) {
+        const double dir = dir_of(f);
+        for (; k < n; ++k) {
+            size_t cnt = 0;
+            while (used + cnt < n_meas && dir * (meas[used + cnt].t_s - t_s[k]) <= GF_INS_TIME_EPS_S)
+                ++cnt;
+            st = ins_step(f, t_s[k], gyro + 3 * k, accel + 3 * k, cnt, meas + used, 1, epochs, log);
+            if (st != GF_OK)
+                break;
+            used += cnt;
+            if (out)
+                write_output(f, out, k);
+        }
+    } else {
+        const int rates = f->cfg.input == GF_SINS_INPUT_RATES;
+        /* measurements after the filter's time stay (they belong to a later period) */
+        size_t top = n_meas;
+        while (top > 0 && meas[top - 1].t_s > f->t_s + GF_INS_TIME_EPS_S)
+            --top;
+        for (; k < n; ++k) {
+            const size_t r = n - 1 - k;
+            const double t_new = rates ? t_s[r] : (r ? t_s[r - 1] : t_start_s);
+            size_t cnt = 0;
+            while (used + cnt < top && meas[top - 1 - used - cnt].t_s >= t_new - GF_INS_TIME_EPS_S)
+                ++cnt;
+            st = ins_step(f, t_new, gyro + 3 * r, accel + 3 * r, cnt,
+                          cnt ? meas + (top - 1 - used) : meas, -1, epochs, log);
+            if (st != GF_OK)
+                break;
+            used += cnt;
+            if (out)
+                write_output(f, out, r);
+        }
+    }
+    if (n_done)
+        *n_done = k;
+    if (meas_done)
+        *meas_done = used;
+    return st;
 }
 
 gf_status gf_ins_run(gf_ins_filter *f, size_t n, const double *t_s, const double *gyro,
@@ -1629,31 +1781,202 @@ gf_status gf_ins_run(gf_ins_filter *f, size_t n, const double *t_s, const double
         *n_done = 0;
     if (meas_done)
         *meas_done = 0;
-    if (!f || !t_s || !gyro || !accel || !out || !out->t_s || !out->q_bn || !out->v_n_m_s ||
-        !out->pos || (n_meas && !meas))
+    if (!f || !t_s || !gyro || !accel || !out || !output_ok(out) || (n_meas && !meas))
         return GF_ERR_NULL_POINTER;
+    if (!layout_is_valid(f))
+        return GF_ERR_BAD_PARAMETER;
+    const double dir = dir_of(f);
+    for (size_t j = 1; j < n_meas; ++j)
+        if (!(dir * (meas[j].t_s - meas[j - 1].t_s) >= 0.0))
+            return GF_ERR_BAD_TIME;
+    return walk(f, 0, n, t_s, gyro, accel, 0.0, n_meas, meas, out, epochs, log, n_done, meas_done);
+}
+
+/* checks of a record stored in increasing time, and of its measurements */
+static gf_status record_check(size_t n, const double *t_s, size_t n_meas, const gf_ins_meas *meas)
+{
+    for (size_t k = 0; k < n; ++k)
+        if (!isfinite(t_s[k]))
+            return GF_ERR_NONFINITE_INPUT;
+    for (size_t k = 1; k < n; ++k)
+        if (!(t_s[k] > t_s[k - 1]))
+            return GF_ERR_BAD_TIME;
     for (size_t j = 1; j < n_meas; ++j)
         if (!(meas[j].t_s >= meas[j - 1].t_s))
             return GF_ERR_BAD_TIME;
+    return GF_OK;
+}
+
+gf_status gf_ins_run_backward(gf_ins_filter *f, size_t n, const double *t_s, const double *gyro,
+                              const double *accel, double t_start_s, size_t n_meas,
+                              const gf_ins_meas *meas, const gf_ins_output *out, gf_ins_log *log,
+                              size_t *n_done, size_t *meas_done)
+{
+    if (n_done)
+        *n_done = 0;
+    if (meas_done)
+        *meas_done = 0;
+    if (!f || !t_s || !gyro || !accel || !output_ok(out) || (n_meas && !meas))
+        return GF_ERR_NULL_POINTER;
+    if (!layout_is_valid(f) || dir_of(f) > 0.0)
+        return GF_ERR_BAD_PARAMETER;
+    if (n == 0)
+        return GF_OK;
+    gf_status st = record_check(n, t_s, n_meas, meas);
+    if (st != GF_OK)
+        return st;
+    const int rates = f->cfg.input == GF_SINS_INPUT_RATES;
+    if (!isfinite(t_start_s) || (!rates && !(t_start_s < t_s[0])))
+        return GF_ERR_BAD_TIME;
+    if (fabs(f->t_s - t_s[n - 1]) > GF_INS_TIME_EPS_S)
+        return GF_ERR_BAD_TIME;
+    return walk(f, 1, n, t_s, gyro, accel, t_start_s, n_meas, meas, out, NULL, log, n_done,
+                meas_done);
+}
+
+/* ---- reverse-time filtering and forward-backward processing (seed 003) ------------------- */
+
+gf_status gf_ins_reverse(gf_ins_filter *f)
+{
+    if (!f)
+        return GF_ERR_NULL_POINTER;
     if (!layout_is_valid(f))
         return GF_ERR_BAD_PARAMETER;
-    size_t j = 0, k = 0;
-    gf_status st = GF_OK;
-    for (; k < n; ++k) {
-        size_t cnt = 0;
-        while (j + cnt < n_meas && meas[j + cnt].t_s <= t_s[k] + GF_INS_TIME_EPS_S)
-            ++cnt;
-        st = ins_step(f, t_s[k], gyro + 3 * k, accel + 3 * k, cnt, meas + j, epochs, log);
-        if (st != GF_OK)
-            break;
-        j += cnt;
-        write_output(f, out, k);
+    /* the covariance at the turning point (no epochs: the smoother does not cross it) */
+    gf_status st = propagate(f, NULL);
+    if (st != GF_OK)
+        return st;
+    st = gf_sins_reverse(&f->nav);
+    if (st != GF_OK)
+        return st;
+    /* x_r = D x, P_r = D P D, D = -1 on dv and dbg (derivation in the header) */
+    const int n = f->n_states;
+    double d[NMAX];
+    for (int i = 0; i < n; ++i)
+        d[i] = 1.0;
+    for (int i = 0; i < 3; ++i)
+        d[IV + i] = d[IBG + i] = -1.0;
+    for (int i = 0; i < n; ++i) {
+        f->kf.x[i] *= d[i];
+        for (int j = 0; j < n; ++j)
+            f->kf.P[i * n + j] *= d[i] * d[j];
     }
-    if (n_done)
-        *n_done = k;
-    if (meas_done)
-        *meas_done = j;
-    return st;
+    for (int i = 0; i < 3; ++i) {
+        f->sensors[S_BG + i] = -f->sensors[S_BG + i];
+        f->w_ib_b_rad_s[i] = -f->w_ib_b_rad_s[i];
+        f->prev_gyro_raw[i] = -f->prev_gyro_raw[i];
+        f->still_w[i] = -f->still_w[i];
+    }
+    f->nav0 = f->nav;
+    memcpy(f->sensors0, f->sensors, sizeof f->sensors);
+    if (f->cfg.input == GF_SINS_INPUT_RATES)
+        f->have_sample = 0;          /* the next sample (the same instant) restarts the record */
+    const double dir = dir_of(f);
+    f->last_regular_t_s = f->t_s;
+    f->last_nhc_t_s = f->last_zupt_t_s = -dir * INFINITY;
+    f->hist_head = f->hist_count = 0;
+    refresh_scale(f);
+    refresh_std(f);
+    return GF_OK;
+}
+
+static void pass_write(const gf_ins_filter *f, gf_ins_pass *p, uint64_t upd0, uint64_t rej0)
+{
+    const double dir = dir_of(f);
+    p->direction = (int32_t)dir;
+    p->t_s = f->t_s;
+    memcpy(p->q_bn, f->nav.q_bn, sizeof p->q_bn);
+    gf_v3_scale(f->nav.v_n_m_s, dir, p->v_n_m_s);
+    memcpy(p->std9, f->std9, sizeof p->std9);
+    memcpy(p->sensors, f->sensors, sizeof p->sensors);
+    gf_v3_scale(f->sensors + S_BG, dir, p->sensors + S_BG);
+    p->n_updates = f->n_updates - upd0;
+    p->n_rejected = f->n_rejected - rej0;
+}
+
+gf_status gf_ins_forward_backward(gf_ins_filter *f, size_t n, const double *t_s,
+                                  const double *gyro, const double *accel, size_t n_meas,
+                                  const gf_ins_meas *meas, int32_t n_fb, gf_ins_pass *passes,
+                                  gf_ins_log *log, int32_t *n_passes_done)
+{
+    if (n_passes_done)
+        *n_passes_done = 0;
+    if (!f || !t_s || !gyro || !accel || (n_meas && !meas))
+        return GF_ERR_NULL_POINTER;
+    if (!layout_is_valid(f) || dir_of(f) < 0.0 || n_fb < 0 || n_fb > 10000)
+        return GF_ERR_BAD_PARAMETER;
+    if (n < 2)
+        return GF_ERR_BAD_SIZE;
+    gf_status st = record_check(n, t_s, n_meas, meas);
+    if (st != GF_OK)
+        return st;
+    const double t_start = f->t_s;
+    /* a measurement at a turning point (the start or the end of the record) was applied
+     * at the end of the pass before: the next pass leaves it out (no double use at one
+     * instant) */
+    size_t j_first = 0, n_before_end = n_meas;
+    while (j_first < n_meas && meas[j_first].t_s <= t_start + GF_INS_TIME_EPS_S)
+        ++j_first;
+    while (n_before_end > 0 && meas[n_before_end - 1].t_s >= t_s[n - 1] - GF_INS_TIME_EPS_S)
+        --n_before_end;
+    for (int32_t p = 0; p <= 2 * n_fb; ++p) {
+        const uint64_t upd0 = f->n_updates, rej0 = f->n_rejected;
+        const int backward = p % 2 == 1;
+        if (p > 0) {
+            st = gf_ins_reverse(f);
+            if (st != GF_OK)
+                return st;
+        }
+        if (backward)
+            st = walk(f, 1, n, t_s, gyro, accel, t_start, n_before_end, meas, NULL, NULL, log,
+                      NULL, NULL);
+        else if (p == 0)
+            st = walk(f, 0, n, t_s, gyro, accel, t_start, n_meas, meas, NULL, NULL, log, NULL,
+                      NULL);
+        else
+            st = walk(f, 0, n, t_s, gyro, accel, t_start, n_meas - j_first, meas + j_first, NULL,
+                      NULL, log, NULL, NULL);
+        if (st != GF_OK) {
+            if (backward)           /* hand the filter back forward in time */
+                gf_ins_reverse(f);
+            return st;
+        }
+        if (passes)
+            pass_write(f, passes + p, upd0, rej0);
+        if (n_passes_done)
+            *n_passes_done = p + 1;
+    }
+    return GF_OK;
+}
+
+/* ---- coarse alignment at rest (for the FMU's alignment phase) ----------------------------- */
+
+gf_status gf_ins_coarse_align(const double *f_b_m_s2, const double *w_b_rad_s, double *q_bn)
+{
+    if (!f_b_m_s2 || !w_b_rad_s || !q_bn)
+        return GF_ERR_NULL_POINTER;
+    if (!gf_all_finite(f_b_m_s2, 3) || !gf_all_finite(w_b_rad_s, 3))
+        return GF_ERR_NONFINITE_INPUT;
+    const double fn = gf_v3_norm(f_b_m_s2), wn = gf_v3_norm(w_b_rad_s);
+    if (!(fn > 5.0 && fn < 15.0))
+        return GF_ERR_SINGULAR_GEOMETRY;
+    double e[3], u[3], nn[3];
+    gf_v3_cross(w_b_rad_s, f_b_m_s2, e);
+    const double en = gf_v3_norm(e);
+    if (!(en > 1e-3 * wn * fn) || !(wn > 0.0))
+        return GF_ERR_SINGULAR_GEOMETRY;
+    gf_v3_scale(e, 1.0 / en, e);
+    gf_v3_scale(f_b_m_s2, 1.0 / fn, u);
+    gf_v3_cross(u, e, nn);
+    gf_mat3 C;
+    for (int j = 0; j < 3; ++j) {
+        C.m[0][j] = e[j];
+        C.m[1][j] = nn[j];
+        C.m[2][j] = u[j];
+    }
+    gf_q_from_dcm(&C, q_bn);
+    gf_q_normalize(q_bn, q_bn);
+    return GF_OK;
 }
 
 /* ---- smoother and helpers ------------------------------------------------------------------ */

@@ -57,9 +57,20 @@
  * Measurements (docs/estimation.md; z_err = prediction from the nominal - measurement):
  *   GNSS position: antenna at lever arm l_gnss (body), p_ant = p + C_b^n l (ENU metres).
  *   GNSS velocity: v_ant = v + C_b^n (w_eb^b x l),  w_eb^b = w_ib^b - C_n^b w_ie^n.
- *   barometer: h + b_baro.  odometer: (1 + k) [C_n^b v + w_eb^b x l_odo]_y (forward).
- *   non-holonomic: [C_n^b v + w_eb^b x l_odo]_x,z = 0.  ZUPT: v = 0.
+ *   barometer: h + b_baro.  odometer: (1 + k) [C_b^m (C_n^b v + w_eb^b x l_odo)]_y
+ *   (forward), C_m^b = Rz(-heading_m) Rx(pitch_m) the odometer's mounting (boresight,
+ *   odo_mount_rad; identity by default).  non-holonomic: [C_b^m (C_n^b v + w_eb^b x
+ *   l_odo)]_x,z = 0.  ZUPT: v = 0.
  *   ZARU: w_ib^b - C_n^b w_ie^n = 0 (mean over the standstill detector's window).
+ *   speed (tachometer, seed 003 section 1.2.2, its eq. 7-8 linearised; the scan lost the
+ *   equations, so derived here): y = (1 + k) sqrt(v_E^2 + v_N^2), k the odometer scale
+ *   state (one speed-scale state: a vehicle has an odometer or a tachometer), so
+ *   dy = (1 + k) (v_E dv_E + v_N dv_N) / |v_h| - |v_h| dk. The seed's 2-D model: the
+ *   AUV's depth comes from its depth sensor (a height measurement: GF_INS_MEAS_BARO with
+ *   z = -depth + datum), the tachometer gives the horizontal speed through the water
+ *   (no current, no lever-arm term: w x l is ~1e-3 of the speed on an AUV). At or below
+ *   speed_min_m_s of INS horizontal speed the direction v_h / |v_h| is undefined or
+ *   poorly known and the update is refused (logged GF_INS_REJECTED_LOW_SPEED).
  * Measurements carry their time of validity; the IMU interval that contains it is
  * split there (increments in proportion to time, rates interpolated linearly), the
  * covariance is propagated to that instant and the update is made there. A measurement
@@ -70,6 +81,28 @@
  * 0.1-0.5 s is second order for the slowly varying INS errors).
  * Innovation gating: NIS r^T S^-1 r above the chi-square quantile of the configured
  * probability for m degrees of freedom rejects the measurement (logged).
+ *
+ * Reverse-time filtering (seed 003 section 2, its eq. 20-36: the reverse navigation
+ * algorithm; the scan lost the equations, so derived here). With tau = -t the
+ * mechanization is the forward one with (w_ib, f, v, w_ie) -> (-w_ib, f, -v, -w_ie)
+ * (gf_sins.h). gf_ins_reverse() turns the filter around: the nominal through
+ * gf_sins_reverse (v and the Earth-rate sign negated; error model and measurement
+ * models take the Earth rate with that sign), and the error state x_r = D x,
+ * P_r = D P D with D = diag(-1 on dv and dbg, +1 elsewhere). Why: dv_r = v_r,computed -
+ * v_r,true = -dv; the gyro increments are negated, so the bias the reverse filter sees
+ * is -b (dbg_r = -dbg, its estimate negated too); attitude, position, accelerometer
+ * bias (f unchanged), scale factors ((1 + s)(-w) - b keeps s) and barometer/odometer
+ * errors are unchanged. Check on F: with x_r = D x, dx_r/dtau = -D F D x_r, and the
+ * forward formula of F evaluated on the reversed nominal (-v, -w_ie, -w_en, -w_ib, same
+ * f, C, position) gives exactly -D F D block by block (e.g. phi-phi: -[w_in x] changes
+ * sign, phi-dv: dw_en/dv keeps it, dv-phi: [f^n x] keeps it, dv-dv: -(2 w_ie + w_en) x
+ * changes it), except the Gauss-Markov decays -1/tau, which keep their sign: a
+ * stationary first-order Markov process has the same statistics in reversed time, so
+ * that is the right backward model (random constants, tau = 0: exact). Reversing twice
+ * is the identity on x, P and the nominal. Measurements in reverse are handed in as
+ * recorded (true time): GNSS velocity and odometer speed are negated inside, the
+ * tachometer speed magnitude and positions/heights are unchanged. Delayed measurements
+ * (max_latency_s) are used forward only; in reverse they are stale.
  */
 #ifndef GF_INS_GNSS_H
 #define GF_INS_GNSS_H
@@ -110,6 +143,9 @@ extern "C" {
 #define GF_INS_MEAS_NHC 5          /* internal: lateral and vertical body velocity 0 */
 #define GF_INS_MEAS_ZUPT 6         /* internal: velocity 0 at standstill */
 #define GF_INS_MEAS_ZARU 7         /* internal: angular rate w.r.t. the Earth 0 at standstill */
+#define GF_INS_MEAS_SPEED 8        /* z[0]: horizontal speed magnitude m/s (tachometer, seed
+                                      003); std[0] m/s */
+#define GF_INS_N_MEAS_KINDS 9      /* measurement type codes are 1 .. GF_INS_N_MEAS_KINDS - 1 */
 
 /* Outcome of one update */
 #define GF_INS_ACCEPTED 0
@@ -119,6 +155,8 @@ extern "C" {
 #define GF_INS_FORCED 4            /* applied above the gate: the previous gate_reset_count
                                       of its kind were all rejected (a gate that rejects
                                       everything after a divergence would never recover) */
+#define GF_INS_REJECTED_LOW_SPEED 5 /* speed update refused: INS horizontal speed below
+                                      speed_min_m_s (direction of v_h undefined) */
 
 typedef struct gf_ins_noise {
     double gyro_arw_rad_sqrt_s;     /* gyro white noise (angle random walk), rad/sqrt(s) */
@@ -168,10 +206,15 @@ typedef struct gf_ins_config {
     double max_latency_s;           /* > 0: measurements valid up to this long before the
                                        current sample are used (delayed update, see above);
                                        older ones, and all past ones with 0, are stale */
+    double speed_min_m_s;           /* GF_INS_MEAS_SPEED refused at or below this INS
+                                       horizontal speed, m/s (>= 0; default 0.5) */
+    double odo_mount_rad[2];        /* odometer boresight, fixed: pitch (nose-up +) and
+                                       heading (clockwise +) of its measuring axes in the
+                                       body frame, rad, |.| < pi/2; 0, 0: body axes */
 } gf_ins_config;
 
 typedef struct gf_ins_meas {
-    int32_t type;                   /* GF_INS_MEAS_GNSS_POS .. GF_INS_MEAS_ODO */
+    int32_t type;                   /* GF_INS_MEAS_GNSS_POS .. GF_INS_MEAS_ODO, GF_INS_MEAS_SPEED */
     double t_s;                     /* time of validity */
     double z[3];
     double std[3];                  /* > 0 */
@@ -256,7 +299,7 @@ typedef struct gf_ins_filter {
     gf_ins_history hist[GF_INS_HISTORY];  /* ring of the last samples (max_latency_s > 0) */
     int32_t hist_head, hist_count;
     uint64_t n_imu, n_updates, n_rejected;
-    int32_t gate_run[8];            /* consecutive gate rejections per measurement type */
+    int32_t gate_run[GF_INS_N_MEAS_KINDS]; /* consecutive gate rejections per measurement type */
 } gf_ins_filter;
 
 /* Defaults: increments with coning, EKF, 15 states, propagation every 0.1 s, IMU gap
@@ -290,7 +333,8 @@ gf_status gf_ins_epochs_begin(gf_ins_filter *f, gf_ins_epochs *epochs);
 
 /* One IMU sample whose interval ends at t_s (increments over (t_prev, t_s], or rates at
  * t_s), with the measurements valid inside that interval (sorted by time; t_prev <
- * t_m <= t_s). epochs and log may be NULL. Errors: GF_ERR_BAD_TIME (t_s not after the
+ * t_m <= t_s; one at t_prev itself, the filter's time, is applied before the sample;
+ * earlier ones are delayed or stale). epochs and log may be NULL. Errors: GF_ERR_BAD_TIME (t_s not after the
  * filter's time, interval above max_imu_gap_s, measurement outside the interval or not
  * sorted), GF_ERR_NONFINITE_INPUT, GF_ERR_BAD_PARAMETER (bad measurement type or std),
  * GF_ERR_OUT_OF_RANGE (absurd sample), GF_ERR_DIVERGED (navigation or covariance left
@@ -302,7 +346,9 @@ gf_status gf_ins_step(gf_ins_filter *f, double t_s, const double *gyro, const do
                       gf_ins_log *log);
 
 /* n IMU samples (t_s n, gyro and accel n x 3) with n_meas measurements sorted by time
- * (those at or before the filter's time are logged as stale; those after t_s[n-1] are
+ * (processing order: time decreasing after gf_ins_reverse). A measurement valid at the
+ * filter's time is applied there, before the first sample; earlier ones are delayed
+ * updates (max_latency_s) or logged as stale; those after t_s[n-1] are
  * left for the next call). Row k of *out is the state after sample k.
  * *n_done = samples processed, *meas_done = measurements consumed; on an error the rows
  * before *n_done are valid and the filter holds the state after the last good sample. */
@@ -310,6 +356,70 @@ gf_status gf_ins_run(gf_ins_filter *f, size_t n, const double *t_s, const double
                      const double *accel, size_t n_meas, const gf_ins_meas *meas,
                      const gf_ins_output *out, gf_ins_epochs *epochs, gf_ins_log *log,
                      size_t *n_done, size_t *meas_done);
+
+/* Turns the filter around in time (see "Reverse-time filtering" above): the covariance
+ * is first propagated to the filter's time, then the nominal is reversed
+ * (gf_sins_reverse), x and P flipped (D x, D P D), the gyro-bias estimate negated; the
+ * NHC/ZUPT timers and the delayed-measurement history restart. Afterwards gf_ins_step
+ * and gf_ins_run take samples with time decreasing (the processing order), the gyro as
+ * recorded (negated inside), measurements as recorded and sorted by decreasing time;
+ * outputs report true-time velocity and gyro bias. Calling it twice is the identity on
+ * the nominal, x and P. Errors: GF_ERR_BAD_PARAMETER (layout), GF_ERR_DIVERGED. */
+gf_status gf_ins_reverse(gf_ins_filter *f);
+
+/* A reversed filter (gf_ins_reverse) walked backward over a record stored in recorded
+ * order: t_s (n, increasing), gyro, accel (n x 3) as gf_ins_run takes them, the
+ * filter's time = t_s[n-1]. Increments: sample k takes the state from t_s[k] to t_s[k-1]
+ * (t_start_s for k = 0, the time at which the record's first interval starts); rates:
+ * the samples at t_s[n-1] .. t_s[0] (t_start_s unused). Measurements sorted by increasing
+ * time, as recorded; those after the filter's time are left (not consumed), those
+ * before the end of the walk are left for a later call. Row k of *out (may be NULL) is
+ * the state after processing sample k (true-time velocity and gyro bias).
+ * *n_done = samples processed (from the last), *meas_done = measurements consumed.
+ * Errors: GF_ERR_BAD_PARAMETER (filter not reversed), GF_ERR_BAD_TIME (filter's time not
+ * t_s[n-1], times not increasing), the errors of gf_ins_step. */
+gf_status gf_ins_run_backward(gf_ins_filter *f, size_t n, const double *t_s, const double *gyro,
+                              const double *accel, double t_start_s, size_t n_meas,
+                              const gf_ins_meas *meas, const gf_ins_output *out, gf_ins_log *log,
+                              size_t *n_done, size_t *meas_done);
+
+/* The state at the end of one pass of gf_ins_forward_backward. */
+typedef struct gf_ins_pass {
+    int32_t direction;              /* +1 forward, -1 backward */
+    double t_s;                     /* time reached (end of the record, or its start) */
+    double q_bn[4];
+    double v_n_m_s[3];              /* true-time velocity, ENU */
+    double std9[9];                 /* as gf_ins_output.std */
+    double sensors[GF_INS_N_SENSORS];  /* true-time convention */
+    uint64_t n_updates, n_rejected; /* in this pass */
+} gf_ins_pass;
+
+/* Forward-backward processing of a stored alignment period (seed 003 section 2): the
+ * filter (forward; its time t_start is where the record's first interval starts: before
+ * t_s[0] for increments, at or before t_s[0] for rates) runs forward over the record,
+ * then n_fb times: reversed, backward to the start, reversed, forward to the end,
+ * carrying x and P across each reversal. The record (recorded order, as
+ * gf_ins_run_backward) and its measurements (increasing time, inside the record's span)
+ * are read in place, one call for all the passes (memory: the caller's arrays only).
+ * passes (1 + 2 n_fb, may be NULL) receive the state at the end of each pass; log (may
+ * be NULL) every update of every pass. On return the filter is forward at t_s[n-1],
+ * ready to navigate on. *n_passes_done = passes completed. Errors: GF_ERR_BAD_PARAMETER
+ * (n_fb outside 0 .. 10000, filter reversed), GF_ERR_BAD_SIZE (n < 2), the errors of
+ * gf_ins_run. */
+gf_status gf_ins_forward_backward(gf_ins_filter *f, size_t n, const double *t_s,
+                                  const double *gyro, const double *accel, size_t n_meas,
+                                  const gf_ins_meas *meas, int32_t n_fb, gf_ins_pass *passes,
+                                  gf_ins_log *log, int32_t *n_passes_done);
+
+/* Coarse alignment at rest for any orientation (TRIAD on gravity and the Earth rate; the
+ * same as gfins_fmi.estimation.alignment.attitude_from_gravity_and_earth_rate): from the
+ * mean specific force f_b (m/s^2) and the mean angular rate w_b (rad/s) over a window at
+ * rest, in body axes, up = f / |f|, east = (w x f) / |w x f|, north = up x east, and
+ * C_b^n has the rows east, north, up (in body axes); q_bn its quaternion. The heading
+ * error is ~ east gyro bias / (Omega cos L): the gyros must see the Earth rate. Errors:
+ * GF_ERR_NONFINITE_INPUT, GF_ERR_SINGULAR_GEOMETRY (|f| not in (5, 15) m/s^2 — not at
+ * rest on the Earth —, or w x f below 1e-3 |w| |f|: a pole, or no Earth rate seen). */
+gf_status gf_ins_coarse_align(const double *f_b_m_s2, const double *w_b_rad_s, double *q_bn);
 
 /* The continuous error model at the filter's nominal state with specific force f_b and
  * rate w_ib_b (body): F (n x n), G (n x (n - 3)) and the noise intensities q (n - 3):

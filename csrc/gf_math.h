@@ -267,6 +267,39 @@ static inline void gf_q_to_dcm(const double q[4], gf_mat3 *dcm)
     out[2][2] = q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3;
 }
 
+/* The unit quaternion of a rotation matrix (the inverse of gf_q_to_dcm), scalar part
+ * >= 0: Shepperd's method, from the largest of 1 + trace and 1 + 2 m_ii - trace, so that
+ * no small divisor appears (Shepperd, J. Guidance Control 1(3), 1978). */
+static inline void gf_q_from_dcm(const gf_mat3 *dcm, double q[4])
+{
+    const double (*m)[3] = dcm->m;
+    const double tr = m[0][0] + m[1][1] + m[2][2];
+    const double c[4] = {1.0 + tr, 1.0 + 2.0 * m[0][0] - tr, 1.0 + 2.0 * m[1][1] - tr,
+                         1.0 + 2.0 * m[2][2] - tr};
+    int k = 0;
+    for (int i = 1; i < 4; ++i)
+        if (c[i] > c[k])
+            k = i;
+    const double r = sqrt(c[k]), h = 0.5 / r;
+    double v[4];
+    if (k == 0) {
+        v[0] = 0.5 * r; v[1] = (m[2][1] - m[1][2]) * h; v[2] = (m[0][2] - m[2][0]) * h;
+        v[3] = (m[1][0] - m[0][1]) * h;
+    } else if (k == 1) {
+        v[0] = (m[2][1] - m[1][2]) * h; v[1] = 0.5 * r; v[2] = (m[0][1] + m[1][0]) * h;
+        v[3] = (m[0][2] + m[2][0]) * h;
+    } else if (k == 2) {
+        v[0] = (m[0][2] - m[2][0]) * h; v[1] = (m[0][1] + m[1][0]) * h; v[2] = 0.5 * r;
+        v[3] = (m[1][2] + m[2][1]) * h;
+    } else {
+        v[0] = (m[1][0] - m[0][1]) * h; v[1] = (m[0][2] + m[2][0]) * h;
+        v[2] = (m[1][2] + m[2][1]) * h; v[3] = 0.5 * r;
+    }
+    const double s = v[0] < 0.0 ? -1.0 : 1.0;
+    for (int i = 0; i < 4; ++i)
+        q[i] = s * v[i];
+}
+
 /* ---- profiles ------------------------------------------------------------- */
 
 /* C2 smooth step S(s) = s - sin(2 pi s)/(2 pi) on [0, 1] (s clamped), its derivatives

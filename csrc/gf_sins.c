@@ -883,6 +883,6 @@ gf_status gf_sins_run(gf_sins_state *state, size_t n, const double *gyro, const 
 gf_status gf_sins_step_trusted(gf_sins_state *state, const double *gyro, const double *accel,
                                double dt_s)
 {
-    /* forward navigation only (the filters); the caller keeps *state valid */
+    /* the filters: the caller keeps *state valid and negates the gyro in reverse */
     return sins_update(state, gyro, accel, dt_s, NAN);
 }

@@ -286,9 +286,11 @@ gf_status gf_sins_step_compensated_trusted(gf_sins_state *state, const double *p
                                            const double *rate_rad_s, const double *f_m_s2,
                                            double dt_s, double h_ext_m);
 
-/* Internal to the core: gf_sins_step forward in time without the check of *state, for
- * callers that keep the state valid themselves (the integrated-navigation filter sets it
- * only through gf_sins_init and gf_sins_set_navigation, which check). */
+/* Internal to the core: gf_sins_step without the check of *state and without its gyro
+ * negation in reverse (the caller hands the increments in the state's direction of
+ * time), for callers that keep the state valid themselves (the integrated-navigation
+ * filter sets it only through gf_sins_init, gf_sins_set_navigation and gf_sins_reverse,
+ * which check). */
 gf_status gf_sins_step_trusted(gf_sins_state *state, const double *gyro, const double *accel,
                                double dt_s);
 

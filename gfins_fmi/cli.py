@@ -710,6 +710,8 @@ def main(argv: list[str] | None = None) -> int:
     parsers["integrate"] = estimation_cli.add_parser(sub)
     from gfins_fmi.estimation import calibrate_cli
     parsers["calibrate"] = calibrate_cli.add_parser(sub)
+    from gfins_fmi.estimation import align_cli
+    parsers["align"] = align_cli.add_parser(sub)
 
     p = parsers["validate"] = sub.add_parser("validate", help="run fmpy's validation on every shipped FMU")
     p.set_defaults(func=_validate)

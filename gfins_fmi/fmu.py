@@ -525,7 +525,8 @@ def ins_gnss_fmu_parameters(config, initial) -> dict:
         std0_gyro_scale=vec(given(initial.gyro_scale_std, config.gyro_scale_std)),
         std0_accel_scale=vec(given(initial.accel_scale_std, config.accel_scale_std)),
         std0_baro_bias=float(given(initial.baro_bias_std_m, config.baro_bias_std_m)),
-        std0_odo_scale=float(given(initial.odometer_scale_std, config.odometer_scale_std)))
+        std0_odo_scale=float(given(initial.odometer_scale_std, config.odometer_scale_std)),
+        align_time=0.0)     # the batch API starts from the given attitude (no alignment phase)
     return params
 
 

@@ -34,11 +34,12 @@ DEG_H = DEG / 3600.0
 MEAS_TYPES = {int(lib.GF_INS_MEAS_GNSS_POS): "gnss_pos", int(lib.GF_INS_MEAS_GNSS_VEL): "gnss_vel",
               int(lib.GF_INS_MEAS_BARO): "baro", int(lib.GF_INS_MEAS_ODO): "odometer",
               int(lib.GF_INS_MEAS_NHC): "nhc", int(lib.GF_INS_MEAS_ZUPT): "zupt",
-              int(lib.GF_INS_MEAS_ZARU): "zaru"}
+              int(lib.GF_INS_MEAS_ZARU): "zaru", int(lib.GF_INS_MEAS_SPEED): "speed"}
 #: outcome of an update (GF_INS_ACCEPTED, GF_INS_REJECTED_*)
 UPDATE_STATUS = {int(lib.GF_INS_ACCEPTED): "accepted", int(lib.GF_INS_REJECTED_GATE): "gate",
                  int(lib.GF_INS_REJECTED_SINGULAR): "singular",
-                 int(lib.GF_INS_REJECTED_STALE): "stale", int(lib.GF_INS_FORCED): "forced"}
+                 int(lib.GF_INS_REJECTED_STALE): "stale", int(lib.GF_INS_FORCED): "forced",
+                 int(lib.GF_INS_REJECTED_LOW_SPEED): "low_speed"}
 #: the sensor-error estimates, in the order of every ``sensors`` array
 SENSOR_NAMES = ("bg_x_rad_s", "bg_y_rad_s", "bg_z_rad_s", "ba_x_m_s2", "ba_y_m_s2", "ba_z_m_s2",
                 "sg_x", "sg_y", "sg_z", "sa_x", "sa_y", "sa_z", "baro_bias_m", "odo_scale")
@@ -51,7 +52,7 @@ _BAD_FIELD = {1: "input", 2: "coning", 3: "filter", 4: "scale_factors/baro_bias/
               30: "gnss_lever_arm_m/odometer_lever_arm_m", 31: "gate_probability",
               32: "nhc_std_m_s/nhc_interval_s", 33: "zupt_std_m_s/zaru_std_rad_s/zupt_interval_s",
               34: "standstill_window_s/standstill_accel_std_m_s2/standstill_gyro_rad_s",
-              35: "max_latency_s"}
+              35: "max_latency_s", 36: "speed_min_m_s", 37: "odometer_mount_rad"}
 
 
 class FilterError(GfinsError, ValueError):
@@ -101,6 +102,9 @@ class FilterConfig:
         the odometer, with their std/tau.
     gnss_lever_arm_m, odometer_lever_arm_m : IMU -> antenna and IMU -> wheel contact point,
         body axes (right, front, up), m.
+    odometer_mount_rad : (pitch, heading) of the odometer's measuring axes in the body
+        frame (boresight, fixed parameters; nose-up and clockwise positive, |.| < 90 deg):
+        the odometer and the non-holonomic constraints then act along those axes.
     gate_probability : NIS gate (chi-square probability; None: no gate).
     gate_reset_count : after this many consecutive gate rejections of one measurement kind
         the next one is applied anyway (logged as "forced"), so that a filter that has
@@ -118,6 +122,9 @@ class FilterConfig:
     max_latency_s : measurements handed in after their time of validity (the FMU, a
         receiver with latency) are used up to this late (0: such measurements are stale);
         see docs/estimation.md.
+    speed_min_m_s : tachometer speed updates (``speed=`` records, seed 003) are refused at
+        or below this INS horizontal speed (the direction of the velocity is undefined
+        there); logged as "low_speed".
     """
 
     imu: ImuNoise = field(default_factory=ImuNoise)
@@ -138,6 +145,7 @@ class FilterConfig:
     odometer_scale_tau_s: float = 0.0
     gnss_lever_arm_m: tuple = (0.0, 0.0, 0.0)
     odometer_lever_arm_m: tuple = (0.0, 0.0, 0.0)
+    odometer_mount_rad: tuple = (0.0, 0.0)
     gate_probability: Optional[float] = 0.9999
     gate_reset_count: int = 5
     nhc: bool = False
@@ -157,6 +165,7 @@ class FilterConfig:
     max_latency_s: float = 0.0
     max_rate_rad_s: float = 50.0
     max_specific_force_m_s2: float = 1000.0
+    speed_min_m_s: float = 0.5
 
     def __post_init__(self):
         if not isinstance(self.imu, ImuNoise):
@@ -173,6 +182,11 @@ class FilterConfig:
                 raise ValueError(f"{f.name} must be finite and >= 0; got {v!r}")
         self.gnss_lever_arm_m = tuple(_vec3("gnss_lever_arm_m", self.gnss_lever_arm_m, "m"))
         self.odometer_lever_arm_m = tuple(_vec3("odometer_lever_arm_m", self.odometer_lever_arm_m, "m"))
+        mount = np.asarray(self.odometer_mount_rad, dtype=float)
+        if mount.shape != (2,) or not np.all(np.abs(mount) < np.pi / 2):
+            raise ValueError(f"odometer_mount_rad must be (pitch, heading) in rad, each inside (-pi/2, pi/2); "
+                             f"got {self.odometer_mount_rad!r}")
+        self.odometer_mount_rad = tuple(float(x) for x in mount)
         self._c()   # the C checks, with messages naming the field
 
     @property
@@ -225,6 +239,7 @@ class FilterConfig:
             setattr(cfg.noise, k, float(v))
         cfg.gnss_lever_m = list(self.gnss_lever_arm_m)
         cfg.odo_lever_m = list(self.odometer_lever_arm_m)
+        cfg.odo_mount_rad = list(self.odometer_mount_rad)
         cfg.gate_prob = float(self.gate_probability or 0.0)
         if isinstance(self.gate_reset_count, bool) or not isinstance(self.gate_reset_count, (int, np.integer)) \
                 or self.gate_reset_count < 0:
@@ -237,6 +252,7 @@ class FilterConfig:
         cfg.still_accel_std_m_s2 = self.standstill_accel_std_m_s2
         cfg.still_gyro_rad_s = self.standstill_gyro_rad_s
         cfg.max_latency_s = float(self.max_latency_s)
+        cfg.speed_min_m_s = float(self.speed_min_m_s)
         n = ffi.new("int32_t *")
         st = lib.gf_ins_state_count(cfg, n)
         if st != lib.GF_OK:
@@ -314,12 +330,16 @@ def _struct_dtype(cname: str, spec) -> np.dtype:
 
 _MEAS_DTYPE = _struct_dtype("gf_ins_meas", [("type", "<i4"), ("t_s", "<f8"), ("z", "<f8", (3,)),
                                             ("std", "<f8", (3,))])
+_PASS_DTYPE = _struct_dtype("gf_ins_pass", [("direction", "<i4"), ("t_s", "<f8"), ("q_bn", "<f8", (4,)),
+                                            ("v_n_m_s", "<f8", (3,)), ("std9", "<f8", (9,)),
+                                            ("sensors", "<f8", (N_SENSORS,)), ("n_updates", "<u8"),
+                                            ("n_rejected", "<u8")])
 _INNOV_DTYPE = _struct_dtype("gf_ins_innovation", [("t_s", "<f8"), ("type", "<i4"), ("status", "<i4"),
                                                    ("m", "<i4"), ("nis", "<f8"), ("r", "<f8", (3,)),
                                                    ("s_std", "<f8", (3,))])
 
 
-def _gather_measurements(gnss, baro, odometer, gnss_velocity: bool) -> np.ndarray:
+def _gather_measurements(gnss, baro, odometer, gnss_velocity: bool, speed=None) -> np.ndarray:
     """All measurements as one array of gf_ins_meas, sorted by time (stable: position
     before velocity at the same instant)."""
     parts = []
@@ -347,6 +367,9 @@ def _gather_measurements(gnss, baro, odometer, gnss_velocity: bool) -> np.ndarra
     if odometer is not None:
         block(np.asarray(odometer.t_s, float), lib.GF_INS_MEAS_ODO,
               np.asarray(odometer.speed_m_s, float)[:, None], np.asarray(odometer.std_m_s, float)[:, None])
+    if speed is not None:
+        block(np.asarray(speed.t_s, float), lib.GF_INS_MEAS_SPEED,
+              np.asarray(speed.speed_m_s, float)[:, None], np.asarray(speed.std_m_s, float)[:, None])
     if not parts:
         return np.zeros(0, _MEAS_DTYPE)
     meas = np.concatenate(parts)
@@ -358,7 +381,7 @@ def _gather_measurements(gnss, baro, odometer, gnss_velocity: bool) -> np.ndarra
                          "holds NaN or Inf (value or standard deviation): remove it or mark the "
                          "epoch invalid")
     for type_, m in ((lib.GF_INS_MEAS_GNSS_POS, 3), (lib.GF_INS_MEAS_GNSS_VEL, 3),
-                     (lib.GF_INS_MEAS_BARO, 1), (lib.GF_INS_MEAS_ODO, 1)):
+                     (lib.GF_INS_MEAS_BARO, 1), (lib.GF_INS_MEAS_ODO, 1), (lib.GF_INS_MEAS_SPEED, 1)):
         sel = meas["type"] == type_
         if np.any(sel) and not np.all(meas["std"][sel, :m] > 0):
             k = int(np.flatnonzero(sel & ~np.all(meas["std"][:, :m] > 0, axis=1))[0])
@@ -559,7 +582,7 @@ class IntegratedNavigator:
                      "gf_ins_error_model")
         return F, G, q
 
-    def run(self, imu, gnss=None, baro=None, odometer=None, *, gnss_velocity: bool = True,
+    def run(self, imu, gnss=None, baro=None, odometer=None, *, speed=None, gnss_velocity: bool = True,
             smoother: bool = False, chunk: int = 200_000, progress: bool = False,
             spill_bytes: int = 1 << 30, spill_dir=None) -> IntegratedSolution:
         """Process a record.
@@ -573,6 +596,8 @@ class IntegratedNavigator:
             ``gnss_velocity=False``). Times of validity.
         baro : record with ``t_s``, ``h_m``, ``std_m``.
         odometer : record with ``t_s``, ``speed_m_s``, ``std_m_s``.
+        speed : tachometer record (horizontal speed magnitude, seed 003) with ``t_s``,
+            ``speed_m_s``, ``std_m_s`` (an ``OdometerRecord`` serves).
         smoother : keep what the RTS smoother needs (at the covariance epochs: ~4 kB per
             epoch with 15 states) for :meth:`IntegratedSolution.smooth`; beyond
             ``spill_bytes`` it goes to memory-mapped files in ``spill_dir``.
@@ -585,21 +610,13 @@ class IntegratedNavigator:
             With ``index`` (IMU sample) and ``partial`` (the solution before it).
         """
         cfg = self.config
-        t = np.ascontiguousarray(np.asarray(imu.t_s, dtype=float))
-        g = np.ascontiguousarray(np.asarray(imu.gyro, dtype=float))
-        a = np.ascontiguousarray(np.asarray(imu.accel, dtype=float))
+        t, g, a = self._record(imu)
         n = t.shape[0]
-        if t.ndim != 1 or g.shape != (n, 3) or a.shape != (n, 3):
-            raise ValueError(f"imu.t_s must be (n,) and imu.gyro, imu.accel (n, 3); got "
-                             f"{t.shape}, {g.shape}, {a.shape}")
-        kind = getattr(imu, "kind", cfg.input)
-        if kind != cfg.input:
-            raise ValueError(f"the IMU record holds {kind!r} but the filter is configured for "
-                             f"input={cfg.input!r}: convert the record (to_increments()/to_rates()) "
-                             "or change FilterConfig.input")
         if isinstance(chunk, bool) or not isinstance(chunk, (int, np.integer)) or chunk < 1:
             raise ValueError(f"chunk must be an integer >= 1; got {chunk!r}")
-        meas = _gather_measurements(gnss, baro, odometer, gnss_velocity)
+        if self.reversed:
+            raise ValueError("the filter is reversed in time: use run_backward(), or reverse() it again")
+        meas = _gather_measurements(gnss, baro, odometer, gnss_velocity, speed)
         # capacity: one epoch per propagation and up to two per measurement
         duration = float(t[-1] - self.t_s) if n else 0.0
         if cfg.propagation_interval_s > 0:
@@ -683,6 +700,111 @@ class IntegratedNavigator:
             raise FilterError(msg + "; the solution before it is in .partial", int(status), bad, sol)
         return sol
 
+
+    # ---- reverse-time filtering and forward-backward processing (seed 003) ----------------
+
+    @property
+    def reversed(self) -> bool:
+        """True after an odd number of :meth:`reverse` calls (time runs backward)."""
+        return float(self._f.nav.earth_rate_sign) < 0
+
+    def reverse(self) -> None:
+        """Turn the filter around in time (``gf_ins_reverse``: velocity and gyro-bias
+        errors change sign, the Earth rate too; see csrc/gf_ins_gnss.h). Twice = identity."""
+        check_status(lib.gf_ins_reverse(self._f), "gf_ins_reverse")
+
+    def _record(self, imu):
+        cfg = self.config
+        t = np.ascontiguousarray(np.asarray(imu.t_s, dtype=float))
+        g = np.ascontiguousarray(np.asarray(imu.gyro, dtype=float))
+        a = np.ascontiguousarray(np.asarray(imu.accel, dtype=float))
+        n = t.shape[0]
+        if t.ndim != 1 or g.shape != (n, 3) or a.shape != (n, 3):
+            raise ValueError(f"imu.t_s must be (n,) and imu.gyro, imu.accel (n, 3); got "
+                             f"{t.shape}, {g.shape}, {a.shape}")
+        kind = getattr(imu, "kind", cfg.input)
+        if kind != cfg.input:
+            raise ValueError(f"the IMU record holds {kind!r} but the filter is configured for "
+                             f"input={cfg.input!r}: convert the record (to_increments()/to_rates()) "
+                             "or change FilterConfig.input")
+        return t, g, a
+
+    def _log(self, n_entries: int):
+        arr = np.zeros(n_entries + 16, _INNOV_DTYPE)
+        log = ffi.new("gf_ins_log *")
+        log.capacity = len(arr)
+        log.entries = ptr(arr, len(arr), "gf_ins_innovation")
+        return arr, log
+
+    def run_backward(self, imu, t_start_s: float, gnss=None, baro=None, odometer=None, *, speed=None,
+                     gnss_velocity: bool = True) -> IntegratedSolution:
+        """Walk a reversed filter (:meth:`reverse`) backward over a record stored in
+        increasing time, from its last sample (the filter's time) to ``t_start_s`` (where
+        the first increment interval starts). Measurements as recorded (true time). Row k
+        is the state after processing sample k (true-time velocity and gyro bias); one C
+        call (``gf_ins_run_backward``)."""
+        if not self.reversed:
+            raise ValueError("run_backward needs a reversed filter: call reverse() first")
+        t, g, a = self._record(imu)
+        n = len(t)
+        meas = _gather_measurements(gnss, baro, odometer, gnss_velocity, speed)
+        internal = (int(self.config.nhc) + 2 * int(self.config.zupt)) * \
+            (int((t[-1] - t_start_s) / max(self.config.propagation_interval_s, 1e-3)) + n + 2 if n else 0)
+        log_arr, log = self._log(len(meas) + internal)
+        out = {"t_s": np.empty(n), "q_bn": np.empty((n, 4)), "v_n_m_s": np.empty((n, 3)),
+               "pos": np.empty((n, 3)), "std": np.empty((n, 9)), "sensors": np.empty((n, N_SENSORS)),
+               "standstill": np.zeros(n, np.int8)}
+        c_out = ffi.new("gf_ins_output *")
+        for k, w in (("t_s", 1), ("q_bn", 4), ("v_n_m_s", 3), ("pos", 3), ("std", 9), ("sensors", N_SENSORS)):
+            setattr(c_out, k, ptr(out[k], w * n))
+        c_out.standstill = ptr(out["standstill"], n, "int8_t")
+        n_done, m_done = ffi.new("size_t *"), ffi.new("size_t *")
+        mptr = ptr(meas, len(meas), "gf_ins_meas") if len(meas) else ffi.NULL
+        st = lib.gf_ins_run_backward(self._f, n, ptr(t, n), ptr(g, 3 * n), ptr(a, 3 * n), float(t_start_s),
+                                     len(meas), mptr, c_out, log, n_done, m_done)
+        if st != lib.GF_OK:
+            k = int(n_done[0])
+            raise FilterError(f"backward walk stopped after {k} samples (from the last): {status_text(st)} "
+                              f"(the filter's time must be the record's last sample, {t[-1] if n else None!r} s, "
+                              f"and t_start_s = {t_start_s!r} before its first)", int(st), n - 1 - k)
+        return IntegratedSolution(out["t_s"], out["q_bn"], out["v_n_m_s"], out["pos"][:, 0].copy(),
+                                  out["pos"][:, 1].copy(), out["pos"][:, 2].copy(), out["std"], out["sensors"],
+                                  out["standstill"].astype(bool), log_arr[:int(log.count)].copy(), self.config)
+
+    def forward_backward(self, imu, passes: int, gnss=None, baro=None, odometer=None, *, speed=None,
+                         gnss_velocity: bool = True):
+        """Seed 003's forward-backward processing of a stored record in one C call
+        (``gf_ins_forward_backward``): forward over the record, then ``passes`` times
+        backward to its start and forward to its end, x and P carried across each
+        reversal. The filter must be at the start of the record's first interval; it ends
+        forward at the record's last sample. Returns (pass table, innovation log): the
+        table holds, per pass (1 + 2 passes rows), direction (+1/-1), t_s, q_bn, v_n_m_s,
+        std9 (9, as IntegratedSolution.std), sensors, n_updates, n_rejected."""
+        if self.reversed:
+            raise ValueError("forward_backward starts from a forward filter: reverse() it back")
+        if isinstance(passes, bool) or not isinstance(passes, (int, np.integer)) or not 0 <= passes <= 10000:
+            raise ValueError(f"passes must be an integer in [0, 10000]; got {passes!r}")
+        t, g, a = self._record(imu)
+        n = len(t)
+        if n < 2:
+            raise ValueError(f"forward-backward processing needs a record of at least 2 IMU samples; got {n}")
+        meas = _gather_measurements(gnss, baro, odometer, gnss_velocity, speed)
+        np_total = 1 + 2 * int(passes)
+        n_prop = int((t[-1] - self.t_s) / max(self.config.propagation_interval_s, 1e-3)) + n + 2
+        internal = (int(self.config.nhc) + 2 * int(self.config.zupt)) * n_prop
+        log_arr, log = self._log(np_total * (len(meas) + internal))
+        table = np.zeros(np_total, _PASS_DTYPE)
+        done = ffi.new("int32_t *")
+        mptr = ptr(meas, len(meas), "gf_ins_meas") if len(meas) else ffi.NULL
+        st = lib.gf_ins_forward_backward(self._f, n, ptr(t, n), ptr(g, 3 * n), ptr(a, 3 * n), len(meas), mptr,
+                                         int(passes), ptr(table, np_total, "gf_ins_pass"), log, done)
+        if log.n_dropped:
+            raise RuntimeError(f"innovation log overflow ({log.n_dropped} entries): please report")
+        if st != lib.GF_OK:
+            raise FilterError(f"forward-backward processing stopped in pass {int(done[0])} of {np_total}: "
+                              f"{status_text(st)} (the filter must start at the record's start, before "
+                              f"its first sample at {t[0]!r} s)", int(st), -1)
+        return table, log_arr[:int(log.count)].copy()
 
 def _smooth(sol: IntegratedSolution, progress: bool) -> SmoothedSolution:
     ep = sol.epochs

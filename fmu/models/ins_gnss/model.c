@@ -249,22 +249,23 @@ static void reset_monitor(ModelData *d)
     d->n_unused = 0;
 }
 
-/* Validates the parameters and starts the filter at t0_s (also after skip_steps). */
-static FmuStatus start_filter(FmuInstance *instance, ModelData *d, double t0_s)
+/* Validates the parameters and starts the filter at t0_s with attitude q and velocity v. */
+static FmuStatus start_filter_with(FmuInstance *instance, ModelData *d, double t0_s,
+                                   const double *q, const double *v)
 {
     double P0[GF_INS_MAX_STATES * GF_INS_MAX_STATES];
     int32_t n = 0, bad = 0;
     if (gf_ins_state_count(&d->cfg, &n) != GF_OK) {
         /* the core's check names the field; the filter is not touched */
         memset(P0, 0, sizeof P0);
-        gf_ins_init(&d->filter, &d->cfg, t0_s, d->q0, d->v0_m_s, d->lat0_rad, d->lon0_rad,
+        gf_ins_init(&d->filter, &d->cfg, t0_s, q, v, d->lat0_rad, d->lon0_rad,
                     d->h0_m, d->sensors0, P0, &bad);
         log_bad_config(instance, &d->cfg, bad);
         return FMU_ERROR;
     }
     if (!initial_covariance(instance, d, n, P0))
         return FMU_ERROR;
-    const gf_status st = gf_ins_init(&d->filter, &d->cfg, t0_s, d->q0, d->v0_m_s, d->lat0_rad,
+    const gf_status st = gf_ins_init(&d->filter, &d->cfg, t0_s, q, v, d->lat0_rad,
                                      d->lon0_rad, d->h0_m, d->sensors0, P0, &bad);
     if (st != GF_OK) {
         if (bad)
@@ -276,6 +277,112 @@ static FmuStatus start_filter(FmuInstance *instance, ModelData *d, double t0_s)
     }
     d->started = 0;
     reset_monitor(d);
+    publish(d);
+    return FMU_OK;
+}
+
+/* The alignment phase's limits (those of gfins_fmi.estimation.alignment.coarse_align) */
+#define ALIGN_MAX_ACCEL_STD_M_S2 0.2
+#define ALIGN_MAX_RATE_RAD_S 0.05
+#define ALIGN_MAX_LAT_RAD (85.0 * GF_PI / 180.0)
+
+/* Starts the filter at t0_s from q0, v0; with align_time > 0 the alignment phase starts
+ * there instead (the filter holds the initial state until it ends). */
+static FmuStatus start_filter(FmuInstance *instance, ModelData *d, double t0_s)
+{
+    if (!(isfinite(d->align_time_s) && d->align_time_s >= 0.0)) {
+        fmu_log_error(instance, "parameter align_time = %g s must be finite and >= 0",
+                      d->align_time_s);
+        return FMU_ERROR;
+    }
+    if (d->align_time_s > 0.0 && !(fabs(d->lat0_rad) <= ALIGN_MAX_LAT_RAD)) {
+        fmu_log_error(instance, "align_time = %g s: an alignment at rest finds the heading from "
+                      "the Earth rate, which is nearly vertical beyond 85 deg latitude (lat0 = "
+                      "%g rad); give q0 and set align_time = 0", d->align_time_s, d->lat0_rad);
+        return FMU_ERROR;
+    }
+    const FmuStatus st = start_filter_with(instance, d, t0_s, d->q0, d->v0_m_s);
+    d->aligning = d->align_time_s > 0.0;
+    d->align_n = d->align_have_t = 0;
+    d->align_t0_s = d->align_t_prev_s = t0_s;
+    memset(d->align_f_sum, 0, sizeof d->align_f_sum);
+    memset(d->align_w_sum, 0, sizeof d->align_w_sum);
+    d->align_fn_sum = d->align_fn2_sum = d->align_wn_sum = 0.0;
+    return st;
+}
+
+/* One doStep of the alignment phase: the sample (increments over (t_prev, t], or rates
+ * at t) joins the sums; at the end of the phase the attitude from their means starts the
+ * filter at t (rates: with this sample as the record's first). */
+static FmuStatus align_step(FmuInstance *instance, ModelData *d, double t_s, size_t n_meas,
+                            const gf_ins_meas *meas)
+{
+    const int increments = d->cfg.input == GF_SINS_INPUT_INCREMENTS;
+    for (size_t j = 0; j < n_meas; ++j)   /* not used while aligning: reported as stale */
+        record_update(d, meas[j].type, GF_INS_REJECTED_STALE, NAN, meas[j].t_s);
+    d->n_unused += n_meas;
+    const double *gyro = increments ? d->dtheta_rad : d->gyro_rad_s;
+    const double *accel = increments ? d->dv_m_s : d->accel_m_s2;
+    if (!gf_all_finite(gyro, 3) || !gf_all_finite(accel, 3)) {
+        fmu_log_error(instance, "t = %.9g s: IMU input holds NaN or Inf (alignment phase)", t_s);
+        return FMU_ERROR;
+    }
+    if (!increments || d->align_have_t) {
+        const double dt = t_s - d->align_t_prev_s;
+        if (increments && !(dt > 0.0)) {
+            fmu_log_error(instance, "t = %.9g s: the time did not advance (alignment phase)", t_s);
+            return FMU_ERROR;
+        }
+        const double k = increments ? 1.0 / dt : 1.0;
+        double f[3], w[3];
+        gf_v3_scale(accel, k, f);
+        gf_v3_scale(gyro, k, w);
+        const double fn = gf_v3_norm(f);
+        gf_v3_add(d->align_f_sum, f, d->align_f_sum);
+        gf_v3_add(d->align_w_sum, w, d->align_w_sum);
+        d->align_fn_sum += fn;
+        d->align_fn2_sum += fn * fn;
+        d->align_wn_sum += gf_v3_norm(w);
+        d->align_n++;
+    }
+    d->align_have_t = 1;
+    d->align_t_prev_s = t_s;
+    publish(d);
+    if (d->align_n < 1 || t_s - d->align_t0_s < d->align_time_s - 1e-9 * fmax(1.0, fabs(t_s)))
+        return FMU_OK;
+    const double n = (double)d->align_n;
+    const double fm = d->align_fn_sum / n;
+    const double sd = sqrt(fmax(0.0, d->align_fn2_sum / n - fm * fm)), wm = d->align_wn_sum / n;
+    if (sd > ALIGN_MAX_ACCEL_STD_M_S2 || wm > ALIGN_MAX_RATE_RAD_S) {
+        fmu_log_error(instance, "t = %.9g s: motion during the alignment phase (std of |f| %g m/s2, "
+                      "limit %g; mean |w| %g rad/s, limit %g): the vehicle must be at rest for "
+                      "align_time = %g s, or give q0 and set align_time = 0", t_s, sd,
+                      ALIGN_MAX_ACCEL_STD_M_S2, wm, ALIGN_MAX_RATE_RAD_S, d->align_time_s);
+        return FMU_ERROR;
+    }
+    double f_mean[3], w_mean[3], q[4];
+    gf_v3_scale(d->align_f_sum, 1.0 / n, f_mean);
+    gf_v3_scale(d->align_w_sum, 1.0 / n, w_mean);
+    if (gf_ins_coarse_align(f_mean, w_mean, q) != GF_OK) {
+        fmu_log_error(instance, "t = %.9g s: no attitude from the alignment phase (mean |f| %g "
+                      "m/s2; the rate must not be parallel to the specific force: the gyros must "
+                      "see the Earth rate)", t_s, gf_v3_norm(f_mean));
+        return FMU_ERROR;
+    }
+    const double zero[3] = {0.0, 0.0, 0.0};
+    if (start_filter_with(instance, d, t_s, q, zero) != FMU_OK)
+        return FMU_ERROR;
+    d->aligning = 0;
+    if (!increments) {
+        /* this rate sample starts the filter's record */
+        const gf_status st = gf_ins_step(&d->filter, t_s, gyro, accel, 0, NULL, NULL, NULL);
+        if (st != GF_OK) {
+            fmu_log_error(instance, "t = %.9g s: the first sample after the alignment was refused (%s)",
+                          t_s, gf_status_string(st));
+            return FMU_ERROR;
+        }
+    }
+    d->started = 1;   /* increments: the next one covers (t, t_next] */
     publish(d);
     return FMU_OK;
 }
@@ -440,6 +547,8 @@ FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double 
     size_t n_meas = 0;
     if (!gather(instance, d, t_s, meas, &n_meas))
         return FMU_ERROR;
+    if (d->aligning)
+        return align_step(instance, d, t_s, n_meas, meas);
     gf_ins_filter *f = &d->filter;
     const int increments = f->cfg.input == GF_SINS_INPUT_INCREMENTS;
     if (increments && !d->started) {
@@ -482,6 +591,8 @@ const char *ins_gnss_state_problem(const ModelData *d)
         return "skip_steps / skipped out of range";
     if (d->started != 0 && d->started != 1)
         return "started is not 0 or 1";
+    if ((d->aligning & ~1) || (d->align_have_t & ~1) || d->align_n < 0)
+        return "alignment phase flags or count out of range";
     if (f->n_states == 0 && f->kf.n == 0 && f->ukf_w.n == 0)
         return NULL; /* not started yet (before exitInitializationMode) */
     int32_t n = 0;

@@ -19,6 +19,7 @@ typedef struct ModelData {
     double std0_gyro_bias_rad_s[3], std0_accel_bias_m_s2[3];
     double std0_gyro_scale[3], std0_accel_scale[3], std0_baro_bias_m, std0_odo_scale;
     int32_t skip_steps;
+    double align_time_s;                 /* > 0: an alignment phase at rest first (s) */
     /* inputs */
     double dtheta_rad[3], dv_m_s[3], gyro_rad_s[3], accel_m_s2[3];
     int32_t gnss_valid, gnss_vel_valid;
@@ -34,10 +35,15 @@ typedef struct ModelData {
     int32_t n_imu, n_updates, n_rejected, standstill;
     double nis[INS_FMU_KINDS], update_time_s[INS_FMU_KINDS];
     int32_t update_status[INS_FMU_KINDS], update_count[INS_FMU_KINDS];
+    int32_t aligning;                    /* 1 during the alignment phase */
     /* internal */
     int32_t started;      /* 1 once the filter has a sample (increments: none at its start) */
     int32_t skipped;      /* doSteps ignored so far (skip_steps) */
     uint64_t n_unused;    /* measurements delivered before the first increment: stale */
+    /* alignment phase: sums over the samples at rest since align_t0_s */
+    int32_t align_n, align_have_t;
+    double align_t0_s, align_t_prev_s, align_f_sum[3], align_w_sum[3];
+    double align_fn_sum, align_fn2_sum, align_wn_sum;
     gf_ins_filter filter;
 } ModelData;
 

@@ -235,6 +235,9 @@ def _outputs():
              "Updates so far (accepted or not)" + per_kind, "Int32"),
         _out("standstill", None, (), "standstill",
              "1: the standstill detector says the IMU is still (zupt = 1)", "Int32"),
+        _out("aligning", None, (), "aligning",
+             "1 during the alignment phase (align_time > 0): the navigation outputs are the "
+             "initial state's until it ends", "Int32"),
     ]
 
 
@@ -256,6 +259,13 @@ MODEL = dict(
         *_COMMON["initial_state"](),
         *_initial_uncertainty(),
         _COMMON["skip_steps"](),
+        _p("align_time", "s", 0.0, "align_time_s", "> 0: the run starts with an alignment phase "
+           "at rest of this duration: the IMU samples are averaged (measurements are not used), "
+           "the attitude is found by levelling and gyrocompassing (TRIAD on gravity and the "
+           "Earth rate, gf_ins_coarse_align; q0 and v0 are not used, the velocity is 0) and "
+           "the filter starts from it at the end of the phase with std0_*; motion during the "
+           "phase (std of |f| above 0.2 m/s2 or mean |w| above 0.05 rad/s) and |lat0| above "
+           "85 deg are errors. 0: start from q0, v0"),
         *_COMMON["imu_inputs"](),
         *_measurement_inputs(),
         *_outputs(),

@@ -1,0 +1,158 @@
+"""``gfins align``: initial alignment of recorded IMU files from the shell (issue 13).
+
+    gfins align static IMU --position LAT,LON,H [--window T0,T1] [--grade G] [--fine]
+    gfins align motion IMU SPEED --initial LAT,LON,H,HEADING,PITCH,ROLL [--depth DEPTH]
+                       [--passes N] [--grade G] [--heading-std DEG] [--output PASSES.csv]
+
+static: levelling and gyrocompassing over the window at rest (motion in it is refused),
+then with --fine the zero-velocity fine alignment over the whole record. motion: the
+seed-003 in-motion alignment with a speed sensor (OdometerRecord CSV: t_s, speed_m_s,
+std_m_s) and optionally depth (BaroRecord CSV, h_m = -depth), forward-backward passes
+over the stored record; prints the attitude after each pass and writes the pass table.
+Exit status 0 when aligned, 1 when the alignment reports that it has not converged (the
+pass table is written all the same), 2 on bad input.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import pathlib
+import sys
+
+from gfins_fmi.estimation.cli import _GRADES, _floats, _nonneg, _positive
+
+__all__ = ["add_parser", "run"]
+
+
+def _count(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}")
+    if v < 0:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
+    return v
+
+
+def add_parser(sub) -> argparse.ArgumentParser:
+    p = sub.add_parser("align", help="initial alignment: static (levelling + gyrocompassing, fine "
+                       "alignment) or in motion with a speed sensor and forward-backward passes",
+                       description="Initial alignment of recorded files (docs/alignment.md).")
+    p.add_argument("mode", choices=("static", "motion"))
+    p.add_argument("imu", type=pathlib.Path, help="IMU file (ImuRecord CSV / npz / parquet)")
+    p.add_argument("speed", type=pathlib.Path, nargs="?", default=None,
+                   help="motion: speed record (OdometerRecord: t_s, speed_m_s, std_m_s)")
+    p.add_argument("--position", type=lambda s: _floats(s, 3, "--position"), default=None,
+                   metavar="LAT,LON,H", help="static: position (deg, deg, m)")
+    p.add_argument("--window", type=lambda s: _floats(s, 2, "--window"), default=None, metavar="T0,T1",
+                   help="static: the window at rest for the coarse alignment, s (default: the first 60 s)")
+    p.add_argument("--fine", action="store_true", help="static: fine alignment over the record after it")
+    p.add_argument("--initial", type=lambda s: _floats(s, 6, "--initial"), default=None,
+                   metavar="LAT,LON,H,HEADING,PITCH,ROLL",
+                   help="motion: coarse start at the record's start (deg, deg, m, deg, deg, deg); the "
+                        "velocity is the first speed along the heading")
+    p.add_argument("--depth", type=pathlib.Path, default=None,
+                   help="motion: height record (BaroRecord CSV, h_m = -depth)")
+    p.add_argument("--passes", type=_count, default=5, help="motion: forward-backward passes (default 5)")
+    p.add_argument("--heading-std", type=_positive, default=5.0,
+                   help="motion: 1-sigma of the coarse heading, deg (default 5)")
+    p.add_argument("--tilt-std", type=_positive, default=0.5,
+                   help="motion: 1-sigma of the coarse pitch/roll, deg (default 0.5)")
+    p.add_argument("--gyro-bias", type=_nonneg, default=None,
+                   help="1-sigma turn-on gyro bias, deg/h (default: the grade's bias instability)")
+    p.add_argument("--accel-bias", type=_nonneg, default=None,
+                   help="1-sigma turn-on accelerometer bias, ug (default: the grade's)")
+    p.add_argument("--grade", choices=_GRADES, default="navigation", help="IMU noise model")
+    p.add_argument("--output", type=pathlib.Path, default=None,
+                   help="motion: CSV of the state after each pass")
+    p.add_argument("--progress", action="store_true", help="report the passes as they run")
+    p.set_defaults(func=run, check=_check)
+    return p
+
+
+def _check(args):
+    if args.mode == "static" and args.position is None:
+        return "static alignment needs --position LAT,LON,H"
+    if args.mode == "motion" and (args.speed is None or args.initial is None):
+        return "motion alignment needs a SPEED record and --initial LAT,LON,H,HEADING,PITCH,ROLL"
+    if args.position is not None and not abs(args.position[0]) < 90:
+        return f"--position: latitude must be in (-90, 90) deg; got {args.position[0]}"
+    if args.initial is not None and not abs(args.initial[0]) < 90:
+        return f"--initial: latitude must be in (-90, 90) deg; got {args.initial[0]}"
+    return None
+
+
+def _biases(args, noise):
+    deg = math.pi / 180.0
+    gb = (args.gyro_bias if args.gyro_bias is not None else noise.gyro_bias_instability_deg_h) * deg / 3600
+    ab = (args.accel_bias if args.accel_bias is not None else noise.accel_bias_instability_ug) * 9.80665e-6
+    return max(gb, 1e-12), max(ab, 1e-9)
+
+
+def run(args) -> int:
+    import numpy as np
+    from gfins_fmi import io
+    from gfins_fmi.estimation import FilterConfig, InitialState
+    from gfins_fmi.estimation import scenarios
+    from gfins_fmi.estimation.alignment import align_in_motion, coarse_align, fine_align
+    from gfins_fmi.sins import NavState, euler_to_quat
+    deg = math.pi / 180.0
+    noise = {"consumer": scenarios.CONSUMER, "tactical": scenarios.TACTICAL,
+             "navigation": scenarios.NAVIGATION}[args.grade]
+    imu = io.ImuRecord.from_csv(args.imu)
+    gb, ab = _biases(args, noise)
+    if args.mode == "static":
+        lat, lon, h = args.position
+        t0, t1 = args.window if args.window else (imu.t_s[0] - 1e-9, imu.t_s[0] + 60.0)
+        co = coarse_align(imu, t0, t1, lat * deg, gyro_bias_std_rad_s=gb, accel_bias_std_m_s2=ab)
+        e = co.euler_rad / deg
+        print(f"coarse ({co.heading_method}): heading {e[0]:.4f} deg, pitch {e[1]:.4f} deg, roll {e[2]:.4f} deg; "
+              f"tilt 1-sigma {co.tilt_std_rad / deg:.4f} deg, heading 1-sigma {co.heading_std_rad / deg:.4f} deg")
+        for note in co.notes:
+            print("note:", note)
+        if args.fine:
+            cfg = FilterConfig(imu=noise, input=imu.kind, gate_probability=None)
+            fa = fine_align(imu, lat * deg, lon * deg, h, config=cfg, coarse=co, gyro_bias_std_rad_s=gb,
+                            accel_bias_std_m_s2=ab)
+            e, s = fa.euler_rad / deg, fa.attitude_std_rad / deg
+            print(f"fine: heading {e[0]:.4f} deg, pitch {e[1]:.4f} deg, roll {e[2]:.4f} deg; 1-sigma E/N/U "
+                  f"{s[0]:.4f}/{s[1]:.4f}/{s[2]:.4f} deg")
+        return 0
+    speed = io.OdometerRecord.from_csv(args.speed)
+    depth = io.BaroRecord.from_csv(args.depth) if args.depth else None
+    lat, lon, h, hd, pt, rl = args.initial
+    t0 = imu.t_s[0] if imu.kind == "rates" else imu.t_s[0] - float(np.median(np.diff(imu.t_s[:100])))
+    s0 = float(speed.speed_m_s[0])
+    v0 = np.array([s0 * math.sin(hd * deg), s0 * math.cos(hd * deg), 0.0])
+    nav0 = NavState(euler_to_quat(np.array([hd, pt, rl]) * deg), v0, lat * deg, lon * deg, h, t0)
+    sv = max(s0 * args.heading_std * deg, 0.1)
+    init = InitialState(nav0, position_std_m=1.0, velocity_std_m_s=(sv, sv, 0.1),
+                        attitude_std_rad=(args.tilt_std * deg, args.tilt_std * deg, args.heading_std * deg),
+                        gyro_bias_std_rad_s=gb, accel_bias_std_m_s2=ab)
+    cfg = FilterConfig(imu=noise, input=imu.kind, gate_probability=0.9999, gate_reset_count=0)
+    al = align_in_motion(imu, speed, depth=depth, config=cfg, initial=init, passes=args.passes,
+                         keep_rows=args.progress, progress=args.progress)
+    e = al.pass_euler_rad / deg
+    for k, row in enumerate(al.passes):
+        what = "forward " if row["direction"] > 0 else "backward"
+        print(f"pass {k:3d} {what} t = {row['t_s']:.3f} s: heading {e[k, 0]:9.4f} deg, pitch {e[k, 1]:8.4f} deg, "
+              f"roll {e[k, 2]:8.4f} deg; 1-sigma heading {row['std9'][8] / deg:.4f} deg; updates "
+              f"{int(row['n_updates'])}, rejected {int(row['n_rejected'])}")
+    for note in al.notes:
+        print("note:", note)
+    if args.output:
+        from gfins_fmi.io.tables import TableWriter
+        cols = [al.passes["t_s"], al.passes["direction"].astype(float), e[:, 0], e[:, 1], e[:, 2],
+                *(al.passes["std9"][:, 6 + i] / deg for i in range(3)),
+                al.passes["n_updates"].astype(float), al.passes["n_rejected"].astype(float)]
+        names = ["t_s", "direction", "heading_deg", "pitch_deg", "roll_deg", "std_att_e_deg", "std_att_n_deg",
+                 "std_att_u_deg", "n_updates", "n_rejected"]
+        with TableWriter(args.output, names) as w:
+            w.write(cols)
+            w.commit()
+        print(f"{len(al.passes)} passes -> {args.output}")
+    if not al.converged:
+        print("gfins align: warning: the alignment has not converged (see the note above); exit status 1",
+              file=sys.stderr)
+        return 1
+    return 0

@@ -162,6 +162,8 @@ def test_pointers_cover_exactly_what_c_accesses():
     assert len(_lib.ptr(np.zeros(3), 3)) == 3
     with pytest.raises(ValueError, match="2 elements where C accesses 3"):
         _lib.ptr(np.zeros(2), 3)
+    with pytest.raises(ValueError, match="4 elements where C accesses 3"):   # larger too
+        _lib.ptr(np.zeros(4), 3)
     with pytest.raises(TypeError, match="float64"):
         _lib.ptr(np.zeros(3, dtype=np.float32), 3)
     with pytest.raises(ValueError, match="C-contiguous"):
@@ -179,12 +181,16 @@ def test_array_shape_check_and_the_single_sample_hint():
              (np.zeros((2, 3, 1)), (None, 3)),    # more dimensions
              (np.zeros(3), (3, 3)),               # fixed shape, not a record
              (np.zeros((2, 2)), (None,)),         # a 1-D record given rows
-             (np.zeros((3, 1)), (3,))]            # fewer dimensions expected
+             (np.zeros((3, 1)), (3,)),            # fewer dimensions expected
+             (np.zeros(3), (None, 3, 3))]         # a record of matrices: no row hint
     for value, shape in cases:
         with pytest.raises(ValueError, match="must have shape") as info:
             _lib.as_array("x", value, shape, "m")
         assert "reshape" not in str(info.value), (value.shape, shape)
     assert _lib.as_array("x", np.zeros((0, 3)), (None, 3), "m").shape == (0, 3)
+    # records keep NaN and Inf for the C core to locate (as_rows is as_array(finite=False))
+    rows = _lib.as_rows("A", [[np.nan, 1.0], [np.inf, 2.0]], 2, "m/s^2")
+    assert rows.shape == (2, 2) and np.isnan(rows[0, 0]) and np.isinf(rows[1, 0])
 
 
 def test_helper_options_are_keyword_only_and_annotations_resolve():

@@ -146,6 +146,10 @@ def main(argv=None) -> int:
     ap.add_argument("--json", type=Path, default=HERE / "results_c.json")
     ap.add_argument("--markdown", type=Path, default=HERE / "results_c.md")
     ap.add_argument("--check", action="store_true", help="only check that the list applies")
+    ap.add_argument("--pytest", default="",
+                    help="second stage for a mutant the C tests let through: build the cffi "
+                         "module from the mutated copy and run these pytest arguments "
+                         "(e.g. 'tests/test_estimation.py -k ekf') against it")
     ap.add_argument("--reuse", action="store_true",
                     help="reuse the copy and build in --work from an earlier run (the copy is "
                          "refreshed file by file; only what changed is rebuilt)")
@@ -199,6 +203,16 @@ def main(argv=None) -> int:
     if rc != 0:
         print("the unmutated tree fails its C tests:\n" + log[-4000:], file=sys.stderr)
         return 2
+    py = None
+    if args.pytest:
+        py = _python_stage_setup(args, cmake, gen, src)
+        if py is None:
+            return 2
+        outcome, why, t_py = _python_stage(py, args.pytest, 600.0)
+        if outcome != "survived":
+            print(f"the Python stage fails on the unmutated copy: {why}", file=sys.stderr)
+            return 2
+        print(f"Python stage: {args.pytest} ({t_py:.0f} s unmutated)", flush=True)
     limit = args.timeout or max(60.0, 4.0 * t_test)
     print(f"baseline: build {t_build:.0f} s, ctest {t_test:.1f} s; limit per mutant {limit:.0f} s",
           flush=True)
@@ -226,6 +240,9 @@ def main(argv=None) -> int:
                     outcome, tests = "killed", failed_tests(log)
                 else:
                     outcome, tests = "survived", []
+                    if py is not None:
+                        outcome, tests, t_py = _python_stage(py, args.pytest, limit)
+                        tt += t_py
         finally:
             path.write_text(original)
         r = dict(id=m.id, file=m.file, outcome=outcome, by=tests, build_s=round(tb, 1),
@@ -236,8 +253,70 @@ def main(argv=None) -> int:
     # leave the copy built as the unmutated tree
     _run(build, 1800)
 
-    write_results(results, args, len(mutants))
+    if args.only and args.json.exists():
+        # a partial run (survivors after a new test, mutants the budget left out): merged
+        # into the last full run's results, mutant by mutant
+        new = {r["id"]: r for r in results}
+        old = {r["id"]: r for r in json.loads(args.json.read_text())["results"]}
+        old.update(new)
+        order = [m.id for m in load_mutants(args.mutants)]
+        results = [old[i] for i in order if i in old]
+    write_results(results, args, len(load_mutants(args.mutants)))
     return 0
+
+
+def _python_stage_setup(args, cmake, gen, src):
+    """A second build of the copy with the cffi module only; the package is imported
+    from the copy (python -S: without the site hooks, so an editable install of the
+    checkout cannot redirect the import; site-packages on PYTHONPATH for numpy & co)."""
+    import sysconfig
+    pybld = args.work / "pybuild"
+    rc, log, _ = _run([cmake, "-S", str(src), "-B", str(pybld), *gen, "-DCMAKE_BUILD_TYPE=Release",
+                       "-DCMAKE_C_FLAGS_RELEASE=-O1 -DNDEBUG -Wno-maybe-uninitialized",
+                       "-DGFINS_BUILD_TESTS=OFF", "-DGFINS_BUILD_PYTHON=ON",
+                       "-DGFINS_BUILD_FMUS=OFF", f"-DPython_EXECUTABLE={sys.executable}"], 600)
+    build = [cmake, "--build", str(pybld), "-j", str(args.jobs), "--target", "_core"]
+    if rc == 0:
+        rc, log, _ = _run(build, 1800)
+    if rc != 0:
+        print("the cffi module does not build in the copy:\n" + log[-4000:], file=sys.stderr)
+        return None
+    so = sorted(pybld.glob("_core*.so"))[0]
+    link = src / "gfins_fmi" / so.name
+    if link.is_symlink() or link.exists():
+        link.unlink()
+    link.symlink_to(so)
+    pkg = args.work / "pypkg"
+    pkg.mkdir(exist_ok=True)
+    if not (pkg / "gfins_fmi").exists():
+        (pkg / "gfins_fmi").symlink_to(src / "gfins_fmi")
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(pkg), sysconfig.get_paths()["purelib"],
+                                                        sysconfig.get_paths()["platlib"]]))
+    return dict(build=build, env=env, cwd=src)
+
+
+def _python_stage(py, pytest_args, limit):
+    rc, log, tb = _run(py["build"], 900)
+    if rc != 0:
+        return "compiler", [], tb
+    cmd = [sys.executable, "-S", "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider",
+           *pytest_args.split()]
+    t0 = time.monotonic()
+    p = subprocess.Popen(cmd, cwd=py["cwd"], env=py["env"], stdout=subprocess.PIPE,
+                         stderr=subprocess.STDOUT, text=True, start_new_session=True)
+    try:
+        out, _ = p.communicate(timeout=10 * limit)
+    except subprocess.TimeoutExpired:
+        os.killpg(p.pid, signal.SIGKILL)
+        p.communicate()
+        return "timeout", ["python"], tb + time.monotonic() - t0
+    dt = tb + time.monotonic() - t0
+    if p.returncode == 0:
+        return "survived", [], dt
+    if p.returncode in (2, 3, 4, 5):   # interrupted, internal error, usage, no tests
+        raise RuntimeError("the Python stage could not run its tests:\n" + out[-3000:])
+    failed = re.findall(r"^FAILED (\S+)", out, re.M)   # failures, or a crash of the interpreter
+    return "killed", ["py:" + (failed[0] if failed else f"pytest exit {p.returncode}")], dt
 
 
 def _commit() -> str:

@@ -131,8 +131,18 @@ def main(argv=None) -> int:
     ap.add_argument("--session", type=Path,
                     default=Path(tempfile.gettempdir()) / "gfins_mutation_py.sqlite")
     ap.add_argument("--report-only", action="store_true")
+    ap.add_argument("--rerun-survivors", action="store_true",
+                    help="run the survivors of the session again (after adding tests)")
     args = ap.parse_args(argv)
-    if not args.report_only:
+    if args.rerun_survivors:
+        import sqlite3
+        cfg = args.session.with_suffix(".toml")
+        write_session_config(cfg)
+        with sqlite3.connect(args.session) as db:
+            n = db.execute("DELETE FROM work_results WHERE test_outcome = 'SURVIVED'").rowcount
+        print(f"{n} survivors to run again", flush=True)
+        sh("cosmic-ray", "exec", str(cfg), str(args.session))
+    elif not args.report_only:
         cfg = args.session.with_suffix(".toml")
         write_session_config(cfg)
         sh("cosmic-ray", "init", str(cfg), str(args.session), "--force")

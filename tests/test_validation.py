@@ -229,6 +229,7 @@ def test_partial_result_messages_count_the_samples_done():
     assert _lib.done_before(2, 7) == "samples 7..8 were solved (see .partial)"
     assert _lib.done_before(5, 0, "filtered") == "samples 0..4 were filtered (see .partial)"
     assert _lib.done_before(3, 1) == "samples 1..3 were solved (see .partial)"
+    assert _lib.done_before(2) == "samples 0..1 were solved (see .partial)"   # record start 0
 
 
 def test_first_nonfinite_names_the_first_bad_column():

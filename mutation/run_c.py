@@ -330,6 +330,8 @@ def _commit() -> str:
 def write_results(results, args, n_listed) -> None:
     counts = {k: sum(r["outcome"] == k for r in results)
               for k in ("killed", "compiler", "timeout", "survived")}
+    counts["killed_by_python"] = sum(r["outcome"] == "killed" and any(b.startswith("py:") for b in r["by"])
+                                     for r in results)
     n = len(results)
     dead = n - counts["survived"]
     meta = dict(date=time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()), commit=_commit(),
@@ -339,7 +341,8 @@ def write_results(results, args, n_listed) -> None:
     args.json.write_text(json.dumps(dict(meta=meta, results=results), indent=1) + "\n")
     lines = [f"# C-core mutation run ({meta['date']}, commit {meta['commit']}, {meta['machine']})",
              "",
-             f"{n} of {n_listed} mutants run: {counts['killed']} killed by the C tests, "
+             f"{n} of {n_listed} mutants run: {counts['killed'] - counts['killed_by_python']} "
+             f"killed by the C tests, {counts['killed_by_python']} by the Python stage, "
              f"{counts['compiler']} by the compiler, {counts['timeout']} by a timeout, "
              f"{counts['survived']} survived; kill rate {dead}/{n}"
              + (f" = {100 * dead / n:.1f} %" if n else ""),

@@ -393,6 +393,19 @@ def test_exact_sensors_at_odd_times(exact_drive, filt):
     assert np.abs(e).max() < 5e-3
 
 
+
+def test_reported_position_std_is_in_metres_on_both_axes(exact_drive):
+    """The output's position std (east, north, up in m) converts the latitude and
+    longitude variances with the meridian and prime-vertical radii; at the first rows,
+    before the first covariance propagation, it is the initial std itself on every axis.
+    Measured: equal to the last bit; tolerance 1e-9 relative (the conversions to rad and
+    back are a few roundings). R_N for R_M would put the north std 0.33 % off here."""
+    tr, imu = exact_drive
+    nav = start(tr, quiet_config(), position_std_m=0.05, velocity_std_m_s=0.01,
+                attitude_std_rad=1e-4)
+    sol = nav.run(imu)
+    np.testing.assert_allclose(sol.std[:3, 3:6], 0.05, rtol=1e-9, atol=0)
+
 def test_lever_arm_ignored_is_seen(exact_drive):
     """The same data with the lever arm left out: the position residuals show it."""
     tr, imu = exact_drive

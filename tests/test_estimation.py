@@ -399,7 +399,7 @@ def test_reported_position_std_is_in_metres_on_both_axes(exact_drive):
     longitude variances with the meridian and prime-vertical radii; at the first rows,
     before the first covariance propagation, it is the initial std itself on every axis.
     Measured: equal to the last bit; tolerance 1e-9 relative (the conversions to rad and
-    back are a few roundings). R_N for R_M would put the north std 0.33 % off here."""
+    back are a few roundings). R_N for R_M would put the north std 0.51 % off here."""
     tr, imu = exact_drive
     nav = start(tr, quiet_config(), position_std_m=0.05, velocity_std_m_s=0.01,
                 attitude_std_rad=1e-4)

@@ -8,13 +8,19 @@ in its file, and the Python mutation configuration names modules and tests that 
 from __future__ import annotations
 
 import importlib.util
+import sys
 
 from conftest import ROOT
 
 
 def _run_c():
-    spec = importlib.util.spec_from_file_location("mutation_run_c", ROOT / "mutation" / "run_c.py")
+    return _load("mutation_run_c", "run_c.py")
+
+
+def _load(name, file):
+    spec = importlib.util.spec_from_file_location(name, ROOT / "mutation" / file)
     mod = importlib.util.module_from_spec(spec)
+    sys.modules[name] = mod          # dataclasses look their module up there
     spec.loader.exec_module(mod)
     return mod
 
@@ -48,9 +54,7 @@ def test_apply_refuses_ambiguous_and_missing_lines():
 
 
 def test_python_mutation_config_names_existing_files():
-    spec = importlib.util.spec_from_file_location("mutation_run_py", ROOT / "mutation" / "run_py.py")
-    run_py = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(run_py)
+    run_py = _load("mutation_run_py", "run_py.py")
     cfg, module, ranges = run_py.selection()   # exits naming a function that is gone
     assert (ROOT / module).is_file(), f"mutation/cosmic-ray.toml names a missing module {module}"
     assert cfg["cosmic-ray"]["module-path"] == module, "the two module names must agree"

@@ -393,6 +393,42 @@ def test_exact_sensors_at_odd_times(exact_drive, filt):
     assert np.abs(e).max() < 5e-3
 
 
+
+def test_reported_position_std_is_in_metres_on_both_axes(exact_drive):
+    """The output's position std (east, north, up in m) converts the latitude and
+    longitude variances with the meridian and prime-vertical radii; at the first rows,
+    before the first covariance propagation, it is the initial std itself on every axis.
+    Measured: equal to the last bit; tolerance 1e-9 relative (the conversions to rad and
+    back are a few roundings). R_N for R_M would put the north std 0.51 % off here."""
+    tr, imu = exact_drive
+    nav = start(tr, quiet_config(), position_std_m=0.05, velocity_std_m_s=0.01,
+                attitude_std_rad=1e-4)
+    sol = nav.run(imu)
+    np.testing.assert_allclose(sol.std[:3, 3:6], 0.05, rtol=1e-9, atol=0)
+
+
+def test_velocity_variance_grows_by_the_vrw_between_propagations(exact_drive):
+    """Between two covariance propagations (T = 0.1 s) the velocity variance of each
+    axis grows by VRW^2 T (the discrete white-noise integral; the trapezoidal rule gives
+    exactly that for a state with negligible dynamics over T). VRW from the one-sided
+    ASD: 10 ug/sqrt(Hz) -> 10e-6 * 9.80665 / sqrt(2) m/s/sqrt(s). The other inputs of the
+    velocity variance are made negligible: attitude std 1e-7 rad (g T sigma = 1e-7 m/s),
+    biases 1e-12. Measured: the ratio is 1 within 1.8e-4 over the first five propagations
+    (it drifts by the dynamics' cross terms, ~4e-5 a step); bound 1e-3, a 5x margin (a
+    doubled Q gives 2)."""
+    tr, imu = exact_drive
+    T = 0.1
+    cfg = FilterConfig(imu=gf.ImuNoise(accel_vrw_ug_sqrt_hz=10.0), propagation_interval_s=T)
+    nav = start(tr, cfg, position_std_m=0.05, velocity_std_m_s=1e-4, attitude_std_rad=1e-7,
+                gyro_bias_std_rad_s=1e-12, accel_bias_std_m_s2=1e-12)
+    sol = nav.run(imu)
+    var = sol.std[:, 0:3] ** 2
+    rows = [np.searchsorted(sol.t_s, T * j - 1e-9) for j in range(1, 6)]   # first rows after
+    steps = np.diff(np.vstack([np.full(3, 1e-8), var[rows]]), axis=0)      # each propagation
+    vrw = 10e-6 * 9.80665 / np.sqrt(2.0)
+    ratio = steps / (vrw ** 2 * T)
+    assert np.all(np.abs(ratio - 1.0) < 1e-3), ratio
+
 def test_lever_arm_ignored_is_seen(exact_drive):
     """The same data with the lever arm left out: the position residuals show it."""
     tr, imu = exact_drive

@@ -162,12 +162,107 @@ def test_pointers_cover_exactly_what_c_accesses():
     assert len(_lib.ptr(np.zeros(3), 3)) == 3
     with pytest.raises(ValueError, match="2 elements where C accesses 3"):
         _lib.ptr(np.zeros(2), 3)
+    with pytest.raises(ValueError, match="4 elements where C accesses 3"):   # larger too
+        _lib.ptr(np.zeros(4), 3)
     with pytest.raises(TypeError, match="float64"):
         _lib.ptr(np.zeros(3, dtype=np.float32), 3)
     with pytest.raises(ValueError, match="C-contiguous"):
         _lib.ptr(np.zeros((3, 2))[:, 0], 3)
     with pytest.raises(TypeError, match="uint8"):
         _lib.ptr(np.zeros(3), 3, "uint8_t")
+
+
+def test_array_shape_check_and_the_single_sample_hint():
+    """Every way a shape can be wrong is refused; the reshape hint appears only where it
+    is the fix (a single sample handed in for a record of rows)."""
+    with pytest.raises(ValueError, match=r"use gyro\.reshape\(1, 3\)"):
+        _lib.as_array("gyro", np.zeros(3), (None, 3), "rad")
+    cases = [(np.zeros(4), (None, 3)),            # a vector of another length: no hint
+             (np.zeros((2, 3, 1)), (None, 3)),    # more dimensions
+             (np.zeros(3), (3, 3)),               # fixed shape, not a record
+             (np.zeros((2, 2)), (None,)),         # a 1-D record given rows
+             (np.zeros((3, 1)), (3,)),            # fewer dimensions expected
+             (np.zeros(3), (None, 3, 3))]         # a record of matrices: no row hint
+    for value, shape in cases:
+        with pytest.raises(ValueError, match="must have shape") as info:
+            _lib.as_array("x", value, shape, "m")
+        assert "reshape" not in str(info.value), (value.shape, shape)
+    assert _lib.as_array("x", np.zeros((0, 3)), (None, 3), "m").shape == (0, 3)
+    # records keep NaN and Inf for the C core to locate (as_rows is as_array(finite=False))
+    rows = _lib.as_rows("A", [[np.nan, 1.0], [np.inf, 2.0]], 2, "m/s^2")
+    assert rows.shape == (2, 2) and np.isnan(rows[0, 0]) and np.isinf(rows[1, 0])
+
+
+def test_helper_options_are_keyword_only_and_annotations_resolve():
+    """``finite`` and the bounds are keyword-only: a positional ``0.0`` at a call would be a
+    bound nobody can see. The annotations resolve (documentation tools evaluate them)."""
+    with pytest.raises(TypeError):
+        _lib.as_array("x", np.zeros(3), (3,), "m", False)
+    with pytest.raises(TypeError):
+        _lib.as_scalar("dt", 1.0, "s", 0.0)
+    import typing
+    for f in (_lib.as_array, _lib.as_scalar, _lib.as_rows, _lib.as_positive_scalar,
+              _lib.as_vector3, _lib.ptr, _lib.done_before, _lib.as_start_index,
+              _lib.first_nonfinite):
+        typing.get_type_hints(f)
+
+
+def test_scalars_zero_d_arrays_positive_and_start_index():
+    assert _lib.as_scalar("dt", np.array(0.25), "s") == 0.25        # a 0-d array is a scalar
+    with pytest.raises(TypeError, match="real number"):
+        _lib.as_scalar("dt", np.array([0.25]), "s")
+    assert _lib.as_positive_scalar("l", 1e-9, "m") == 1e-9
+    for bad in (0.0, -1e-300, -0.5):
+        with pytest.raises(ValueError, match="l must be finite and > 0 m"):
+            _lib.as_positive_scalar("l", bad, "m")
+    assert _lib.as_start_index(0) == 0 and _lib.as_start_index(np.int64(12)) == 12
+    for bad in (-1, True, 2.0, "3"):
+        with pytest.raises(ValueError, match="start_index must be an integer >= 0"):
+            _lib.as_start_index(bad)
+
+
+def test_partial_result_messages_count_the_samples_done():
+    """``done_before`` tells how much of a record was solved before a bad sample: the
+    sample numbers are the record's (``start`` onwards), the last one ``start + k - 1``."""
+    assert _lib.done_before(0) == "no sample was solved before it (.partial is empty)"
+    assert _lib.done_before(1, 7) == "sample 7 was solved (see .partial)"
+    assert _lib.done_before(2, 7) == "samples 7..8 were solved (see .partial)"
+    assert _lib.done_before(5, 0, "filtered") == "samples 0..4 were filtered (see .partial)"
+    assert _lib.done_before(3, 1) == "samples 1..3 were solved (see .partial)"
+    assert _lib.done_before(2) == "samples 0..1 were solved (see .partial)"   # record start 0
+
+
+def test_first_nonfinite_names_the_first_bad_column():
+    a = np.array([[1.0, 2.0, 3.0, 4.0], [0.0, np.nan, np.inf, np.nan]])
+    assert _lib.first_nonfinite(a, 1) == 1          # the first, not the last
+    assert _lib.first_nonfinite(a, 0) == -1         # none: exactly -1
+    assert _lib.first_nonfinite(np.array([[-np.inf, 0.0]]), 0) == 0
+
+
+def test_struct_buffers_must_be_records_of_the_struct_size():
+    """``ptr`` with a C struct type: only a C-contiguous numpy structured array whose
+    records have the struct's size, with exactly the number of records C accesses."""
+    ctype = "gf_vehicle_sample"
+    size = _lib.ffi.sizeof(ctype)
+    rec = np.dtype([("d", np.float64, (size // 8,))])
+    assert rec.itemsize == size
+    buf = np.zeros(4, dtype=rec)
+    p = _lib.ptr(buf, 4, ctype)
+    assert _lib.ffi.typeof(p) is _lib.ffi.typeof(f"{ctype} *")
+    assert int(_lib.ffi.cast("uintptr_t", p)) == buf.ctypes.data
+    for n in (3, 5):
+        with pytest.raises(ValueError, match=f"4 records where C accesses {n}"):
+            _lib.ptr(buf, n, ctype)
+    with pytest.raises(ValueError, match="C-contiguous"):
+        _lib.ptr(np.zeros(8, dtype=rec)[::2], 4, ctype)
+    bad = (np.zeros(4, dtype=np.dtype(f"V{size}")),                           # unstructured bytes
+           np.zeros(4, dtype=np.dtype([("d", np.float64, (size // 8 + 1,))])),  # longer records
+           np.zeros(4, dtype=np.dtype([("d", np.float64, (size // 8 - 1,))])),  # shorter records
+           np.zeros((4, size // 8)),                                           # plain doubles
+           [0.0] * size)                                                        # not an array
+    for b in bad:
+        with pytest.raises(TypeError, match=f"structured array of {size}-byte records"):
+            _lib.ptr(b, 4, ctype)
 
 
 def _calls(tree):

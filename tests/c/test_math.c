@@ -85,5 +85,21 @@ int main(void)
     double bad[4] = {NAN, 0, 0, 1};
     CHECK(!gf_q_normalize(bad, out), "NaN quaternion rejected");
 
+    /* quaternion -> rotation vector: q and -q are one attitude and give the same, short
+     * rotation vector (angle 0.3 rad about a unit axis; closed form, tolerance a few ulp
+     * of the atan2 and the products) */
+    {
+        const double ang = 0.3, ax[3] = {2.0 / 3.0, -1.0 / 3.0, 2.0 / 3.0};
+        const double ch = cos(0.5 * ang), sh = sin(0.5 * ang);
+        const double qp[4] = {ch, sh * ax[0], sh * ax[1], sh * ax[2]};
+        const double qm[4] = {-ch, -sh * ax[0], -sh * ax[1], -sh * ax[2]};
+        double rp[3], rm[3];
+        gf_q_to_rotvec(qp, rp);
+        gf_q_to_rotvec(qm, rm);
+        for (int k = 0; k < 3; ++k) {
+            CHECK_CLOSE(rp[k], ang * ax[k], 1e-15, "rotvec of q");
+            CHECK_CLOSE(rm[k], ang * ax[k], 1e-15, "rotvec of -q (the same attitude)");
+        }
+    }
     TEST_MAIN_END();
 }

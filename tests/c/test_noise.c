@@ -94,6 +94,39 @@ static void test_processes(void)
     }
     CHECK(fabs(sqrt(first_var / 3000.0) / sigma - 1.0) < 5.0 * sqrt(0.5 / 3000.0),
           "GM steady-state start: std %g vs %g", sqrt(first_var / 3000.0), sigma);
+
+    /* band-limited noise (gf_noise.h: the Gauss-Markov recursion with a = exp(-2 pi f_c
+     * dt), a first-order low-pass of corner f_c): stationary std sigma_b, and
+     * y_k - a y_(k-1) white with std sigma_b sqrt(1 - a^2), a from the corner. At f_c =
+     * 5 Hz, dt = 0.01 s: a = 0.730; a corner off by 2 (a = 0.855) moves that std by 37 %,
+     * the bound is 5 standard errors (0.6 %) */
+    const double sb_g = 2e-5, sb_a = 3e-3, fc = 5.0;
+    memset(&p, 0, sizeof p);
+    p.gyro_band_std_rad_s = sb_g;
+    p.accel_band_std_m_s2 = sb_a;
+    p.band_hz = fc;
+    CHECK(gf_imu_noise_init(&s, &p, 3, NULL) == GF_OK, "init band-limited");
+    CHECK(gf_imu_noise_run(&s, N, dt, g_buf, g_buf2) == GF_OK, "run band-limited");
+    const double ab = exp(-2.0 * 3.14159265358979323846 * fc * dt);
+    double rg = 0.0, ra = 0.0;
+    for (size_t k = 1; k < N; ++k)
+        for (int i = 0; i < 3; ++i) {
+            const double eg = g_buf[3 * k + i] - ab * g_buf[3 * (k - 1) + i];
+            const double ea = g_buf2[3 * k + i] - ab * g_buf2[3 * (k - 1) + i];
+            rg += eg * eg;
+            ra += ea * ea;
+        }
+    rg /= 3.0 * (N - 1);
+    ra /= 3.0 * (N - 1);
+    CHECK(fabs(sqrt(rg) / (sb_g * sqrt(1.0 - ab * ab)) - 1.0) < 5.0 * sqrt(0.5 / (3 * N)),
+          "band-limited gyro innovation std %g vs %g", sqrt(rg), sb_g * sqrt(1.0 - ab * ab));
+    CHECK(fabs(sqrt(ra) / (sb_a * sqrt(1.0 - ab * ab)) - 1.0) < 5.0 * sqrt(0.5 / (3 * N)),
+          "band-limited accel innovation std");
+    /* the stationary std: samples are correlated (a = 0.73), the effective sample count
+     * is 3N (1 - a^2) / (1 + a^2) = 1.8e5, the standard error of the std 0.17 %; bound 1 %
+     * (6 standard errors) */
+    moments(g_buf, 3 * N, 1, &m, &v);
+    CHECK(fabs(sqrt(v) / sb_g - 1.0) < 0.01, "band-limited gyro std %g vs %g", sqrt(v), sb_g);
 }
 
 static void test_bad_input(void)

@@ -386,6 +386,53 @@ static void test_repeat_and_bad(void)
     CHECK(gf_rot_eval(&st, NAN, &p) == GF_ERR_NONFINITE_INPUT, "NaN time");
 }
 
+/* Closed forms the other tests do not reach: a tilted static base (the specific force and
+ * Earth rate seen by a level-mounted IMU on a base rolled by gamma about north), a cycle
+ * ending at -q0 (one full turn: the same attitude), and the rate limit on the plateau
+ * rate of a turn with ramps, angle / (move - ramp), not the mean rate angle / move. */
+static void test_tilted_base_and_limits(void)
+{
+    gf_rot_schedule s;
+    memset(&s, 0, sizeof s);
+    s.q_mb0[0] = 1.0;
+    gf_rot_state st;
+    CHECK(gf_rot_init(&st, &s, 0.0, NULL) == GF_OK, "no segments: the IMU stays at q_mb0");
+    /* C_b^n = R_y(gamma) (q = [cos gamma/2, 0, sin gamma/2, 0]); f^b = C^T [0, 0, g] =
+     * g [-sin gamma, 0, cos gamma], w_ie^b = C^T [0, W cos L, W sin L] */
+    const double gam = 30.0 * DEG, lat = 40.0 * DEG, h = 50.0, dt = 0.01;
+    const double q_base[4] = {cos(0.5 * gam), 0.0, sin(0.5 * gam), 0.0};
+    double dth[3 * 4], dv[3 * 4];
+    size_t done = 0;
+    CHECK(gf_rot_imu_static(&st, q_base, lat, h, 0.0, 4, dt, 0.0, dth, dv, NULL, NULL, &done) ==
+              GF_OK && done == 4, "static simulation on a tilted base");
+    const double g = ref_gravity(lat, h), W = REF_W_IE;
+    const double f_want[3] = {-g * sin(gam), 0.0, g * cos(gam)};
+    const double w_want[3] = {-sin(gam) * W * sin(lat), W * cos(lat), cos(gam) * W * sin(lat)};
+    for (int k = 0; k < 4; ++k)
+        for (int i = 0; i < 3; ++i) {
+            /* as in test_static_closed_form: 2e-13 m/s on g dt, 1e-15 rad on w dt */
+            CHECK_CLOSE(dv[3 * k + i], f_want[i] * dt, 2e-13, "tilted base: specific force");
+            CHECK_CLOSE(dth[3 * k + i], w_want[i] * dt, 1e-15, "tilted base: Earth rate");
+        }
+
+    /* one full turn about IMU z returns the attitude as -q0: the cycle closes */
+    s.n_segments = 1;
+    s.repeat = 1;
+    s.segment[0] = (gf_rot_segment){-1, 2, 0.0, 2.0 * REF_PI, 40.0, 2.0, 1.0};
+    int bad = 0;
+    CHECK(gf_rot_init(&st, &s, 0.0, &bad) == GF_OK && bad == 0,
+          "a cycle of one full turn (ends at -q0) repeats (bad %d)", bad);
+
+    /* 180 deg with ramps of 0.15 s: in 0.4 s the plateau rate is 720 deg/s (refused; the
+     * mean 450 deg/s is below the 600 deg/s limit), in 0.5 s it is 514 deg/s (accepted) */
+    s.repeat = 0;
+    s.segment[0] = (gf_rot_segment){0, -1, REF_PI, 0.0, 0.4, 0.15, 1.0};
+    CHECK(gf_rot_init(&st, &s, 0.0, &bad) == GF_ERR_BAD_PARAMETER && bad == GF_ROT_BAD_SEGMENT,
+          "plateau rate 720 deg/s refused (bad %d)", bad);
+    s.segment[0].move_s = 0.5;
+    CHECK(gf_rot_init(&st, &s, 0.0, &bad) == GF_OK, "plateau rate 514 deg/s accepted");
+}
+
 int main(void)
 {
     test_seed001_table();
@@ -393,5 +440,6 @@ int main(void)
     test_static_closed_form();
     test_on_vehicle();
     test_repeat_and_bad();
+    test_tilted_base_and_limits();
     TEST_MAIN_END();
 }

@@ -273,10 +273,32 @@ static void test_bad(void)
     CHECK(gf_syscal_check(&damaged) == GF_ERR_BAD_PARAMETER, "estimates and compensation disagree");
 }
 
+/* The measurement noise of the zero-velocity update: the velocity-error states are
+ * observed directly (H = I, R = vel_std^2 I), so after an update from a prior P >= R I
+ * the eigenvalues of their posterior block P (P + R)^-1 R lie in [R/2, R): each std in
+ * [vel_std / sqrt 2, vel_std] (a 1e-9 relative slack for round-off). The prior here is
+ * 0.01 m/s, 1000 vel_std. */
+static void test_update_variance(void)
+{
+    const gf_rot_state st = short_path();
+    simulate(&st, NULL, 0.0);
+    gf_syscal_config c = config(36);
+    size_t ne = 0;
+    run_filter(&c, 150, &ne);
+    CHECK(ne == 1, "one update in 1.5 s: %zu", ne);
+    for (int i = 0; i < 3; ++i) {
+        const double s = epochs[0].std[GF_SYSCAL_IDX_DV + i];
+        CHECK(s >= c.vel_std_m_s / sqrt(2.0) * (1.0 - 1e-9) && s <= c.vel_std_m_s * (1.0 + 1e-9),
+              "velocity-error std after the update %.6g, in [%.6g, %.6g]", s,
+              c.vel_std_m_s / sqrt(2.0), c.vel_std_m_s);
+    }
+}
+
 int main(void)
 {
     test_mapping();
     test_exact_data();
+    test_update_variance();
     test_recovery(36);
     test_recovery(37);
     test_bad();

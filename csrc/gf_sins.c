@@ -285,16 +285,16 @@ static inline int renormalize(double q[4])
     return gf_q_normalize(q, q);
 }
 
-/* What every successful update ends with: the sample becomes the previous one, time
- * moves by T in the direction of travel. */
+/* What every successful update (of `samples` samples) ends with: the last sample becomes
+ * the previous one, time moves by T in the direction of travel. */
 static inline void finish_update(gf_sins_state *s, const double gyro[3], const double accel[3],
-                                 double T)
+                                 double T, uint64_t samples)
 {
     gf_v3_copy(gyro, s->prev_gyro);
     gf_v3_copy(accel, s->prev_accel);
     s->have_prev = 1;
     s->time_s += s->earth_rate_sign > 0 ? T : -T;
-    s->n_samples += 1;
+    s->n_samples += samples;
 }
 
 static gf_status nav_update(gf_sins_state *s, const double qb[4], const double dv_b[3], double T,
@@ -367,7 +367,7 @@ static gf_status sins_update(gf_sins_state *s, const double gyro[3], const doubl
     gf_q_from_rotvec_fast(phi, qb);
     const gf_status status = nav_update(s, qb, dv_b, T, h_ext_m);
     if (status == GF_OK)
-        finish_update(s, gyro, accel, T);
+        finish_update(s, gyro, accel, T, 1);
     return status;
 }
 
@@ -442,11 +442,7 @@ static inline gf_status group_update_m(gf_sins_state *s, int m, const double *g,
     const gf_status status = nav_update(s, qb, dv_b, T, h_ext_m);
     if (status != GF_OK)
         return status;
-    gf_v3_copy(gl, s->prev_gyro);
-    gf_v3_copy(al, s->prev_accel);
-    s->have_prev = 1;
-    s->time_s += s->earth_rate_sign > 0 ? T : -T;
-    s->n_samples += (uint64_t)m;
+    finish_update(s, gl, al, T, (uint64_t)m);   /* the group's last sample is the previous one */
     return GF_OK;
 }
 
@@ -739,7 +735,7 @@ gf_status gf_sins_step_compensated_trusted(gf_sins_state *state, const double *p
     (void)phi;
     const gf_status status = nav_update(state, q_phi, dv_b, dt_s, h_ext_m);
     if (status == GF_OK)
-        finish_update(state, rate, f, dt_s);
+        finish_update(state, rate, f, dt_s, 1);
     return status;
 }
 

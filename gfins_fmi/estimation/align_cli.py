@@ -47,6 +47,10 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--window", type=lambda s: _floats(s, 2, "--window"), default=None, metavar="T0,T1",
                    help="static: the window at rest for the coarse alignment, s (default: the first 60 s)")
     p.add_argument("--fine", action="store_true", help="static: fine alignment over the record after it")
+    p.add_argument("--disturbed", action="store_true",
+                   help="static on a swaying base (a moored ship, an idling vehicle): the inertial-frame "
+                        "coarse alignment; the attitude is that at the window's end (default window: the "
+                        "first 300 s)")
     p.add_argument("--initial", type=lambda s: _floats(s, 6, "--initial"), default=None,
                    metavar="LAT,LON,H,HEADING,PITCH,ROLL",
                    help="motion: coarse start at the record's start (deg, deg, m, deg, deg, deg); the "
@@ -75,6 +79,9 @@ def _check(args):
         return "static alignment needs --position LAT,LON,H"
     if args.mode == "motion" and (args.speed is None or args.initial is None):
         return "motion alignment needs a SPEED record and --initial LAT,LON,H,HEADING,PITCH,ROLL"
+    if args.disturbed and (args.mode != "static" or args.fine):
+        return ("--disturbed is a static coarse alignment; the fine alignment's zero-velocity "
+                "updates assume a base at rest (leave out --fine)")
     if args.position is not None and not abs(args.position[0]) < 90:
         return f"--position: latitude must be in (-90, 90) deg; got {args.position[0]}"
     if args.initial is not None and not abs(args.initial[0]) < 90:
@@ -94,7 +101,8 @@ def run(args) -> int:
     from gfins_fmi import io
     from gfins_fmi.estimation import FilterConfig, InitialState
     from gfins_fmi.estimation import scenarios
-    from gfins_fmi.estimation.alignment import align_in_motion, coarse_align, fine_align
+    from gfins_fmi.estimation.alignment import (align_in_motion, coarse_align, coarse_align_inertial,
+                                                fine_align)
     from gfins_fmi.sins import NavState, euler_to_quat
     deg = math.pi / 180.0
     noise = {"consumer": scenarios.CONSUMER, "tactical": scenarios.TACTICAL,
@@ -103,8 +111,10 @@ def run(args) -> int:
     gb, ab = _biases(args, noise)
     if args.mode == "static":
         lat, lon, h = args.position
-        t0, t1 = args.window if args.window else (imu.t_s[0] - 1e-9, imu.t_s[0] + 60.0)
-        co = coarse_align(imu, t0, t1, lat * deg, gyro_bias_std_rad_s=gb, accel_bias_std_m_s2=ab)
+        span = 300.0 if args.disturbed else 60.0
+        t0, t1 = args.window if args.window else (imu.t_s[0] - 1e-9, imu.t_s[0] + span)
+        align = coarse_align_inertial if args.disturbed else coarse_align
+        co = align(imu, t0, t1, lat * deg, gyro_bias_std_rad_s=gb, accel_bias_std_m_s2=ab)
         e = co.euler_rad / deg
         print(f"coarse ({co.heading_method}): heading {e[0]:.4f} deg, pitch {e[1]:.4f} deg, roll {e[2]:.4f} deg; "
               f"tilt 1-sigma {co.tilt_std_rad / deg:.4f} deg, heading 1-sigma {co.heading_std_rad / deg:.4f} deg")

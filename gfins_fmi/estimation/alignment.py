@@ -25,9 +25,9 @@ from typing import Optional
 
 import numpy as np
 
-from gfins_fmi.sins import NavState, euler_to_quat
+from gfins_fmi.sins import NavState, euler_to_quat, quat_to_euler
 
-__all__ = ["CoarseAlignment", "coarse_align", "attitude_from_gravity_and_earth_rate", "heading_from_gnss",
+__all__ = ["CoarseAlignment", "coarse_align", "coarse_align_inertial", "attitude_from_gravity_and_earth_rate", "heading_from_gnss",
            "AlignmentError", "StartingPoint", "align_static_then_gnss", "FineAlignment", "fine_align",
            "InMotionAlignment", "align_in_motion"]
 
@@ -137,6 +137,115 @@ def coarse_align(imu, t0_s: float, t1_s: float, lat_rad: float, *, gyro_bias_std
                          f"{np.degrees(horiz) * 3600:.3g} deg/h here): heading left undetermined")
     tilt_std = float(accel_bias_std_m_s2 / np.linalg.norm(fm))
     return CoarseAlignment(np.array([heading, pitch, roll]), tilt_std, hstd, method, (t0_s, t1_s), fm, wm,
+                           notes)
+
+
+def coarse_align_inertial(imu, t0_s: float, t1_s: float, lat_rad: float, *,
+                          gyro_bias_std_rad_s: float = 0.0, accel_bias_std_m_s2: float = 1e-3,
+                          n_vectors: int = 20, min_duration_s: float = 30.0, max_misfit_rad: float = 5e-3,
+                          max_heading_std_rad: float = np.radians(10.0)) -> CoarseAlignment:
+    """Coarse alignment on a disturbed base (a moored ship, a vehicle with its engine
+    running, people walking on a platform): the inertial-frame method.
+
+    At rest on a swaying base the mean rate is dominated by the sway, not the Earth rate,
+    and gyrocompassing fails. Here the gyros integrate the body's attitude relative to the
+    inertial frame it had at ``t0_s`` (ib0), and the specific force is integrated in that
+    frame: V^ib0(t) = int C_b^ib0 f^b dt (the strapdown mechanization, fixed frame, no
+    gravity: one C call). In the frame i0 = the navigation frame at t0, frozen in inertial
+    space, the same integral of gravity's reaction is a closed form — the up axis turns
+    about the Earth's axis u = [0, cos L, sin L] at the Earth rate W:
+
+        V^i0(t) = g [ p sin(W t) / W + (u x p)(1 - cos(W t)) / W + (u . e_U) u t ],
+        p = e_U - (u . e_U) u
+
+    while the sway's accelerations integrate to its bounded velocity. The rotation
+    C_ib0^i0 that best maps the directions of the V^ib0 onto those of the V^i0 at
+    ``n_vectors`` times of the second half of the window (Wahba's problem,
+    ``scipy.spatial.transform.Rotation.align_vectors``; directions only, so g drops out)
+    gives the attitude at the window's end, C_b^n(t1) = C_i0^n(t1) C_ib0^i0 C_b^ib0(t1),
+    C_i0^n(t1) = R(u, W t1)^T.
+
+    Errors: the heading comes from the turn of the up axis (W T cos L rad over the window),
+    so the window must be long enough for the sway's velocity to be small against it:
+    heading ~ v_sway / (g T) / (W T cos L) (e.g. 0.15 m/s of sway over 300 s at 30 deg: a
+    few mrad); the gyro bias gives ~ bias / (W cos L) as in gyrocompassing, the tilt
+    ~ accelerometer bias / g.
+
+    Returns a :class:`CoarseAlignment` whose attitude is that at ``t1_s`` (the base moves:
+    the start of navigation), ``heading_method`` "inertial frame" — or "none" with the
+    heading NaN when its 1-sigma (from the gyro bias and the fit's misfit) exceeds
+    ``max_heading_std_rad``.
+
+    Raises
+    ------
+    AlignmentError
+        A window shorter than ``min_duration_s`` or holding too few samples, a latitude
+        beyond 85 deg (the Earth rate turns the up axis about itself: no heading), or a
+        window in which the base is not at rest on average (the directions of the
+        integrated specific force miss gravity's closed form by more than
+        ``max_misfit_rad``: measured 6e-5-3e-4 rad on a moored ship, 0.02 rad on a car
+        driving a 100 m circle).
+    """
+    from scipy.spatial.transform import Rotation
+
+    from gfins_fmi.sins import SinsConfig, Strapdown
+    if not abs(lat_rad) <= np.radians(85.0):
+        raise AlignmentError(f"latitude {np.degrees(lat_rad):.3g} deg: beyond 85 deg the Earth rate is "
+                             "nearly vertical and gives no heading")
+    if not (t1_s - t0_s >= min_duration_s):
+        raise AlignmentError(f"the window ({t0_s}, {t1_s}] s is shorter than {min_duration_s} s: the "
+                             "inertial-frame alignment needs the Earth to turn the up axis (use 60-300 s)")
+    if not (isinstance(n_vectors, (int, np.integer)) and n_vectors >= 2):
+        raise ValueError(f"n_vectors must be an integer >= 2, got {n_vectors!r}")
+    t = np.asarray(imu.t_s)
+    idx = np.flatnonzero((t > t0_s) & (t <= t1_s))
+    if idx.size < 10 * n_vectors:
+        raise AlignmentError(f"the window ({t0_s}, {t1_s}] s holds {idx.size} IMU samples; the "
+                             f"inertial-frame alignment needs at least {10 * n_vectors}")
+    w, f = _window_means(imu, t0_s, t1_s)
+    t_start = float(t[idx[0] - 1]) if idx[0] > 0 else float(t0_s)
+    x0 = NavState(np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3), 0.0, 0.0, 0.0, t_start, np.zeros(3))
+    sol = Strapdown(x0, SinsConfig(input=imu.kind, earth="flat", flat_gravity_m_s2=0.0)).run(
+        np.asarray(imu.gyro)[idx], np.asarray(imu.accel)[idx], t_s=t[idx])
+    tau = sol.t_s - t_start
+    T = float(tau[-1])
+    pick = np.unique(np.searchsorted(tau, np.linspace(0.5 * T, T, n_vectors)).clip(0, len(tau) - 1))
+    u = np.array([0.0, np.cos(lat_rad), np.sin(lat_rad)])
+    up = np.array([0.0, 0.0, 1.0])
+    p = up - u[2] * u
+    wt = _OMEGA * tau[pick][:, None]
+    V_i = (np.sin(wt) / _OMEGA * p + (1.0 - np.cos(wt)) / _OMEGA * np.cross(u, p) + u[2] * u * tau[pick][:, None])
+    V_b = sol.v_n_m_s[pick]
+    # directions only: g (and an accelerometer scale error) drops out, and the mean |f| of
+    # a swaying body is not g (the sway turns f in body axes: 0.25 % for 5 deg of roll)
+    V_i /= np.linalg.norm(V_i, axis=1)[:, None]
+    V_b = V_b / np.linalg.norm(V_b, axis=1)[:, None]
+    R, rssd = Rotation.align_vectors(V_i, V_b)            # V_i ~ C_ib0^i0 V_b
+    resid = float(rssd) / np.sqrt(len(pick))              # rms angle between fitted directions, rad
+    if not resid < max_misfit_rad:
+        raise AlignmentError(f"the specific force integrated over ({t0_s}, {t1_s}] s does not follow "
+                             f"gravity's (rms misfit {resid:.3g} rad): the base is moving, not "
+                             "swaying about a fixed point; use an in-motion alignment (align_in_motion)")
+    q_b_ib0 = sol.q_bn[-1]
+    C_b_ib0 = Rotation.from_quat([q_b_ib0[1], q_b_ib0[2], q_b_ib0[3], q_b_ib0[0]])
+    C_i0_n = Rotation.from_rotvec(u * _OMEGA * T).inv()
+    qx = (C_i0_n * R * C_b_ib0).as_quat()
+    euler = quat_to_euler(np.array([qx[3], qx[0], qx[1], qx[2]]))
+    g = float(np.linalg.norm(f.mean(axis=0)))
+    horiz = _OMEGA * np.cos(lat_rad)
+    notes = [f"attitude at the end of the window, t = {float(sol.t_s[-1])} s (the base moves)",
+             f"rms misfit of the fitted directions {resid:.2g} rad"]
+    # 1-sigma estimates: the directions' misfit is the sway's share of the vectors; the
+    # heading sees it divided by the turn of the up axis over the window's second half
+    tilt_std = float(np.hypot(accel_bias_std_m_s2 / g, resid))
+    heading_std = float(np.hypot(gyro_bias_std_rad_s / horiz, resid / (0.5 * _OMEGA * T * np.cos(lat_rad))))
+    euler = np.asarray(euler, float)
+    method = "inertial frame"
+    if not heading_std <= max_heading_std_rad:
+        notes.append(f"heading sigma {np.degrees(heading_std):.3g} deg above {np.degrees(max_heading_std_rad):.3g} "
+                     "deg: heading left undetermined (a longer window, a quieter base or better gyros)")
+        euler[0], heading_std, method = np.nan, np.nan, "none"
+    return CoarseAlignment(euler, tilt_std, heading_std, method, (t0_s, t1_s), f.mean(axis=0), w.mean(axis=0),
                            notes)
 
 

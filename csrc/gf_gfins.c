@@ -1154,11 +1154,18 @@ gf_status gf_gfnav_init(gf_gfnav_state *st, const gf_array_geometry *g, const gf
         return GF_ERR_NULL_POINTER;
     if (sc->input != GF_SINS_INPUT_RATES)
         return GF_ERR_BAD_PARAMETER;
-    gf_status status = gf_gfins_init(&st->rate, g, rc, omega_init, unobservable);
+    /* both parts into a copy, committed only when both start (found by fuzzing: a refused
+     * strapdown start left a new rate solver beside the old navigation state) */
+    gf_gfnav_state fresh;
+    memset(&fresh, 0, sizeof fresh);   /* padding included: states are compared and hashed as bytes */
+    gf_status status = gf_gfins_init(&fresh.rate, g, rc, omega_init, unobservable);
     if (status != GF_OK)
         return status;
-    st->integration = GF_GFNAV_HERMITE;
-    return gf_sins_init(&st->nav, sc, q_bn, v_n, lat, lon, h, t0);
+    fresh.integration = GF_GFNAV_HERMITE;
+    status = gf_sins_init(&fresh.nav, sc, q_bn, v_n, lat, lon, h, t0);
+    if (status == GF_OK)
+        *st = fresh;
+    return status;
 }
 
 gf_status gf_gfnav_set_integration(gf_gfnav_state *st, int32_t integration)

@@ -2414,6 +2414,15 @@ static void test_gfnav(void)
           "gfnav: sins errors passed on (|lat| > 90 deg)");
     CHECK(gf_gfnav_init(&nav, &g, &rc, w_b, &sc, q_true, v0, L, lon, h, t0, NULL) == GF_OK, "gfnav init");
     const gf_gfnav_state nav0 = nav;
+    {   /* found by fuzzing: a refused strapdown start left a new rate solver beside the old
+         * navigation state; now an error changes nothing */
+        static gf_gfnav_state c;
+        memcpy(&c, &nav, sizeof c);
+        gf_rate_config rc2 = rate_cfg(GF_RATE_FUSED);
+        CHECK(gf_gfnav_init(&c, &g, &rc2, w_b, &sc, q_true, v0, 2.0, lon, h, t0, NULL) == GF_ERR_BAD_PARAMETER &&
+                  memcmp(&c, &nav, sizeof c) == 0,
+              "gfnav: a refused start leaves the state as it was");
+    }
 
     /* 600 s at 100 Hz (the first sample starts the rate record) */
     const size_t n_total = 60001;

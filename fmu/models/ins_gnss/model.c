@@ -541,8 +541,17 @@ static void log_step_error(FmuInstance *instance, const ModelData *d, gf_status 
 FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double h_s)
 {
     int restart = 0;
-    if (fmu_skip_this_step(d->skip_steps, &d->skipped, &restart)) /* start at the next sample */
-        return restart ? start_filter(instance, d, t_s + h_s) : FMU_OK;
+    if (fmu_skip_this_step(d->skip_steps, &d->skipped, &restart)) { /* start at the next sample */
+        if (!restart)
+            return FMU_OK;
+        /* a failed step changes no model data: the start writes the navigator in place
+         * (found by fuzzing: a refused start left a half-initialised solver); once per run */
+        ModelData saved = *d;
+        const FmuStatus s = start_filter(instance, d, t_s + h_s);
+        if (s != FMU_OK)
+            *d = saved;
+        return s;
+    }
     gf_ins_meas meas[N_MEAS_MAX];
     size_t n_meas = 0;
     if (!gather(instance, d, t_s, meas, &n_meas))

@@ -37,7 +37,7 @@ def test_vehicle_fmu_equals_cffi_vehicle_with_sensor_errors(version):
     system = cosim.vehicle_navigation("gfnav_qin9", PROFILE, stop_s=STOP_S, imu_errors=imu,
                                       array_bias_m_s2=bias)
     system.outputs = {"vehicle": ["time_s", "lat", "lon", "v", "q", "gyro_rate", "specific_force",
-                                  "dtheta", "dv", "A"]}
+                                  "dtheta", "dv", "A", "angular_accel"]}
     with cosim.CoSimulation(system, fmi_version=version) as m:
         m.initialize()
         r = m.run()
@@ -61,6 +61,9 @@ def test_vehicle_fmu_equals_cffi_vehicle_with_sensor_errors(version):
     for got, ref in [(r["vehicle.dtheta"][1:], gi * h), (r["vehicle.dv"][1:], fi * h)]:
         assert np.max(np.abs(got - ref)) <= 1e-12 * np.max(np.abs(ref))
     assert np.all(r["vehicle.A"][:, 9:] == 0.0)
+    # the true angular acceleration (no sensor errors): the batch's, same round-off as the rates
+    ref = rec.gyro_dot_rad_s2
+    assert np.max(np.abs(r["vehicle.angular_accel"] - ref)) <= 1e-13 * np.max(np.abs(ref))
 
 
 @pytest.mark.parametrize("version", [2, 3])

@@ -396,6 +396,37 @@ def test_navigator_fmus_euler_output_follows_the_attitude(circle, version):
 
 
 @pytest.mark.parametrize("version", [2, 3])
+def test_sins_fmu_vehicle_attitude_outputs(circle, version):
+    """With rotating = 1 the SINS FMU navigates the IMU frame m and outputs the vehicle's
+    attitude from the gimbal input: q_vehicle = q_m^n * conj(q_m^b) with C_m^b = R_x(alpha)
+    R_z(beta) (docs/rotating_ins.md), written here with numpy quaternions, and
+    euler_vehicle its Euler angles. Round-off only: 1e-12."""
+    tr = circle
+    n = 50
+    x0 = gf.NavState.from_trajectory(tr, 0)
+    start = {"q0": x0.q_bn, "v0": x0.v_n_m_s, "lat0": x0.lat_rad, "lon0": x0.lon_rad, "h0": x0.h_m}
+    alpha, beta = 0.3, -0.7
+    gimbal = np.tile([alpha, beta], (n, 1))
+    out = run_fmu("sins", {"gyro_rate": tr.gyro_rad_s[:n], "specific_force": tr.accel_m_s2[:n],
+                           "gimbal": gimbal}, ["q", "q_vehicle", "euler_vehicle"], tr.dt_s,
+                  parameters={"input_mode": 1, "rotating": 1, **start}, fmi_version=version)
+
+    def qmul(p, q):
+        w1, x1, y1, z1 = p.T
+        w2, x2, y2, z2 = q.T
+        return np.stack([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2, w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+                         w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2], -1)
+
+    q_mb = qmul(np.array([np.cos(alpha / 2), np.sin(alpha / 2), 0, 0]),
+                np.array([np.cos(beta / 2), 0, 0, np.sin(beta / 2)]))
+    want = qmul(out["q"], np.tile(q_mb * [1, -1, -1, -1], (n, 1)))
+    got = out["q_vehicle"] * np.sign(np.sum(out["q_vehicle"] * want, axis=1))[:, None]
+    assert np.abs(got - want).max() < 1e-12
+    e = gf.quat_to_euler(out["q_vehicle"])
+    assert np.abs(np.c_[_wrap_pi(out["euler_vehicle"][:, 0] - e[:, 0]), out["euler_vehicle"][:, 1:] - e[:, 1:]]).max() < 1e-12
+
+
+@pytest.mark.parametrize("version", [2, 3])
 def test_accel9_fmu_blames_the_lever_arm_below_its_minimum(record, version):
     """l = 1e-7 m is positive but below the 1e-6 m minimum (before: the FMU logged
     'omega_init must be finite')."""

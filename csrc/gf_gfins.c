@@ -1102,11 +1102,19 @@ gf_status gf_gfins_step(gf_gfins_state *st, const double *A, double dt, double *
     const gf_status status = rate_step(st, A, dt, &r);
     if (status != GF_OK)
         return status;
+    /* the products of a finite but absurd rate overflow (found by fuzzing: w = 1.8e308
+     * rad/s gave GF_OK with NaN products): checked before anything is committed */
+    double Wk[6];
+    if (W) {
+        rate_products(&st->solver, &r, Wk);
+        if (!gf_all_finite(Wk, 6))
+            return GF_ERR_DIVERGED;
+    }
     rate_commit(st, &r);
     if (f) gf_v3_copy(r.f, f);
     if (w) gf_v3_copy(r.w, w);
     if (wd) gf_v3_copy(r.wd, wd);
-    if (W) rate_products(&st->solver, &r, W);
+    if (W) memcpy(W, Wk, sizeof Wk);
     if (flags) *flags = r.flags;
     return GF_OK;
 }
@@ -1130,12 +1138,17 @@ gf_status gf_gfins_run(gf_gfins_state *st, size_t n, const double *A, double dt,
         status = rate_step(st, A + ns * k, dt, &r);
         if (status != GF_OK)
             break;
+        if (W) {   /* as in gf_gfins_step: overflowing products refuse the sample */
+            rate_products(&st->solver, &r, W + 6 * k);
+            if (!gf_all_finite(W + 6 * k, 6)) {
+                status = GF_ERR_DIVERGED;
+                break;
+            }
+        }
         rate_commit(st, &r);
         gf_v3_copy(r.f, f + 3 * k);
         gf_v3_copy(r.w, w + 3 * k);
         gf_v3_copy(r.wd, wd + 3 * k);
-        if (W)
-            rate_products(&st->solver, &r, W + 6 * k);
         flags[k] = r.flags;
     }
     if (n_done)

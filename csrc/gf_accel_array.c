@@ -152,9 +152,9 @@ static int state_is_valid(const gf9_state *s)
  * |f| <= GF9_MAX_SPECIFIC_FORCE_M_S2, sum |omega_k^2| <= GF9_MAX_RATE_RAD_S^2 (the
  * measured |omega|^2, either sign: a negative omega_k^2 beyond it is no noise), and the
  * rate output within GF9_MAX_RATE_RAD_S (it is the reference rate where omega_k^2 < 0).
- * The reference rate alone is not limited: it only gives signs, and on a long record
- * its integral may drift (gf9_state) without making the solution absurd. Finite samples
- * whose solution overflows fail the same test. */
+ * The reference rate alone is not limited (only required finite, by the callers): it
+ * only gives signs, and on a long record its integral may drift (gf9_state) without
+ * making the solution absurd. Finite samples whose solution overflows fail the same test. */
 static int within_limits(const double f[3], const double omega[3], const double omega_dot[3],
                          const double omega_sq[3])
 {
@@ -239,7 +239,10 @@ gf_status gf9_step(gf9_state *state, const double *A_m_s2, double dt_s, gf9_outp
     gf9_solve_sample(A_m_s2, 0.25 / l, -0.5 / l, first, first ? 0.0 : 0.5 * dt_s, ref,
                      state->omega_dot_rad_s2, o.f_m_s2, o.omega_rad_s, o.omega_dot_rad_s2,
                      o.omega_sq_rad2_s2, &o.flags);
-    if (!within_limits(o.f_m_s2, o.omega_rad_s, o.omega_dot_rad_s2, o.omega_sq_rad2_s2))
+    /* the reference rate itself may overflow over an absurd interval (found by fuzzing:
+     * a state gf9_state_check refuses): refused like an absurd sample */
+    if (!within_limits(o.f_m_s2, o.omega_rad_s, o.omega_dot_rad_s2, o.omega_sq_rad2_s2) ||
+        !gf_all_finite(ref, 3))
         return GF_ERR_OUT_OF_RANGE; /* absurd or overflowing sample; state kept */
     *out = o;
     gf_v3_copy(ref, state->omega_ref_rad_s);
@@ -283,7 +286,8 @@ gf_status gf9_solve(gf9_state *state, size_t n_samples, const double *A_m_s2, do
         gf_v3_copy(omega_ref, ref_before);
         gf9_solve_sample(A, inv_4l, minus_inv_2l, first, half_dt_s, omega_ref, omega_dot_prev,
                          f_m_s2 + 3 * k, omega_rad_s + 3 * k, wd, omega_sq_rad2_s2 + 3 * k, &fl);
-        if (!within_limits(f_m_s2 + 3 * k, omega_rad_s + 3 * k, wd, omega_sq_rad2_s2 + 3 * k)) {
+        if (!within_limits(f_m_s2 + 3 * k, omega_rad_s + 3 * k, wd, omega_sq_rad2_s2 + 3 * k) ||
+            !gf_all_finite(omega_ref, 3)) {
             gf_v3_copy(ref_before, omega_ref); /* absurd or overflowing sample */
             status = GF_ERR_OUT_OF_RANGE;
             break;

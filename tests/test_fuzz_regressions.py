@@ -61,3 +61,45 @@ def test_12_from_csv_of_binary_bytes(tmp_path):
     p.write_bytes(b"\xb6\xfc*")
     with pytest.raises(FileFormatError, match="not a text file"):
         ImuRecord.from_csv(p)
+
+
+def test_19_gf9_reference_rate_overflow_is_refused():
+    """A second sample over an absurd interval (1e307 s) with a large angular
+    acceleration: the reference rate's trapezoid overflowed and gf9_step returned GF_OK
+    with a state gf9_state_check refuses. Now: GF_ERR_OUT_OF_RANGE, state unchanged."""
+    st = ffi.new("gf9_state *")
+    assert lib.gf9_init(st, 0.1, ffi.new("double[3]", [0.0, 0.0, 0.0])) == lib.GF_OK
+    out = ffi.new("gf9_output *")
+    # outputs of angular acceleration w_dot = (0, 0, 100) rad/s^2 at rest, no rate:
+    # A_k = (w_dot x u_k) . theta_k (tangential terms only) for the paper's layout
+    geo = gf.accel9_geometry(0.1)
+    A = gf.forward_model(geo, np.zeros((1, 3)), np.zeros((1, 3)), np.array([[0.0, 0.0, 100.0]]))[0]
+    Ac = ffi.new("double[9]", list(A))
+    assert lib.gf9_step(st, Ac, 0.01, out) == lib.GF_OK
+    before = bytes(ffi.buffer(st))
+    assert lib.gf9_step(st, Ac, 1e307, out) == lib.GF_ERR_OUT_OF_RANGE
+    assert bytes(ffi.buffer(st)) == before
+
+
+def test_13_15_rotation_schedule_bounds():
+    """gf_rot_imu_static refuses a sample interval beyond 10 s (1e300 s overflowed the
+    quadrature's piece count); gf_rot_eval refuses a damaged axis (it wrote beyond a
+    quaternion)."""
+    sched = ffi.new("gf_rot_schedule *")
+    sched.q_mb0 = [1.0, 0.0, 0.0, 0.0]
+    sched.n_segments = 1
+    sched.segment[0].base_axis = -1
+    sched.segment[0].imu_axis = 2
+    sched.segment[0].imu_angle_rad = np.pi / 2
+    sched.segment[0].move_s = 10.0
+    sched.segment[0].ramp_s = 1.0
+    sched.segment[0].dwell_s = 5.0
+    st = ffi.new("gf_rot_state *")
+    assert lib.gf_rot_init(st, sched, 0.0, ffi.NULL) == lib.GF_OK
+    q = ffi.new("double[4]", [1, 0, 0, 0])
+    th, dv, done = ffi.new("double[3]"), ffi.new("double[3]"), ffi.new("size_t *")
+    assert lib.gf_rot_imu_static(st, q, 0.5, 0.0, 0.0, 1, 1e300, 0.0, th, dv, ffi.NULL, ffi.NULL,
+                                 done) == lib.GF_ERR_BAD_TIME
+    st.sched.segment[0].imu_axis = 55
+    pose = ffi.new("gf_rot_pose *")
+    assert lib.gf_rot_eval(st, 3.0, pose) == lib.GF_ERR_BAD_SIZE

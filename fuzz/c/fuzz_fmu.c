@@ -29,6 +29,21 @@
 #define N3 (sizeof kFmi3Variables / sizeof kFmi3Variables[0])
 #define H_S 0.01
 
+/* FUZZ_STEP_CAP_S (set for the vehicle model, fuzz/CMakeLists.txt): a model whose doStep
+ * works in proportion to the step asked for (the vehicle integrates up to 4e5 quadrature
+ * pieces for its longest accepted step, 1e5 s: 50 s of CPU under the sanitizers) would
+ * spend the run on a few long steps. Steps between the cap and 1e6 s are shortened to
+ * the cap; longer ones (refused by the model) and every other value pass unchanged, so
+ * the refusal paths stay reachable (tests/c/test_vehicle.c: the step limit). */
+static double capped_step(double h)
+{
+#ifdef FUZZ_STEP_CAP_S
+    if (h > FUZZ_STEP_CAP_S && h < 1e6)
+        return FUZZ_STEP_CAP_S;
+#endif
+    return h;
+}
+
 static void logger2(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status,
                     fmi2String category, fmi2String message, ...)
 {
@@ -80,6 +95,7 @@ static fmi2Status checked_step(fmi2Component c, double t, double h)
 {
     static ModelData before;
     memcpy(&before, &((FmuInstance *)c)->s.data, sizeof before);
+    h = capped_step(h);
     const fmi2Status st = fmi2DoStep(c, t, h, fmi2True);
     if (st >= fmi2Error && memcmp(&before, &((FmuInstance *)c)->s.data, sizeof before) != 0) {
 #ifdef FUZZ_FMU_PARTIAL_AFTER_DIVERGENCE
@@ -221,7 +237,7 @@ static void mode_calls2(fz *d)
             fmi2ExitInitializationMode(c);
             break;
         case 7: case 8: {
-            const double h = (fz_u8(d) & 3) ? H_S : fz_num(d, 1.0);
+            const double h = capped_step((fz_u8(d) & 3) ? H_S : fz_num(d, 1.0));
             const double tt = (fz_u8(d) & 7) ? t : fz_num(d, 10.0);
             if (checked_step(c, tt, h) == fmi2OK)
                 t = tt + h;
@@ -289,7 +305,7 @@ static void mode_calls3(fz *d)
         default: {
             fmi3Boolean ev = 0, term = 0, early = 0;
             double last = 0.0;
-            const double h = (fz_u8(d) & 3) ? H_S : fz_num(d, 1.0);
+            const double h = capped_step((fz_u8(d) & 3) ? H_S : fz_num(d, 1.0));
             if (fmi3DoStep(c, t, h, fmi3True, &ev, &term, &early, &last) == fmi3OK)
                 t += h;
         }

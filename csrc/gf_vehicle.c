@@ -269,6 +269,16 @@ static int indices_valid(const gf_vehicle_state *st)
            st->next_segment <= st->profile.n_segments;
 }
 
+/* The state's time inside its active segment, to a tolerance above the FMI masters'
+ * time rounding (1e-9 relative). A restored or hand-made state may break it: a step from
+ * a time far beyond the active segment's end would integrate from that end, unbounded by
+ * STEP_MAX_S (found by fuzz_fmu_vehicle: a 10^6 s jump, 46 s of CPU). */
+static int time_in_segment(const gf_vehicle_state *st)
+{
+    const double tol = 1e-6 * fmax(1.0, fabs(st->time_s));
+    return st->time_s >= st->active_t0_s - tol && st->time_s <= active_end(st) + tol;
+}
+
 gf_status gf_vehicle_state_check(const gf_vehicle_state *st)
 {
     if (!st)
@@ -291,7 +301,7 @@ gf_status gf_vehicle_state_check(const gf_vehicle_state *st)
             return GF_ERR_NONFINITE_INPUT;
     }
     if (!(fabs(p->lat0_rad) < LAT_MAX_RAD) || !(p->h0_m >= -1000.0 && p->h0_m <= 1e5) ||
-        !(st->R_M0_m > 0.0) || !(st->R_N0_m > 0.0))
+        !(st->R_M0_m > 0.0) || !(st->R_N0_m > 0.0) || !time_in_segment(st))
         return GF_ERR_BAD_PARAMETER;
     return GF_OK;
 }
@@ -347,6 +357,8 @@ gf_status gf_vehicle_step_mounted(gf_vehicle_state *state, double t_end_s,
         return GF_ERR_BAD_SIZE;
     if (!(t_end_s > state->time_s) || !isfinite(t_end_s) || !(t_end_s - state->time_s <= STEP_MAX_S))
         return GF_ERR_BAD_TIME;
+    if (!time_in_segment(state))
+        return GF_ERR_BAD_PARAMETER;
     gf_vehicle_state s = *state;
     const double t_end = t_end_s;
     double dth[3] = {0.0, 0.0, 0.0}, dv[3] = {0.0, 0.0, 0.0}, msum[6] = {0.0};

@@ -112,7 +112,8 @@ gf_status gf_vehicle_command(gf_vehicle_state *state, double speed_m_s,
  * Errors: GF_ERR_BAD_TIME (t_end not after the state's time, non-finite, or more than
  * 1e5 s after it: one step integrates up to 4e5 quadrature pieces), GF_ERR_DIVERGED
  * (latitude beyond +-89 deg), GF_ERR_BAD_SIZE (segment counts of the state out of
- * range, see gf_vehicle_state_check); the state is unchanged on error. */
+ * range, see gf_vehicle_state_check), GF_ERR_BAD_PARAMETER (the state's time outside its
+ * active segment: a damaged or hand-made state); the state is unchanged on error. */
 gf_status gf_vehicle_step(gf_vehicle_state *state, double t_end_s, gf_vehicle_sample *sample);
 
 /* The truth at the state's own time (state->time_s): pose, velocity and sensor rates,
@@ -150,8 +151,8 @@ gf_status gf_vehicle_step_mounted(gf_vehicle_state *state, double t_end_s,
 /* Checks a state handed in by a caller (e.g. restored from saved bytes). gf_vehicle_step
  * and gf_vehicle_command check before every call what indexes the profile (n_segments
  * <= GF_VEHICLE_MAX_SEGMENTS, next_segment <= n_segments: GF_ERR_BAD_SIZE); this also
- * checks every number finite (GF_ERR_NONFINITE_INPUT) and the start position and radii
- * as gf_vehicle_init would (GF_ERR_BAD_PARAMETER). */
+ * checks every number finite (GF_ERR_NONFINITE_INPUT), the start position and radii
+ * as gf_vehicle_init would and the time inside the active segment (GF_ERR_BAD_PARAMETER). */
 gf_status gf_vehicle_state_check(const gf_vehicle_state *state);
 
 #ifdef __cplusplus

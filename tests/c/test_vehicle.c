@@ -163,6 +163,30 @@ static void test_corrupted_state_and_huge_step(void)
     b = s;
     b.profile.lat0_rad = 1.56;
     CHECK(gf_vehicle_state_check(&b) == GF_ERR_BAD_PARAMETER, "check: start latitude beyond 89 deg");
+    {
+        /* a time far beyond the active segment (a restored state whose time was changed;
+         * fuzz_fmu_vehicle): the step used to integrate from the segment's end, 10^6 s of
+         * pieces in one "0.01 s" step; refused now, by the check and by the step */
+        gf_vehicle_profile pp = base_profile();
+        pp.n_segments = 1;
+        pp.segment[0].duration_s = 60.0;
+        pp.segment[0].dspeed_m_s = 5.0;
+        gf_vehicle_state v;
+        CHECK(gf_vehicle_init(&v, &pp, 0.0, &x, NULL) == GF_OK, "init, one 60 s segment");
+        CHECK(gf_vehicle_step(&v, 60.0, &x) == GF_OK, "to the segment's end");
+        CHECK(gf_vehicle_state_check(&v) == GF_OK, "check at the segment's end (cruise next)");
+        gf_vehicle_state w = v;
+        w.time_s = 30.0;           /* before the cruise segment began: inconsistent too */
+        w.active_t0_s = 60.0;
+        CHECK(gf_vehicle_state_check(&w) == GF_ERR_BAD_PARAMETER, "check: time before its segment");
+        v = s;                     /* the base vehicle: its first segment is the cruise */
+        v.active.duration_s = 60.0;
+        v.time_s = 1e6;
+        before = v;
+        CHECK(gf_vehicle_state_check(&v) == GF_ERR_BAD_PARAMETER, "check: time beyond its segment");
+        CHECK(gf_vehicle_step(&v, 1e6 + 0.01, &x) == GF_ERR_BAD_PARAMETER &&
+                  memcmp(&v, &before, sizeof v) == 0, "step: refused, state unchanged");
+    }
 }
 
 static void test_command(void)

@@ -6,7 +6,7 @@
  *
  *   gcc -O3 -ffp-contract=off -I csrc bench/bench_ins_gnss.c csrc/gf_*.c -lm -o bench_ins_gnss
  *   ./bench_ins_gnss [filter 0=EKF 1=UKF] [propagation interval s, 0 = every sample]
- *                    [samples] [repeats]
+ *                    [samples] [repeats] [subsamples per navigation update, 1..4]
  *
  * Prints the best of the repeats (process CPU time) in IMU samples per second, and beside
  * it the strapdown mechanization alone (gf_sins_run, the filter's own settings, same
@@ -33,6 +33,7 @@ int main(int argc, char **argv)
     const double prop = argc > 2 ? atof(argv[2]) : 0.1;
     const size_t n = argc > 3 ? (size_t)atol(argv[3]) : 1000000;
     const int repeats = argc > 4 ? atoi(argv[4]) : 3;
+    const int subsamples = argc > 5 ? atoi(argv[5]) : 1;
     const double dt = 0.005;
     double *t = malloc(n * sizeof *t), *g = malloc(3 * n * sizeof *g), *a = malloc(3 * n * sizeof *a);
     const size_t m = (size_t)(n * dt) * 2;
@@ -58,6 +59,7 @@ int main(int argc, char **argv)
     gf_ins_config_default(&cfg);
     cfg.filter = filter;
     cfg.prop_interval_s = prop;
+    cfg.subsamples = subsamples;
     cfg.noise.gyro_arw_rad_sqrt_s = 1e-4; cfg.noise.accel_vrw_m_s_sqrt_s = 1e-3;
     cfg.noise.gyro_bias_std_rad_s = 5e-6; cfg.noise.gyro_bias_tau_s = 3600;
     cfg.noise.accel_bias_std_m_s2 = 1e-3; cfg.noise.accel_bias_tau_s = 3600;
@@ -70,6 +72,7 @@ int main(int argc, char **argv)
     gf_sins_config sc;
     gf_sins_config_default(&sc);
     sc.vertical = GF_SINS_VERTICAL_FREE;   /* as the filter's mechanization */
+    sc.subsamples = subsamples;
     double best = 1e300, best_sins = 1e300;
     for (int r = 0; r < repeats; ++r) {
         /* in chunks of 100 s from the initial state: free inertial, the record's constant
@@ -94,7 +97,7 @@ int main(int argc, char **argv)
         if (gf_ins_init(&f, &cfg, 0.0, q, v0, 0.5, 1.0, 100.0, NULL, P0, &bad) != GF_OK)
             return 2;
         gf_ins_output out = {out_buf, out_buf + n, out_buf + 5 * n, out_buf + 8 * n,
-                             out_buf + 11 * n, out_buf + 20 * n, NULL};
+                             out_buf + 11 * n, out_buf + 20 * n, NULL, 0};
         size_t done, mdone;
         const double t0 = now_s();
         const gf_status st = gf_ins_run(&f, n, t, g, a, nm, meas, &out, NULL, NULL, &done, &mdone);
@@ -106,10 +109,10 @@ int main(int argc, char **argv)
         if (el < best)
             best = el;
     }
-    printf("%s, propagation %s%g s, %zu samples at 200 Hz, %zu GNSS updates: %.3f M samples/s "
+    printf("%s, propagation %s%g s, %d sample(s) per update, %zu samples at 200 Hz, %zu GNSS updates: %.3f M samples/s "
            "(%.1f ns/sample); mechanization alone %.3f M samples/s (%.1f ns/sample), "
            "filter / mechanization %.2f\n", filter ? "UKF" : "EKF",
-           prop == 0 ? "every sample, " : "", prop, n, nm, n / best * 1e-6, best / n * 1e9,
+           prop == 0 ? "every sample, " : "", prop, subsamples, n, nm, n / best * 1e-6, best / n * 1e9,
            n / best_sins * 1e-6, best_sins / n * 1e9, best / best_sins);
     free(t); free(g); free(a); free(meas); free(out_buf);
     return 0;

@@ -4,7 +4,8 @@
 over the outages of the maximum horizontal drift during each, for the EKF and for the
 RTS smoother.
 
-    python bench/study_outages.py [--minutes 60] [--seeds 5] [--filter ekf] [--out docs/figures]
+    python bench/study_outages.py [--minutes 60] [--seeds 5] [--filter ekf] [--subsamples 1]
+                                  [--out docs/figures]
 """
 from __future__ import annotations
 
@@ -27,13 +28,14 @@ def main(argv=None):
     ap.add_argument("--minutes", type=float, default=60.0)
     ap.add_argument("--seeds", type=int, default=5)
     ap.add_argument("--filter", default="ekf")
+    ap.add_argument("--subsamples", type=int, default=1, help="IMU samples per navigation update")
     ap.add_argument("--out", default=None)
     a = ap.parse_args(argv)
     T = 60.0 * a.minutes
     profile = town_drive(T)
     dt = 0.01
     truth0 = simulate_vehicle(profile, T, dt)
-    cfg = FilterConfig(imu=NAVIGATION, filter=a.filter, propagation_interval_s=0.1)
+    cfg = FilterConfig(imu=NAVIGATION, filter=a.filter, propagation_interval_s=0.1, subsamples=a.subsamples)
     scores, smooth_scores = [], []
     for seed in range(a.seeds):
         t0 = time.perf_counter()

@@ -53,6 +53,7 @@ gf_status gf_ins_config_default(gf_ins_config *cfg)
     cfg->still_accel_std_m_s2 = 0.05;
     cfg->still_gyro_rad_s = 0.01;
     cfg->speed_min_m_s = 0.5;
+    cfg->subsamples = 1;
     return GF_OK;
 }
 
@@ -115,6 +116,9 @@ static int config_check(const gf_ins_config *c)
         return 36;
     if (!(fabs(c->odo_mount_rad[0]) < GF_HALF_PI) || !(fabs(c->odo_mount_rad[1]) < GF_HALF_PI))
         return 37;
+    if (c->subsamples < 0 || c->subsamples > GF_SINS_MAX_SUBSAMPLES ||
+        (c->subsamples > 1 && c->input != GF_SINS_INPUT_INCREMENTS))
+        return 38;
     return 0;
 }
 
@@ -1536,6 +1540,31 @@ static void meas_directed(const gf_ins_filter *f, const gf_ins_meas *in, gf_ins_
  * measurements are meas[0], meas[stride], ... (stride -1: a backward walk over a record
  * stored in increasing time). Times are compared in the filter's direction: with
  * dir = -1 (reversed) time decreases, and every difference below is dir * (a - b). */
+/* After a sample (or a group of them) that ends at the filter's time: on the regular
+ * grid, the covariance propagation and the internal updates (NHC, ZUPT, ZARU) that are due.
+ * Measurement instants propagate too, but do not move the grid. */
+static gf_status regular_updates(gf_ins_filter *f, gf_ins_epochs *epochs, gf_ins_log *log)
+{
+    const double dir = dir_of(f), t_s = f->t_s;
+    if (!(dir * (t_s - f->last_regular_t_s) >= f->cfg.prop_interval_s - GF_INS_TIME_EPS_S))
+        return GF_OK;
+    f->last_regular_t_s = t_s;
+    gf_status st = propagate(f, epochs);
+    if (st == GF_OK && f->cfg.nhc &&
+        dir * (t_s - f->last_nhc_t_s) >= f->cfg.nhc_interval_s - GF_INS_TIME_EPS_S) {
+        f->last_nhc_t_s = t_s;
+        st = update(f, GF_INS_MEAS_NHC, NULL, f->cfg.nhc_std_m_s, epochs, log);
+    }
+    if (st == GF_OK && f->cfg.zupt && f->standstill &&
+        dir * (t_s - f->last_zupt_t_s) >= f->cfg.zupt_interval_s - GF_INS_TIME_EPS_S) {
+        f->last_zupt_t_s = t_s;
+        st = update(f, GF_INS_MEAS_ZUPT, NULL, f->cfg.zupt_std_m_s, epochs, log);
+        if (st == GF_OK && f->cfg.zaru_std_rad_s > 0.0)
+            st = update(f, GF_INS_MEAS_ZARU, NULL, f->cfg.zaru_std_rad_s, epochs, log);
+    }
+    return st;
+}
+
 static gf_status ins_step(gf_ins_filter *f, double t_s, const double *gyro_in, const double *accel,
                           size_t n_meas, const gf_ins_meas *meas, ptrdiff_t stride,
                           gf_ins_epochs *epochs, gf_ins_log *log)
@@ -1654,25 +1683,9 @@ static gf_status ins_step(gf_ins_filter *f, double t_s, const double *gyro_in, c
             return st;
         if (f->cfg.zupt)
             standstill_update(f, T);
-        /* the regular grid: measurement instants propagate too, but do not move it */
-        if (dir * (t_s - f->last_regular_t_s) >= f->cfg.prop_interval_s - GF_INS_TIME_EPS_S) {
-            f->last_regular_t_s = t_s;
-            st = propagate(f, epochs);
-            if (st == GF_OK && f->cfg.nhc &&
-                dir * (t_s - f->last_nhc_t_s) >= f->cfg.nhc_interval_s - GF_INS_TIME_EPS_S) {
-                f->last_nhc_t_s = t_s;
-                st = update(f, GF_INS_MEAS_NHC, NULL, f->cfg.nhc_std_m_s, epochs, log);
-            }
-            if (st == GF_OK && f->cfg.zupt && f->standstill &&
-                dir * (t_s - f->last_zupt_t_s) >= f->cfg.zupt_interval_s - GF_INS_TIME_EPS_S) {
-                f->last_zupt_t_s = t_s;
-                st = update(f, GF_INS_MEAS_ZUPT, NULL, f->cfg.zupt_std_m_s, epochs, log);
-                if (st == GF_OK && f->cfg.zaru_std_rad_s > 0.0)
-                    st = update(f, GF_INS_MEAS_ZARU, NULL, f->cfg.zaru_std_rad_s, epochs, log);
-            }
-            if (st != GF_OK)
-                return st;
-        }
+        st = regular_updates(f, epochs, log);
+        if (st != GF_OK)
+            return st;
     }
 #undef MS
     gf_v3_copy(gyro, f->prev_gyro_raw);
@@ -1682,6 +1695,60 @@ static gf_status ins_step(gf_ins_filter *f, double t_s, const double *gyro_in, c
     if (f->cfg.max_latency_s > 0.0 && dir > 0.0)
         history_push(f);
     return GF_OK;
+}
+
+/* Samples k .. k+m-1 of a forward run (t_s, gyro, accel point at sample k) as one
+ * navigation update of gf_sins_step_group (cfg.subsamples = m), when nothing needs the
+ * state inside the group: no measurement valid before the end of its last sample (t_meas
+ * is the next one's time, +inf if none), no propagation instant at its first m-1
+ * samples, no standstill detector or delayed-measurement history (per-sample), the
+ * intervals within 1% of their mean (the m-sample coning and sculling coefficients
+ * assume equal sub-intervals), every sample passing ins_step's checks, room for the
+ * epochs. 0: not applicable — the caller steps the samples one by one, which reports a
+ * faulty sample at its index; otherwise the status of the update. */
+static gf_status group_step(gf_ins_filter *f, int m, const double *t_s, const double *gyro,
+                            const double *accel, double t_meas, gf_ins_epochs *epochs,
+                            gf_ins_log *log, int *applied)
+{
+    *applied = 0;
+    const gf_ins_config *c = &f->cfg;
+    if (!(t_meas - t_s[m - 1] > GF_INS_TIME_EPS_S) ||
+        !(t_s[m - 2] - f->last_regular_t_s < c->prop_interval_s - GF_INS_TIME_EPS_S))
+        return GF_OK;
+    if (epochs && (epochs->count > epochs->capacity || epochs->capacity - epochs->count < 2))
+        return GF_OK;
+    const double mean = (t_s[m - 1] - f->t_s) / (double)m;
+    double dt[GF_SINS_MAX_SUBSAMPLES], g[3 * GF_SINS_MAX_SUBSAMPLES], a[3 * GF_SINS_MAX_SUBSAMPLES];
+    for (int i = 0; i < m; ++i) {
+        const double *gi = gyro + 3 * i, *ai = accel + 3 * i;
+        dt[i] = t_s[i] - (i ? t_s[i - 1] : f->t_s);
+        if (!(fabs(dt[i] - mean) <= 0.01 * mean && dt[i] <= c->max_imu_gap_s) ||
+            !gf_all_finite(gi, 3) || !gf_all_finite(ai, 3))
+            return GF_OK;
+        const double wm = c->max_rate_rad_s * dt[i], fm = c->max_specific_force_m_s2 * dt[i];
+        if (!(gf_v3_dot(gi, gi) <= wm * wm) || !(gf_v3_dot(ai, ai) <= fm * fm))
+            return GF_OK;
+        compensate(f, gi, ai, dt[i], g + 3 * i, a + 3 * i);
+    }
+    *applied = 1;
+    gf_status st = gf_sins_step_group_trusted(&f->nav, m, g, a, dt);
+    if (st != GF_OK)
+        return st;
+    for (int i = 0; i < m; ++i) {
+        gf_v3_add(f->acc_dtheta_rad, g + 3 * i, f->acc_dtheta_rad);
+        gf_v3_add(f->acc_dv_m_s, a + 3 * i, f->acc_dv_m_s);
+    }
+    const int l = m - 1;
+    gf_v3_scale(g + 3 * l, 1.0 / dt[l], f->w_ib_b_rad_s);
+    gf_v3_scale(a + 3 * l, 1.0 / dt[l], f->f_b_m_s2);
+    f->acc_T_s += t_s[l] - f->t_s;
+    f->t_s = t_s[l];
+    f->nav.time_s = t_s[l];
+    gf_v3_copy(gyro + 3 * l, f->prev_gyro_raw);
+    gf_v3_copy(accel + 3 * l, f->prev_accel_raw);
+    f->have_sample = 1;
+    f->n_imu += (uint64_t)m;
+    return regular_updates(f, epochs, log);
 }
 
 gf_status gf_ins_step(gf_ins_filter *f, double t_s, const double *gyro, const double *accel,
@@ -1726,14 +1793,33 @@ static int output_ok(const gf_ins_output *out)
  * t_s[k-1], t_start_s for k = 0, with increments; to t_s[k] with rates). out may be NULL. */
 static gf_status walk(gf_ins_filter *f, int backward, size_t n, const double *t_s,
                       const double *gyro, const double *accel, double t_start_s, size_t n_meas,
-                      const gf_ins_meas *meas, const gf_ins_output *out, gf_ins_epochs *epochs,
+                      const gf_ins_meas *meas, gf_ins_output *out, gf_ins_epochs *epochs,
                       gf_ins_log *log, size_t *n_done, size_t *meas_done)
 {
-    size_t k = 0, used = 0;
+    size_t k = 0, used = 0, row = 0;
     gf_status st = GF_OK;
     if (!backward) {
         const double dir = dir_of(f);
-        for (; k < n; ++k) {
+        /* groups of m samples (cfg.subsamples) on the grid of the filter's sample count,
+         * so that a record cut into calls at multiples of m is processed as one */
+        const int m = f->cfg.subsamples;
+        const int grouping = m > 1 && dir > 0.0 && !f->cfg.zupt && f->cfg.max_latency_s == 0.0 &&
+                             f->cfg.input == GF_SINS_INPUT_INCREMENTS;
+        while (k < n) {
+            if (grouping && n - k >= (size_t)m && f->n_imu % (uint64_t)m == 0) {
+                int applied;
+                const double t_meas = used < n_meas ? meas[used].t_s : INFINITY;
+                st = group_step(f, m, t_s + k, gyro + 3 * k, accel + 3 * k, t_meas, epochs, log,
+                                &applied);
+                if (st != GF_OK)
+                    break;
+                if (applied) {
+                    k += (size_t)m;
+                    if (out)
+                        write_output(f, out, row++);
+                    continue;
+                }
+            }
             size_t cnt = 0;
             while (used + cnt < n_meas && dir * (meas[used + cnt].t_s - t_s[k]) <= GF_INS_TIME_EPS_S)
                 ++cnt;
@@ -1741,8 +1827,9 @@ static gf_status walk(gf_ins_filter *f, int backward, size_t n, const double *t_
             if (st != GF_OK)
                 break;
             used += cnt;
+            ++k;
             if (out)
-                write_output(f, out, k);
+                write_output(f, out, row++);
         }
     } else {
         const int rates = f->cfg.input == GF_SINS_INPUT_RATES;
@@ -1764,7 +1851,10 @@ static gf_status walk(gf_ins_filter *f, int backward, size_t n, const double *t_
             if (out)
                 write_output(f, out, r);
         }
+        row = k;
     }
+    if (out)
+        out->n_rows = row;
     if (n_done)
         *n_done = k;
     if (meas_done)
@@ -1774,7 +1864,7 @@ static gf_status walk(gf_ins_filter *f, int backward, size_t n, const double *t_
 
 gf_status gf_ins_run(gf_ins_filter *f, size_t n, const double *t_s, const double *gyro,
                      const double *accel, size_t n_meas, const gf_ins_meas *meas,
-                     const gf_ins_output *out, gf_ins_epochs *epochs, gf_ins_log *log,
+                     gf_ins_output *out, gf_ins_epochs *epochs, gf_ins_log *log,
                      size_t *n_done, size_t *meas_done)
 {
     if (n_done)
@@ -1809,7 +1899,7 @@ static gf_status record_check(size_t n, const double *t_s, size_t n_meas, const 
 
 gf_status gf_ins_run_backward(gf_ins_filter *f, size_t n, const double *t_s, const double *gyro,
                               const double *accel, double t_start_s, size_t n_meas,
-                              const gf_ins_meas *meas, const gf_ins_output *out, gf_ins_log *log,
+                              const gf_ins_meas *meas, gf_ins_output *out, gf_ins_log *log,
                               size_t *n_done, size_t *meas_done)
 {
     if (n_done)

@@ -211,6 +211,8 @@ typedef struct gf_ins_config {
     double odo_mount_rad[2];        /* odometer boresight, fixed: pitch (nose-up +) and
                                        heading (clockwise +) of its measuring axes in the
                                        body frame, rad, |.| < pi/2; 0, 0: body axes */
+    int32_t subsamples;             /* 1..4 IMU samples per navigation update in gf_ins_run
+                                       (increments only; see gf_ins_run); 0 or 1: one */
 } gf_ins_config;
 
 typedef struct gf_ins_meas {
@@ -251,7 +253,8 @@ typedef struct gf_ins_epochs {
 } gf_ins_epochs;
 
 /* Per-IMU-sample outputs (rows = samples; any pointer may be NULL except t_s, q_bn,
- * v_n_m_s, pos). */
+ * v_n_m_s, pos), or one row per navigation update when gf_ins_run groups samples
+ * (cfg.subsamples > 1); n_rows says how many rows a call wrote. */
 typedef struct gf_ins_output {
     double *t_s;                    /* n */
     double *q_bn;                   /* n x 4 */
@@ -260,6 +263,7 @@ typedef struct gf_ins_output {
     double *std;                    /* n x 9: velocity E N U m/s, position E N U m, attitude E N U rad */
     double *sensors;                /* n x GF_INS_N_SENSORS */
     int8_t *standstill;             /* n: detector output */
+    size_t n_rows;                  /* written by gf_ins_run / gf_ins_run_backward */
 } gf_ins_output;
 
 /* The nominal state after one IMU sample, kept for delayed measurements. */
@@ -351,10 +355,19 @@ gf_status gf_ins_step(gf_ins_filter *f, double t_s, const double *gyro, const do
  * updates (max_latency_s) or logged as stale; those after t_s[n-1] are
  * left for the next call). Row k of *out is the state after sample k.
  * *n_done = samples processed, *meas_done = measurements consumed; on an error the rows
- * before *n_done are valid and the filter holds the state after the last good sample. */
+ * before *n_done are valid and the filter holds the state after the last good sample.
+ * Grouped samples (cfg.subsamples = m > 1, increments, forward in time, no ZUPT, no
+ * max_latency_s): samples k .. k+m-1 make one navigation update (gf_sins_step_group's
+ * m-sample coning and sculling) when the filter's sample count is a multiple of m at k,
+ * no measurement is valid before the end of sample k+m-1, no propagation instant of the
+ * regular grid falls on samples k .. k+m-2 (so choose prop_interval_s a multiple of m
+ * samples), the intervals are equal within 1 % and every sample passes the checks;
+ * otherwise the samples are processed one by one as above. The outputs then have one row
+ * per navigation update (a group's end or a single sample), out->n_rows of them; a
+ * record cut into calls at multiples of m gives the same bits as one call. */
 gf_status gf_ins_run(gf_ins_filter *f, size_t n, const double *t_s, const double *gyro,
                      const double *accel, size_t n_meas, const gf_ins_meas *meas,
-                     const gf_ins_output *out, gf_ins_epochs *epochs, gf_ins_log *log,
+                     gf_ins_output *out, gf_ins_epochs *epochs, gf_ins_log *log,
                      size_t *n_done, size_t *meas_done);
 
 /* Turns the filter around in time (see "Reverse-time filtering" above): the covariance
@@ -380,7 +393,7 @@ gf_status gf_ins_reverse(gf_ins_filter *f);
  * t_s[n-1], times not increasing), the errors of gf_ins_step. */
 gf_status gf_ins_run_backward(gf_ins_filter *f, size_t n, const double *t_s, const double *gyro,
                               const double *accel, double t_start_s, size_t n_meas,
-                              const gf_ins_meas *meas, const gf_ins_output *out, gf_ins_log *log,
+                              const gf_ins_meas *meas, gf_ins_output *out, gf_ins_log *log,
                               size_t *n_done, size_t *meas_done);
 
 /* The state at the end of one pass of gf_ins_forward_backward. */

@@ -882,3 +882,14 @@ gf_status gf_sins_step_trusted(gf_sins_state *state, const double *gyro, const d
     /* the filters: the caller keeps *state valid and negates the gyro in reverse */
     return sins_update(state, gyro, accel, dt_s, NAN);
 }
+
+gf_status gf_sins_step_group_trusted(gf_sins_state *state, int m, const double *gyro,
+                                     const double *accel, const double *dt_s)
+{
+    if (m == 1)
+        return sins_update(state, gyro, accel, dt_s[0], NAN);
+    if (m < 1 || m > GF_SINS_MAX_SUBSAMPLES)
+        return GF_ERR_BAD_PARAMETER;
+    int bad;
+    return group_update(state, m, gyro, accel, dt_s, NAN, &bad);
+}

@@ -293,6 +293,10 @@ gf_status gf_sins_step_compensated_trusted(gf_sins_state *state, const double *p
  * which check). */
 gf_status gf_sins_step_trusted(gf_sins_state *state, const double *gyro, const double *accel,
                                double dt_s);
+/* ... and gf_sins_step_group the same way, over sub-intervals dt_s[m] of their own
+ * (m = 1..GF_SINS_MAX_SUBSAMPLES; the integrated filter's grouped mechanization). */
+gf_status gf_sins_step_group_trusted(gf_sins_state *state, int m, const double *gyro,
+                                     const double *accel, const double *dt_s);
 
 #ifdef __cplusplus
 }

@@ -394,6 +394,65 @@ def test_exact_sensors_at_odd_times(exact_drive, filt):
 
 
 
+@pytest.mark.parametrize("m", [2, 4])
+def test_subsample_groups_exact_drive(exact_drive, m):
+    """subsamples = m: the mechanization takes groups of m increments between measurement
+    and propagation instants (one output row per navigation update). Truth is the exact
+    drive: the rows fall on IMU sample times and every GNSS instant still splits its
+    interval (residuals at the mechanization's truncation level, as sample by sample);
+    the result does not depend on how the record is cut into C calls (chunks are rounded
+    to multiples of m, groups follow the filter's sample count); and grouping changes the
+    solution by less than the mechanization error itself."""
+    tr, imu = exact_drive
+    lever = np.array([0.4, 1.2, 1.6])
+    k = np.arange(1003, len(tr.t_s), 1000)          # 1 Hz, 3 ms after every 10 ms IMU sample
+    gnss = gnss_record(tr, k, lever)
+
+    prop_s = 0.2          # 20 samples: a multiple of m, so propagation ends a group
+
+    def run(sub, chunk=200_000):
+        nav = start(tr, quiet_config(gnss_lever_arm_m=lever, subsamples=sub, propagation_interval_s=prop_s),
+                    position_std_m=0.05, velocity_std_m_s=0.01, attitude_std_rad=1e-4)
+        return nav.run(imu, gnss, chunk=chunk)
+
+    one, grouped, chunked = run(1), run(m), run(m, chunk=777)
+    n = len(imu.t_s)
+    # one row per group of m, except the group holding a GNSS instant: its m samples are
+    # stepped one by one (m rows instead of 1)
+    assert len(grouped.t_s) == n // m + (m - 1) * len(k)
+    assert np.all(np.diff(grouped.t_s) > 0) and np.all(np.isin(grouped.t_s, imu.t_s))
+    inn = grouped.innovations
+    assert len(inn) == 2 * len(k) and np.all(inn["status"] == 0)
+    # mechanization truncation during the turns grows with the update interval (10, 20,
+    # 40 ms): measured max position residual 0.38 / 0.89 / 3.02 mm, velocity 0.48 / 0.49 /
+    # 1.12 mm/s, position error against the truth 0.38 / 0.89 / 3.03 mm for m = 1 / 2 / 4;
+    # bounds 1.5x the measured
+    pos_bound, vel_bound = {2: (1.4e-3, 0.8e-3), 4: (4.5e-3, 1.7e-3)}[m]
+    assert np.abs(inn[inn["type"] == lib.GF_INS_MEAS_GNSS_POS]["r"]).max() < pos_bound
+    assert np.abs(inn[inn["type"] == lib.GF_INS_MEAS_GNSS_VEL]["r"]).max() < vel_bound
+    row = np.rint(grouped.t_s / 0.001).astype(int)   # truth rows at the solution's times
+    e = pos_error_m(grouped.lat_rad, grouped.lon_rad, grouped.h_m, tr.lat_rad[row], tr.lon_rad[row], tr.h_m[row])
+    assert np.abs(e).max() < pos_bound
+    # the same rows of the sample-by-sample solution differ by that truncation too
+    idx = np.searchsorted(one.t_s, grouped.t_s)
+    assert np.array_equal(one.t_s[idx], grouped.t_s)
+    d = pos_error_m(grouped.lat_rad, grouped.lon_rad, grouped.h_m, one.lat_rad[idx], one.lon_rad[idx], one.h_m[idx])
+    assert np.abs(d).max() < pos_bound
+    # chunked equals whole, bit for bit
+    for name in ("t_s", "q_bn", "v_n_m_s", "lat_rad", "lon_rad", "h_m", "std", "sensors"):
+        np.testing.assert_array_equal(getattr(chunked, name), getattr(grouped, name), err_msg=name)
+    # ZUPT needs the detector per sample: the samples are stepped one by one
+    zu = start(tr, quiet_config(subsamples=m, zupt=True)).run(imu)
+    assert len(zu.t_s) == n
+
+
+def test_subsamples_config_is_checked():
+    with pytest.raises(ValueError, match="subsamples must be an integer in 1..4"):
+        quiet_config(subsamples=5)
+    with pytest.raises(ValueError, match="needs input='increments'"):
+        quiet_config(subsamples=2, input="rates")
+
+
 def test_reported_position_std_is_in_metres_on_both_axes(exact_drive):
     """The output's position std (east, north, up in m) converts the latitude and
     longitude variances with the meridian and prime-vertical radii; at the first rows,

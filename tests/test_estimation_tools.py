@@ -240,6 +240,19 @@ def test_cli_integrate(tmp_path):
         main(["integrate", str(d / "imu_1730_sf.csv"), str(d / "gnss_1730_sf.pos"), str(out),
               "--imu-format", "rtk_walk", "--static", "9", "--lever-arm", "1,2"])
     assert ei.value.code == 2
+    # two increments per navigation update: fewer rows, all finite (not half: this
+    # receiver's IMU times are whole milliseconds, intervals of 6 to 9 ms, and only pairs
+    # of equal intervals (within 1 %) are grouped; measured 15546 of 19052 rows)
+    out2 = tmp_path / "walk2.csv"
+    assert main(["integrate", str(d / "imu_1730_sf.csv"), str(d / "gnss_1730_sf.pos"), str(out2),
+                 "--imu-format", "rtk_walk", "--grade", "consumer", "--static", "9",
+                 "--subsamples", "2"]) == 0
+    sol2 = np.loadtxt(out2, delimiter=",", skiprows=1)
+    assert 0.5 * len(sol) < len(sol2) < 0.9 * len(sol) and np.all(np.isfinite(sol2))
+    with pytest.raises(SystemExit) as ei:
+        main(["integrate", str(d / "imu_1730_sf.csv"), str(d / "gnss_1730_sf.pos"), str(out2),
+              "--imu-format", "rtk_walk", "--subsamples", "5"])
+    assert ei.value.code == 2
 
 
 def test_barometer_and_odometer_states(drive):

@@ -78,6 +78,11 @@ def add_parser(sub) -> None:
                    "written to OUT.smoothed.csv)")
     p.add_argument("--propagation-interval", type=_nonneg, default=0.1,
                    help="covariance propagation interval, s (0: every IMU sample)")
+    p.add_argument("--subsamples", type=int, choices=(1, 2, 3, 4), default=1,
+                   help="IMU increments per navigation update between measurement and propagation "
+                        "instants (multi-sample coning/sculling; one output row per update; a rate "
+                        "record is turned into increments by the trapezoid); 2 doubles the speed "
+                        "on a 200 Hz IMU")
     p.add_argument("--static", type=_positive, default=None, metavar="SECONDS",
                    help="the record starts at rest for SECONDS: level (and gyrocompass if the gyros "
                         "allow; otherwise heading from GNSS velocity); default when no --initial")
@@ -176,9 +181,14 @@ def run(args) -> int:
     from gfins_fmi.io import ImuRecord
     from gfins_fmi.sins import NavState, euler_to_quat
     imu, gnss, baro, odo, truth = _read(args)
+    if args.subsamples > 1 and imu.kind == "rates":
+        # the multi-sample coning/sculling corrections are formed from increments: the
+        # trapezoid over each interval (what the filter's rate input assumes too)
+        imu = imu.to_increments()
     cfg = FilterConfig(imu=_noise(args), filter=args.filter, input=imu.kind,
                        propagation_interval_s=args.propagation_interval,
-                       gnss_lever_arm_m=tuple(args.lever_arm), zupt=args.zupt, nhc=args.nhc)
+                       gnss_lever_arm_m=tuple(args.lever_arm), zupt=args.zupt, nhc=args.nhc,
+                       subsamples=args.subsamples)
     deg = math.pi / 180.0
     if args.initial:
         lat, lon, h, hd, pt, rl = args.initial

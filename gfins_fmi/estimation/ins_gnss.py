@@ -52,7 +52,7 @@ _BAD_FIELD = {1: "input", 2: "coning", 3: "filter", 4: "scale_factors/baro_bias/
               30: "gnss_lever_arm_m/odometer_lever_arm_m", 31: "gate_probability",
               32: "nhc_std_m_s/nhc_interval_s", 33: "zupt_std_m_s/zaru_std_rad_s/zupt_interval_s",
               34: "standstill_window_s/standstill_accel_std_m_s2/standstill_gyro_rad_s",
-              35: "max_latency_s", 36: "speed_min_m_s", 37: "odometer_mount_rad"}
+              35: "max_latency_s", 36: "speed_min_m_s", 37: "odometer_mount_rad", 38: "subsamples"}
 
 
 class FilterError(GfinsError, ValueError):
@@ -125,6 +125,14 @@ class FilterConfig:
     speed_min_m_s : tachometer speed updates (``speed=`` records, seed 003) are refused at
         or below this INS horizontal speed (the direction of the velocity is undefined
         there); logged as "low_speed".
+    subsamples : IMU samples per navigation update in :meth:`IntegratedNavigator.run`
+        (1..4; increments only): between measurement and propagation instants the
+        mechanization takes groups of this many samples with the matching multi-sample
+        coning and sculling corrections (``SinsConfig(subsamples=)``, docs/sins.md), the
+        usual way of processing a high-rate IMU; the solution then has one row per
+        navigation update (a group's end, or a sample processed alone next to a
+        measurement), not one per sample. Ignored with ZUPT or ``max_latency_s > 0``
+        (per-sample work) and by the FMU and the backward passes. 1: every sample.
     """
 
     imu: ImuNoise = field(default_factory=ImuNoise)
@@ -166,6 +174,7 @@ class FilterConfig:
     max_rate_rad_s: float = 50.0
     max_specific_force_m_s2: float = 1000.0
     speed_min_m_s: float = 0.5
+    subsamples: int = 1
 
     def __post_init__(self):
         if not isinstance(self.imu, ImuNoise):
@@ -187,6 +196,12 @@ class FilterConfig:
             raise ValueError(f"odometer_mount_rad must be (pitch, heading) in rad, each inside (-pi/2, pi/2); "
                              f"got {self.odometer_mount_rad!r}")
         self.odometer_mount_rad = tuple(float(x) for x in mount)
+        if isinstance(self.subsamples, bool) or not isinstance(self.subsamples, (int, np.integer)) \
+                or not 1 <= self.subsamples <= 4:
+            raise ValueError(f"subsamples must be an integer in 1..4; got {self.subsamples!r}")
+        if self.subsamples > 1 and self.input != "increments":
+            raise ValueError("subsamples > 1 needs input='increments' (the multi-sample coning "
+                             "and sculling corrections are formed from increments)")
         self._c()   # the C checks, with messages naming the field
 
     @property
@@ -253,6 +268,7 @@ class FilterConfig:
         cfg.still_gyro_rad_s = self.standstill_gyro_rad_s
         cfg.max_latency_s = float(self.max_latency_s)
         cfg.speed_min_m_s = float(self.speed_min_m_s)
+        cfg.subsamples = int(self.subsamples)
         n = ffi.new("int32_t *")
         st = lib.gf_ins_state_count(cfg, n)
         if st != lib.GF_OK:
@@ -614,6 +630,9 @@ class IntegratedNavigator:
         n = t.shape[0]
         if isinstance(chunk, bool) or not isinstance(chunk, (int, np.integer)) or chunk < 1:
             raise ValueError(f"chunk must be an integer >= 1; got {chunk!r}")
+        # the C core groups samples on the grid of its sample count: chunks of a multiple
+        # of the group size are processed as the whole record would be
+        chunk = -(-int(chunk) // cfg.subsamples) * cfg.subsamples
         if self.reversed:
             raise ValueError("the filter is reversed in time: use run_backward(), or reverse() it again")
         meas = _gather_measurements(gnss, baro, odometer, gnss_velocity, speed)
@@ -646,7 +665,7 @@ class IntegratedNavigator:
         if progress:
             from tqdm import tqdm
             bar = tqdm(total=n, unit="sample", unit_scale=True, desc=f"{cfg.filter.upper()} filter")
-        j = 0
+        j = row = 0
         status, bad = lib.GF_OK, n
         try:
             for lo in range(0, n, chunk):
@@ -654,19 +673,22 @@ class IntegratedNavigator:
                 # the measurements valid up to the chunk's last sample
                 j_hi = int(np.searchsorted(meas["t_s"], t[hi - 1] + 1e-9, side="right"))
                 sub = meas[j:j_hi]
-                c_out.t_s = ptr(out["t_s"][lo:hi], hi - lo)
-                c_out.q_bn = ptr(out["q_bn"][lo:hi], 4 * (hi - lo))
-                c_out.v_n_m_s = ptr(out["v_n_m_s"][lo:hi], 3 * (hi - lo))
-                c_out.pos = ptr(out["pos"][lo:hi], 3 * (hi - lo))
-                c_out.std = ptr(out["std"][lo:hi], 9 * (hi - lo))
-                c_out.sensors = ptr(out["sensors"][lo:hi], N_SENSORS * (hi - lo))
-                c_out.standstill = ptr(out["standstill"][lo:hi], hi - lo, "int8_t")
+                # rows: one per sample, or fewer (subsamples > 1); written from row on
+                r_hi = row + hi - lo
+                c_out.t_s = ptr(out["t_s"][row:r_hi], hi - lo)
+                c_out.q_bn = ptr(out["q_bn"][row:r_hi], 4 * (hi - lo))
+                c_out.v_n_m_s = ptr(out["v_n_m_s"][row:r_hi], 3 * (hi - lo))
+                c_out.pos = ptr(out["pos"][row:r_hi], 3 * (hi - lo))
+                c_out.std = ptr(out["std"][row:r_hi], 9 * (hi - lo))
+                c_out.sensors = ptr(out["sensors"][row:r_hi], N_SENSORS * (hi - lo))
+                c_out.standstill = ptr(out["standstill"][row:r_hi], hi - lo, "int8_t")
                 mptr = ptr(sub, len(sub), "gf_ins_meas") if len(sub) else ffi.NULL
                 status = lib.gf_ins_run(self._f, hi - lo, ptr(t[lo:hi], hi - lo), ptr(g[lo:hi], 3 * (hi - lo)),
                                         ptr(a[lo:hi], 3 * (hi - lo)),
                                         len(sub), mptr, c_out, epochs.c if epochs else ffi.NULL, log,
                                         n_done, m_done)
                 j += int(m_done[0])
+                row += int(c_out.n_rows)
                 if bar:
                     bar.update(int(n_done[0]))
                 if status != lib.GF_OK:
@@ -677,7 +699,7 @@ class IntegratedNavigator:
                 bar.close()
         if log.n_dropped:
             raise RuntimeError(f"innovation log overflow ({log.n_dropped} entries): please report")
-        k = bad if status != lib.GF_OK else n
+        k = row
         sol = IntegratedSolution(out["t_s"][:k], out["q_bn"][:k], out["v_n_m_s"][:k],
                                  out["pos"][:k, 0].copy(), out["pos"][:k, 1].copy(), out["pos"][:k, 2].copy(),
                                  out["std"][:k], out["sensors"][:k], out["standstill"][:k].astype(bool),

@@ -314,13 +314,13 @@ static void test_round_trip(void)
     const double v[3] = {4.0, 1.0, 0.0};
     CHECK(start(&f, &c, v, 0.0) == GF_OK, "init");
     const gf_ins_filter f0 = f;
-    gf_ins_output out = {o_t, o_q, o_v, o_p, NULL, NULL, NULL};
+    gf_ins_output out = {o_t, o_q, o_v, o_p, NULL, NULL, NULL, 0};
     size_t done, mdone;
     CHECK(gf_ins_run(&f, NREC, g_t, g_g, g_a, 0, NULL, &out, NULL, NULL, &done, &mdone) == GF_OK, "forward");
     CHECK(gf_ins_run_backward(&f, NREC, g_t, g_g, g_a, 0.0, 0, NULL, NULL, NULL, &done, &mdone) ==
               GF_ERR_BAD_PARAMETER, "backward run needs gf_ins_reverse first");
     CHECK(gf_ins_reverse(&f) == GF_OK, "reverse");
-    gf_ins_output bout = {b_t, b_q, b_v, b_p, NULL, NULL, NULL};
+    gf_ins_output bout = {b_t, b_q, b_v, b_p, NULL, NULL, NULL, 0};
     CHECK(gf_ins_run_backward(&f, NREC, g_t, g_g, g_a, 0.0, 0, NULL, &bout, NULL, &done, &mdone) == GF_OK &&
               done == NREC, "backward");
     /* back at the start: the nominal against the initial one */
@@ -413,7 +413,7 @@ static void test_forward_backward_driver(void)
     CHECK(gf_ins_forward_backward(&f1, n, g_t, g_g, g_a, nm, m, 2, passes, &log, &np) == GF_OK && np == 5,
           "driver (%d passes)", np);
     /* the same passes by hand */
-    gf_ins_output out = {o_t, o_q, o_v, o_p, NULL, NULL, NULL};
+    gf_ins_output out = {o_t, o_q, o_v, o_p, NULL, NULL, NULL, 0};
     size_t done, md;
     CHECK(gf_ins_run(&f2, n, g_t, g_g, g_a, nm, m, &out, NULL, NULL, &done, &md) == GF_OK && md == nm, "fwd");
     for (int p = 0; p < 2; ++p) {
@@ -445,6 +445,58 @@ static void test_forward_backward_driver(void)
           "backward walk that does not start at the filter's time");
 }
 
+/* cfg.subsamples = 2 (gf_ins_run groups two increments per navigation update between
+ * measurement and propagation instants): one row per group, at the group's end; a record
+ * cut into calls at an even sample count gives the same bits as one call; a faulty
+ * sample inside a group is reported at its own index, the rows before it kept. */
+static void test_subsample_groups(void)
+{
+    enum { N = 6000 };           /* 60 s at 100 Hz; propagation every 10 samples */
+    const double dt = 0.01;
+    make_record(N, dt, g_t, g_g, g_a);
+    gf_ins_config c = base_config();
+    c.subsamples = 2;
+    const double v[3] = {4.0, 1.0, 0.0};
+    gf_ins_meas ms[2] = {{0}};
+    for (int j = 0; j < 2; ++j) {          /* GNSS velocity inside groups: 10.003 s, 30.013 s */
+        ms[j].type = GF_INS_MEAS_GNSS_VEL;
+        ms[j].t_s = j ? 30.013 : 10.003;
+        ms[j].z[0] = 4.0;
+        ms[j].z[1] = 1.0;
+        ms[j].std[0] = ms[j].std[1] = ms[j].std[2] = 0.1;
+    }
+    gf_ins_filter f1, f2;
+    CHECK(start(&f1, &c, v, 0.0) == GF_OK && start(&f2, &c, v, 0.0) == GF_OK, "init");
+    gf_ins_output out = {o_t, o_q, o_v, o_p, NULL, NULL, NULL, 0};
+    size_t done, mdone;
+    CHECK(gf_ins_run(&f1, N, g_t, g_g, g_a, 2, ms, &out, NULL, NULL, &done, &mdone) == GF_OK &&
+              done == N && mdone == 2, "whole record");
+    /* a measurement breaks its group into two single samples: one row more each */
+    CHECK(out.n_rows == N / 2 + 2, "one row per group");
+    int on_grid = 1;
+    for (size_t r = 0; r < out.n_rows; ++r)
+        on_grid &= fabs(o_t[r] / dt - rint(o_t[r] / dt)) < 1e-9 && (r == 0 || o_t[r] > o_t[r - 1]);
+    CHECK(on_grid && o_t[out.n_rows - 1] == g_t[N - 1], "rows at sample times, increasing, to the end");
+    /* in two calls cut at sample 2000 (even) */
+    gf_ins_output out2 = {b_t, b_q, b_v, b_p, NULL, NULL, NULL, 0};
+    CHECK(gf_ins_run(&f2, 2000, g_t, g_g, g_a, 1, ms, &out2, NULL, NULL, &done, &mdone) == GF_OK &&
+              mdone == 1, "first part");
+    const size_t r1 = out2.n_rows;
+    gf_ins_output out3 = {b_t + r1, b_q + 4 * r1, b_v + 3 * r1, b_p + 3 * r1, NULL, NULL, NULL, 0};
+    CHECK(gf_ins_run(&f2, N - 2000, g_t + 2000, g_g + 6000, g_a + 6000, 1, ms + 1, &out3, NULL, NULL,
+                     &done, &mdone) == GF_OK, "second part");
+    CHECK(r1 + out3.n_rows == out.n_rows && memcmp(b_q, o_q, 4 * out.n_rows * sizeof(double)) == 0 &&
+              memcmp(b_p, o_p, 3 * out.n_rows * sizeof(double)) == 0 &&
+              memcmp(b_v, o_v, 3 * out.n_rows * sizeof(double)) == 0, "two calls = one call (bits)");
+    /* NaN in the second sample of a group: stopped there, the rows before kept */
+    g_a[3 * 1001 + 2] = NAN;
+    CHECK(start(&f2, &c, v, 0.0) == GF_OK, "init");
+    CHECK(gf_ins_run(&f2, N, g_t, g_g, g_a, 0, NULL, &out2, NULL, NULL, &done, &mdone) ==
+              GF_ERR_NONFINITE_INPUT && done == 1001 && out2.n_rows == 501 && f2.t_s == g_t[1000],
+          "a faulty sample inside a group is reported at its index");
+    g_a[3 * 1001 + 2] = 9.7936 * dt;
+}
+
 int main(void)
 {
     test_speed_update();
@@ -453,5 +505,6 @@ int main(void)
     test_reverse_signs();
     test_round_trip();
     test_forward_backward_driver();
+    test_subsample_groups();
     TEST_MAIN_END();
 }

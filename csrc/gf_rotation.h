@@ -151,7 +151,9 @@ gf_status gf_rot_imu_vehicle(const gf_rot_state *state, gf_vehicle_state *vehicl
 /* One step of the vehicle to t_end_s with the rotating IMU (for the vehicle FMU):
  * *truth as gf_vehicle_step gives it (body increments over the whole step), imu (12):
  * w_im^m and f^m at t_end_s, then dtheta and dv over the step. The vehicle is advanced
- * only on GF_OK. */
+ * only on GF_OK. Errors: GF_ERR_BAD_TIME (t_end_s not after the vehicle's time, or more
+ * than GF_VEHICLE_MAX_STEP_S after it, as gf_vehicle_step), those of gf_vehicle_step and
+ * gf_rot_eval. */
 gf_status gf_rot_vehicle_step(const gf_rot_state *state, gf_vehicle_state *vehicle,
                               double t_end_s, gf_vehicle_sample *truth, double *imu);
 

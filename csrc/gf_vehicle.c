@@ -11,7 +11,6 @@
 
 #define PIECE_MAX_S 0.25                 /* longest quadrature piece */
 #define LAT_MAX_RAD (89.0 * GF_PI / 180.0)
-#define STEP_MAX_S 1e5                   /* longest step (4e5 pieces; see gf_vehicle.h) */
 
 /* Integration matrix of the Gauss-Legendre rule of gf_quad.h: int_{-1}^{x_j} g =
  * sum_i GL_S[j][i] g(x_i) for g a polynomial of degree <= 7 (the Lagrange interpolant through the nodes, integrated);
@@ -272,7 +271,7 @@ static int indices_valid(const gf_vehicle_state *st)
 /* The state's time inside its active segment, to a tolerance above the FMI masters'
  * time rounding (1e-9 relative). A restored or hand-made state may break it: a step from
  * a time far beyond the active segment's end would integrate from that end, unbounded by
- * STEP_MAX_S (found by fuzz_fmu_vehicle: a 10^6 s jump, 46 s of CPU). */
+ * GF_VEHICLE_MAX_STEP_S (found by fuzz_fmu_vehicle: a 10^6 s jump, 46 s of CPU). */
 static int time_in_segment(const gf_vehicle_state *st)
 {
     const double tol = 1e-6 * fmax(1.0, fabs(st->time_s));
@@ -355,7 +354,7 @@ gf_status gf_vehicle_step_mounted(gf_vehicle_state *state, double t_end_s,
         return GF_ERR_NULL_POINTER;
     if (!indices_valid(state))
         return GF_ERR_BAD_SIZE;
-    if (!(t_end_s > state->time_s) || !isfinite(t_end_s) || !(t_end_s - state->time_s <= STEP_MAX_S))
+    if (!(t_end_s > state->time_s) || !isfinite(t_end_s) || !(t_end_s - state->time_s <= GF_VEHICLE_MAX_STEP_S))
         return GF_ERR_BAD_TIME;
     if (!time_in_segment(state))
         return GF_ERR_BAD_PARAMETER;

@@ -48,6 +48,7 @@ extern "C" {
 
 /* CDEF BEGIN */
 #define GF_VEHICLE_MAX_SEGMENTS 32
+#define GF_VEHICLE_MAX_STEP_S 1e5   /* longest step: up to 4e5 quadrature pieces */
 
 typedef struct gf_vehicle_segment {
     double duration_s;            /* > 0 */

@@ -253,6 +253,18 @@ static void test_on_vehicle(void)
         worst = fmax(worst, fabs(a_th[i] - b_th[i]) + fabs(a_dv[i] - b_dv[i]) * 1e-3);
     /* the same integrand, pieces split alike: round-off of the vehicle's Earth terms */
     CHECK(worst < 1e-15, "vehicle at rest = static base: %.3g", worst);
+    {
+        /* one FMU step: as long as gf_vehicle_step takes and no longer (a longer one split
+         * at the schedule's breaks was accepted: 10^6 s of pieces, fuzz_fmu_vehicle) */
+        gf_vehicle_state w = v, before = v;
+        gf_vehicle_sample tr;
+        double imu[12];
+        CHECK(gf_rot_vehicle_step(&st, &w, w.time_s + GF_VEHICLE_MAX_STEP_S * 1.001, &tr, imu) ==
+                  GF_ERR_BAD_TIME && memcmp(&w, &before, sizeof w) == 0,
+              "a step beyond GF_VEHICLE_MAX_STEP_S refused, vehicle unchanged");
+        CHECK(gf_rot_vehicle_step(&st, &w, w.time_s + 1e300, &tr, imu) == GF_ERR_BAD_TIME, "1e300 s");
+        CHECK(gf_rot_vehicle_step(&st, &w, w.time_s + 0.05, &tr, imu) == GF_OK, "a short step");
+    }
 
     /* an IMU held at a fixed attitude on a moving vehicle: the rotated body increments */
     gf_rot_schedule fixed;

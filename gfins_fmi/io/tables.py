@@ -27,8 +27,8 @@ anything else
     the same float64 (``0.1``, ``1e-7``, ``0.00002201446582700049``), so every value
     round-trips bit for bit.
 
-CSV parsing and formatting are polars' (Rust; shortest round-trip digits): 70-100 ns
-a value to read and 45-70 ns to write on one core of the development machine, where
+CSV parsing and formatting are polars' (Rust; shortest round-trip digits): 40-55 ns
+a value to read and 55-65 ns to write on one core of the development machine, where
 numpy's ``loadtxt`` takes 300 ns and ``savetxt`` 900 ns (docs/io.md, "Why polars";
 docs/benchmarks.md, "Record I/O"). When polars refuses a block of lines, the block is scanned in Python to
 name the line at fault (:func:`gfins_fmi.io._text.diagnose`).
@@ -525,8 +525,8 @@ class _WriteBehind:
     A record's output is written once and not read back; left to the kernel, all of
     it (gigabytes) stays in memory as dirty pages until written back, and filling
     memory with them costs the writer far more than the writing itself on a VM
-    (3.6 GB of CSV: 7-13 s of system time, 1.3 s with this; docs/benchmarks.md,
-    "Record I/O"). Linux only (``sync_file_range`` and ``posix_fadvise``); elsewhere,
+    (3.6 GB written plainly: 6.6-13.2 s of system time; 1.3 s synced and dropped as it
+    went; docs/benchmarks.md, "Record I/O"). Linux only (``sync_file_range`` and ``posix_fadvise``); elsewhere,
     and wherever a call fails (a file system without them), it does nothing."""
 
     #: SYNC_FILE_RANGE_WAIT_BEFORE, _WRITE, _WAIT_AFTER (linux/fs.h)

@@ -113,6 +113,48 @@ def test_tables_round_trip_bit_for_bit_in_chunks(fmt, values, tmp_path):
     assert [p.name for p in tmp_path.iterdir()] == [path.name]  # no temporary file left
 
 
+@pytest.mark.parametrize("fmt", FORMATS)
+def test_write_behind_sends_each_range_then_drops_it_and_keeps_tables_exact(fmt, values,
+                                                                             tmp_path, monkeypatch):
+    """The writer sends what it wrote to the disk and drops it from the page cache one
+    step later (every 64 MB; here after every chunk): every byte written is sent once,
+    every range but the last step's is waited for before it is dropped, and the table
+    still reads back bit for bit."""
+    _needs(fmt)
+    real = tables._sync_file_range()
+    if real is None:
+        pytest.skip("no sync_file_range here (not Linux): the writer leaves the cache alone")
+    calls = []
+
+    def spy(fd, offset, length, flags):
+        calls.append((offset, length, flags))
+        return real(fd, offset, length, flags)
+    monkeypatch.setattr(tables, "_sync_file_range", lambda: spy)
+    monkeypatch.setattr(tables, "_WRITE_BEHIND_BYTES", 1)
+    path = tmp_path / f"t.{fmt}"
+    with TableWriter(path, ["a_s", "b_m", "c", "d"], rows=1000) as w:
+        for lo in range(0, 1000, 300):
+            w.write([values[lo:lo + 300, j] for j in range(4)])
+        w.commit()
+    assert np.array_equal(_read(path), values, equal_nan=True)
+    sent = [(o, n) for o, n, f in calls if f == 2]               # SYNC_FILE_RANGE_WRITE
+    waited = [(o, n) for o, n, f in calls if f == 1 | 2 | 4]     # WAIT_BEFORE|WRITE|WAIT_AFTER
+    assert len(sent) + len(waited) == len(calls) and waited, calls
+    assert waited == sent[:len(waited)] and len(sent) > len(waited), calls
+    covered = np.zeros(path.stat().st_size, bool)                 # no byte sent twice
+    for o, n in sent:
+        assert not covered[o:o + n].any(), (o, n)
+        covered[o:o + n] = True
+    size, m = covered.size, int(covered.sum())
+    if fmt == "npz":                # the four columns' data, not the zip's headers
+        assert m == 4 * 1000 * 8
+    elif fmt == "csv":              # everything after the header line
+        head = path.read_bytes().index(b"\n") + 1
+        assert not covered[:head].any() and covered[head:].all()
+    else:                           # from the start, all but the footer (written at commit)
+        assert covered[:m].all() and 4 * 1000 * 8 < m < size
+
+
 @pytest.mark.parametrize("planned", [None, 1000, 700, 1300])
 def test_npz_written_in_place_or_through_side_files(planned, values, tmp_path):
     """With the row count known (a binary input) the npz columns are written in place

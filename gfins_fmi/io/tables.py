@@ -27,8 +27,8 @@ anything else
     the same float64 (``0.1``, ``1e-7``, ``0.00002201446582700049``), so every value
     round-trips bit for bit.
 
-CSV parsing and formatting are polars' (Rust; shortest round-trip digits): 70-100 ns
-a value to read and 45-70 ns to write on one core of the development machine, where
+CSV parsing and formatting are polars' (Rust; shortest round-trip digits): 40-55 ns
+a value to read and 55-65 ns to write on one core of the development machine, where
 numpy's ``loadtxt`` takes 300 ns and ``savetxt`` 900 ns (docs/io.md, "Why polars";
 docs/benchmarks.md, "Record I/O"). When polars refuses a block of lines, the block is scanned in Python to
 name the line at fault (:func:`gfins_fmi.io._text.diagnose`).
@@ -57,8 +57,10 @@ FORMATS = ("csv", "parquet", "npz")
 #: of parsing; large enough that per-chunk costs vanish, small enough for a smooth
 #: progress bar and a small memory footprint
 DEFAULT_CHUNK_ROWS = 1 << 18
-#: bytes of text parsed at a time (whole lines)
-_TEXT_BLOCK_BYTES = 4 << 20
+#: bytes of text parsed at a time (whole lines): polars' cost per call is about that of
+#: 1 MB of text, so 16 MB blocks parse a third faster than 4 MB (docs/benchmarks.md,
+#: "Record I/O"); the text, its columns and the chunk are 40 MB or so
+_TEXT_BLOCK_BYTES = 16 << 20
 #: bytes copied at a time when assembling an npz file
 _COPY_BYTES = 16 << 20
 
@@ -145,15 +147,18 @@ class _TextSource:
             f.seek(offset)
             while True:
                 buf = f.read(_TEXT_BLOCK_BYTES)
-                data = rest + buf if rest else buf
                 if buf:
-                    cut = data.rfind(b"\n") + 1
+                    cut = buf.rfind(b"\n") + 1
                     if cut == 0:          # a line longer than a block: read on
-                        rest = data
+                        rest += buf
                         continue
-                    block, rest = data[:cut], data[cut:]
+                    # the lines: one copy (none when the block ends a line); the partial
+                    # line after them starts the next block
+                    view = memoryview(buf)
+                    block = b"".join((rest, view[:cut])) if rest or cut < len(buf) else buf
+                    rest = bytes(view[cut:])
                 else:
-                    block, rest = data, b""
+                    block, rest = rest, b""
                 if block:
                     cols = self._parse(block, offset, rows)
                     self.position = offset = f.tell() - len(rest)
@@ -169,8 +174,11 @@ class _TextSource:
         import polars as pl
         k = self.n_columns
         text = block.translate(None, b" \t") if (b" " in block or b"\t" in block) else block
+        # comment lines are looked for only in a block that holds a '#': polars parses
+        # 40 % slower when it must look for them
+        comment = "#" if b"#" in block else None
         try:
-            df = pl.read_csv(text, has_header=False, schema=self._schema(), comment_prefix="#",
+            df = pl.read_csv(text, has_header=False, schema=self._schema(), comment_prefix=comment,
                              quote_char=None)
         except pl.exceptions.PolarsError as exc:
             err = self._diagnose(block, offset, rows)
@@ -491,6 +499,75 @@ def _temp_beside(path: pathlib.Path) -> pathlib.Path:
     raise FileExistsError(f"{path}: no free temporary name beside it")  # pragma: no cover
 
 
+#: bytes of output written between two steps of :class:`_WriteBehind`
+_WRITE_BEHIND_BYTES = 64 << 20
+
+
+def _sync_file_range():
+    """libc's ``sync_file_range`` (Linux), or None."""
+    if not hasattr(os, "posix_fadvise"):
+        return None
+    try:
+        import ctypes
+        fn = ctypes.CDLL(None, use_errno=True).sync_file_range
+    except (OSError, AttributeError):    # pragma: no cover - not glibc/musl Linux
+        return None
+    fn.argtypes = [ctypes.c_int, ctypes.c_int64, ctypes.c_int64, ctypes.c_uint]
+    fn.restype = ctypes.c_int
+    return fn
+
+
+class _WriteBehind:
+    """Keeps a long output out of the page cache: the ranges written since the last
+    step are sent to the disk (without waiting), and those of the step before, by now
+    written or nearly, are waited for and dropped from the cache.
+
+    A record's output is written once and not read back; left to the kernel, all of
+    it (gigabytes) stays in memory as dirty pages until written back, and filling
+    memory with them costs the writer far more than the writing itself on a VM
+    (3.6 GB written plainly: 6.6-13.2 s of system time; 1.3 s synced and dropped as it
+    went; docs/benchmarks.md, "Record I/O"). Linux only (``sync_file_range`` and ``posix_fadvise``); elsewhere,
+    and wherever a call fails (a file system without them), it does nothing."""
+
+    #: SYNC_FILE_RANGE_WAIT_BEFORE, _WRITE, _WAIT_AFTER (linux/fs.h)
+    _WAIT_BEFORE, _WRITE, _WAIT_AFTER = 1, 2, 4
+
+    def __init__(self, fd: int):
+        self._fd = fd
+        self._fn = _sync_file_range()
+        self._new: list[tuple[int, int]] = []     # (offset, length) since the last step
+        self._sent: list[tuple[int, int]] = []    # sent to the disk at the last step
+        self._bytes = 0
+
+    def written(self, offset: int, length: int) -> None:
+        """``length`` bytes were written at ``offset``."""
+        if self._fn is None or length <= 0:
+            return
+        if self._new and self._new[-1][0] + self._new[-1][1] == offset:
+            self._new[-1] = (self._new[-1][0], self._new[-1][1] + length)
+        else:
+            self._new.append((offset, length))
+        self._bytes += length
+        if self._bytes >= _WRITE_BEHIND_BYTES:
+            self._step()
+
+    def _step(self) -> None:
+        fn, fd = self._fn, self._fd
+        wait = self._WAIT_BEFORE | self._WRITE | self._WAIT_AFTER
+        try:
+            ok = all(fn(fd, offset, length, self._WRITE) == 0 for offset, length in self._new)
+            for offset, length in self._sent if ok else ():
+                ok = fn(fd, offset, length, wait) == 0
+                if not ok:
+                    break
+                os.posix_fadvise(fd, offset, length, os.POSIX_FADV_DONTNEED)
+        except OSError:
+            ok = False
+        if not ok:
+            self._fn = None      # not on this file system: left to the kernel, as before
+        self._sent, self._new, self._bytes = self._new, [], 0
+
+
 class _CsvSink:
     """CSV text: ``# `` comment lines, the header line, then each chunk formatted by
     polars (the shortest decimal that reads back as the same float64)."""
@@ -500,11 +577,17 @@ class _CsvSink:
         self._file = open(tmp, "wb")
         head = "".join(f"# {' '.join(c.split())}\n" for c in comments) + ",".join(names) + "\n"
         self._file.write(head.encode("utf-8"))
+        self._end = len(head.encode("utf-8"))
+        self._behind = _WriteBehind(self._file.fileno())
 
     def write(self, arrays) -> None:
         import polars as pl
         pl.DataFrame([pl.Series(n, a) for n, a in zip(self.names, arrays)]).write_csv(
             self._file, include_header=False)
+        self._file.flush()
+        end = self._file.tell()
+        self._behind.written(self._end, end - self._end)
+        self._end = end
 
     def close(self) -> None:
         self._file.close()
@@ -523,14 +606,26 @@ class _ParquetSink:
         # plain encoding: dictionaries of float noise only cost time (12x) and memory
         self._writer = pq.ParquetWriter(str(tmp), self.schema, compression="none",
                                         use_dictionary=False)
+        # pyarrow writes the file through its own handle; this one follows its size
+        self._fd = os.open(tmp, os.O_RDONLY)
+        self._end = 0
+        self._behind = _WriteBehind(self._fd)
 
     def write(self, arrays) -> None:
         pa = self._pa
         self._writer.write_batch(pa.RecordBatch.from_arrays(
             [pa.array(a, type=f.type) for a, f in zip(arrays, self.schema)], schema=self.schema))
+        end = os.fstat(self._fd).st_size
+        self._behind.written(self._end, end - self._end)
+        self._end = end
 
     def close(self) -> None:
-        self._writer.close()
+        try:
+            self._writer.close()
+        finally:
+            if self._fd is not None:
+                os.close(self._fd)
+                self._fd = None
 
     def abort(self) -> None:
         try:
@@ -624,6 +719,7 @@ class _NpzSink:
                                    [len(h) + rows * d.itemsize for h, d in zip(self._heads, self.dtypes)])
             self._crcs = [zlib.crc32(h) for h in self._heads]
             self._fd = os.open(tmp, os.O_WRONLY)
+            self._behind = _WriteBehind(self._fd)
         else:
             self._to_side_files()
 
@@ -651,6 +747,7 @@ class _NpzSink:
             for j, (a, h, d, at) in enumerate(zip(arrays, self._heads, self.dtypes, self._zip.data)):
                 a = np.ascontiguousarray(a)
                 _pwrite(self._fd, a, at + len(h) + self.rows * d.itemsize)
+                self._behind.written(at + len(h) + self.rows * d.itemsize, a.nbytes)
                 self._crcs[j] = zlib.crc32(a, self._crcs[j])
         else:
             for f, a in zip(self._files, arrays):

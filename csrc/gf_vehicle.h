@@ -46,9 +46,12 @@
 extern "C" {
 #endif
 
+/* longest step of gf_vehicle_step (up to 4e5 quadrature pieces); outside the cffi
+ * declarations, which take integer constants only */
+#define GF_VEHICLE_MAX_STEP_S 1e5
+
 /* CDEF BEGIN */
 #define GF_VEHICLE_MAX_SEGMENTS 32
-#define GF_VEHICLE_MAX_STEP_S 1e5   /* longest step: up to 4e5 quadrature pieces */
 
 typedef struct gf_vehicle_segment {
     double duration_s;            /* > 0 */

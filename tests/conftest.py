@@ -6,10 +6,17 @@ The sensor outputs of a motion are computed here with numpy from the output equa
 """
 from __future__ import annotations
 
+import os
 import pathlib
 import sys
 
-import numpy as np
+# One BLAS thread (before numpy loads OpenBLAS): the tests' matrices are small, and
+# OpenBLAS's threads spin-wait for work — on a busy 2-core machine a scipy expm of a
+# 16 x 16 matrix took minutes (threads spinning against each other and other jobs).
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import numpy as np  # noqa: E402
 import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]

@@ -40,6 +40,7 @@ import pathlib
 import secrets
 import shutil
 import struct
+import weakref
 import zipfile
 import zlib
 from typing import Iterator, Sequence
@@ -486,16 +487,29 @@ def _take(pending: list[list[np.ndarray]], m: int, k: int) -> tuple[np.ndarray, 
 
 # --- writing ---------------------------------------------------------------------------------
 
-def _temp_beside(path: pathlib.Path) -> pathlib.Path:
+def _remove_temporary(tmp: pathlib.Path) -> None:
+    """A temporary output and its side folder (npz), where they exist."""
+    tmp.unlink(missing_ok=True)
+    side = pathlib.Path(str(tmp) + ".d")
+    if side.exists():
+        shutil.rmtree(side, ignore_errors=True)
+
+
+def _temp_beside(path: pathlib.Path, owner) -> tuple[pathlib.Path, weakref.finalize]:
     """A new empty file beside ``path`` (same folder, so the final rename stays on one
-    file system), created with the process's umask like any output."""
+    file system), created with the process's umask like any output, and the finalizer
+    that removes it. The finalizer is registered before the file exists: a Ctrl-C at any
+    point after (even before the caller has entered its ``with`` block) leaves no
+    temporary file once ``owner`` is collected or the interpreter exits; a commit
+    detaches it."""
     for _ in range(100):
         tmp = path.with_name(f"{path.name}.{secrets.token_hex(4)}.partial")
+        remove = weakref.finalize(owner, _remove_temporary, tmp)
         try:
             with open(tmp, "xb"):
-                return tmp
+                return tmp, remove
         except FileExistsError:
-            continue
+            remove.detach()
     raise FileExistsError(f"{path}: no free temporary name beside it")  # pragma: no cover
 
 
@@ -835,12 +849,12 @@ class TableWriter:
         self.format = _format(self.path, format)
         if self.path.is_dir():
             raise IsADirectoryError(f"{self.path} is a folder: give a file name for the output")
-        self._tmp = _temp_beside(self.path)
+        self._tmp, self._remove = _temp_beside(self.path, self)
         try:
             self._sink = _SINKS[self.format](self._tmp, self.names, self.dtypes, list(comments),
                                              rows)
         except BaseException:
-            self._tmp.unlink(missing_ok=True)
+            self._remove()
             raise
         self.rows = 0
         self._open = True
@@ -867,6 +881,7 @@ class TableWriter:
         try:
             self._sink.close()
             os.replace(self._tmp, self.path)
+            self._remove.detach()
         except BaseException:
             self._cleanup()
             raise
@@ -880,10 +895,7 @@ class TableWriter:
             self._cleanup()
 
     def _cleanup(self) -> None:
-        self._tmp.unlink(missing_ok=True)
-        side = pathlib.Path(str(self._tmp) + ".d")
-        if side.exists():
-            shutil.rmtree(side, ignore_errors=True)
+        self._remove()
 
     def __enter__(self) -> "TableWriter":
         return self

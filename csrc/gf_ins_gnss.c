@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "gf_earth.h"
+#include "gf_ins_model.h"
 #include "gf_linalg.h"
 #include "gf_math.h"
 
@@ -343,27 +344,6 @@ gf_status gf_ins_init(gf_ins_filter *f, const gf_ins_config *cfg, double t0_s,
 
 /* ---- error model (see gf_ins_gnss.h) ----------------------------------------------- */
 
-typedef struct earth_terms {
-    double sL, cL, tL, RMh, RNh, Re, g;
-    double w_ie[3], w_en[3];
-} earth_terms;
-
-static void earth_terms_of(double sin_lat, double cos_lat, double h, const double v[3],
-                           double earth_rate_sign, earth_terms *e)
-{
-    gf_earth ea;
-    gf_earth_from_sincos(&ea, sin_lat, cos_lat, h, v, earth_rate_sign);
-    e->sL = ea.sin_lat;
-    e->cL = ea.cos_lat;
-    e->tL = ea.tan_lat;
-    e->RMh = ea.R_M_m + h;
-    e->RNh = ea.R_N_m + h;
-    e->Re = sqrt(ea.R_M_m * ea.R_N_m) + h;
-    e->g = ea.gravity_m_s2;
-    gf_v3_copy(ea.w_ie_n_rad_s, e->w_ie);
-    gf_v3_copy(ea.w_en_n_rad_s, e->w_en);
-}
-
 static double gm_rate(double tau_s)
 {
     return tau_s > 0.0 ? -1.0 / tau_s : 0.0;
@@ -397,18 +377,10 @@ static void process_noise(const gf_ins_filter *f, double *q_diag)
         q_diag[f->idx_odo] = gm_intensity(nz->odo_scale_std, nz->odo_scale_tau_s);
 }
 
-/* Entry (i, j) of F (row stride s), marked in the row masks (bit j of mask[i]): the
- * model's structure (which entries it can make non-zero) comes out of the code that
- * fills it, so the covariance propagation skips the rest without scanning F. */
 _Static_assert(GF_INS_MAX_STATES <= 64, "row masks of F are 64 bits");
-static inline double *f_entry(double *F, size_t s, uint64_t *mask, int i, int j)
-{
-    mask[i] |= (uint64_t)1 << j;
-    return F + (size_t)i * s + (size_t)j;
-}
 
 /* F (n x n in rows of stride s >= n, zero-filled here; mask (n) receives the rows'
- * structure, see f_entry) at attitude C, velocity v, position (sin and cos of the
+ * structure, see gf_ins_f_entry) at attitude C, velocity v, position (sin and cos of the
  * latitude, h), specific force f_b and rate w_b (body); q_diag (n, may be NULL):
  * process_noise(). Only entries that can be non-zero are written. */
 static void error_model(const gf_ins_filter *f, const gf_mat3 *C, const double v[3],
@@ -420,77 +392,10 @@ static void error_model(const gf_ins_filter *f, const gf_mat3 *C, const double v
     const gf_ins_noise *nz = &f->cfg.noise;
     memset(F, 0, (size_t)n * s * sizeof *F);
     memset(mask, 0, (size_t)n * sizeof *mask);
-#define FF(i, j) (*f_entry(F, s, mask, (i), (j)))
-    earth_terms e;
-    /* reverse-time filtering: the Earth rate with the nominal's sign (see the header) */
-    const double er_sign = dir_of(f);
-    earth_terms_of(sin_lat, cos_lat, h, v, er_sign, &e);
-    const double W = er_sign * GF_WGS84_OMEGA_IE_RAD_S;
-    const double vE = v[0], vN = v[1];
-    double w_in[3], f_n[3];
-    gf_v3_add(e.w_ie, e.w_en, w_in);
-    gf_m3_mul_v3(C, f_b, f_n);
-    /* derivatives of w_ie and w_en (columns: dvE, dvN | dL, dh); the entries listed as
-     * zero are not written below */
-    const double dwie_dL[3] = {0.0, -W * e.sL, W * e.cL};
-    const double dwen_dvE[3] = {0.0, 1.0 / e.RNh, e.tL / e.RNh};
-    const double dwen_dvN[3] = {-1.0 / e.RMh, 0.0, 0.0};
-    const double dwen_dL[3] = {0.0, 0.0, vE / (e.RNh * e.cL * e.cL)};
-    const double dwen_dh[3] = {vN / (e.RMh * e.RMh), -vE / (e.RNh * e.RNh),
-                               -vE * e.tL / (e.RNh * e.RNh)};
-    /* attitude: phi' = -w_in x phi + d(w_in) - C dw_ib */
-    FF(IA + 1, IV + 0) = dwen_dvE[1];
-    FF(IA + 2, IV + 0) = dwen_dvE[2];
-    FF(IA + 0, IV + 1) = dwen_dvN[0];
-    FF(IA + 1, IP + 0) = dwie_dL[1] + dwen_dL[1];
-    FF(IA + 2, IP + 0) = dwie_dL[2] + dwen_dL[2];
-    for (int i = 0; i < 3; ++i)
-        FF(IA + i, IP + 2) = dwen_dh[i];
-    FF(IA + 0, IA + 1) = w_in[2];
-    FF(IA + 0, IA + 2) = -w_in[1];
-    FF(IA + 1, IA + 0) = -w_in[2];
-    FF(IA + 1, IA + 2) = w_in[0];
-    FF(IA + 2, IA + 0) = w_in[1];
-    FF(IA + 2, IA + 1) = -w_in[0];
-    /* velocity: dv' = f^n x phi + C df + v x (2 dw_ie + dw_en) - (2 w_ie + w_en) x dv + dg */
-    FF(IV + 0, IA + 1) = -f_n[2];
-    FF(IV + 0, IA + 2) = f_n[1];
-    FF(IV + 1, IA + 0) = f_n[2];
-    FF(IV + 1, IA + 2) = -f_n[0];
-    FF(IV + 2, IA + 0) = -f_n[1];
-    FF(IV + 2, IA + 1) = f_n[0];
-    double w2[3];
-    gf_v3_axpy(e.w_en, 2.0, e.w_ie, w2);     /* 2 w_ie + w_en */
-    /* -(w2 x) */
-    FF(IV + 0, IV + 1) = w2[2];
-    FF(IV + 0, IV + 2) = -w2[1];
-    FF(IV + 1, IV + 0) = -w2[2];
-    FF(IV + 1, IV + 2) = w2[0];
-    FF(IV + 2, IV + 0) = w2[1];
-    FF(IV + 2, IV + 1) = -w2[0];
-    /* v x (d w_en / dv) columns E, N; v x (2 dw_ie/dL + dw_en/dL), v x dw_en/dh */
-    double c[3], d[3];
-    gf_v3_cross(v, dwen_dvE, c);
-    gf_v3_cross(v, dwen_dvN, d);
-    double dL_col[3], t3[3];
-    gf_v3_axpy(dwen_dL, 2.0, dwie_dL, t3);
-    gf_v3_cross(v, t3, dL_col);
-    double dh_col[3];
-    gf_v3_cross(v, dwen_dh, dh_col);
-    for (int i = 0; i < 3; ++i) {
-        FF(IV + i, IV + 0) += c[i];
-        FF(IV + i, IV + 1) += d[i];
-        FF(IV + i, IP + 0) = dL_col[i];
-        FF(IV + i, IP + 2) = dh_col[i];
-    }
-    FF(IV + 2, IP + 2) += 2.0 * e.g / e.Re;
-    /* position */
-    FF(IP + 0, IV + 1) = 1.0 / e.RMh;
-    FF(IP + 0, IP + 2) = -vN / (e.RMh * e.RMh);
-    FF(IP + 1, IV + 0) = 1.0 / (e.RNh * e.cL);
-    FF(IP + 1, IP + 0) = vE * e.tL / (e.RNh * e.cL);
-    FF(IP + 1, IP + 2) = -vE / (e.RNh * e.RNh * e.cL);
-    FF(IP + 2, IV + 2) = 1.0;
+#define FF(i, j) (*gf_ins_f_entry(F, s, mask, (size_t)(i), (size_t)(j)))
+    /* the navigation blocks (phi, dv, dp): gf_ins_model, with the nominal's Earth-rate
+     * sign (reverse-time filtering, see the header) */
+    gf_ins_nav_blocks_sparse(C, v, sin_lat, cos_lat, h, dir_of(f), f_b, s, IA, IV, IP, F, mask);
     /* sensor errors into attitude and velocity */
     for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j) {

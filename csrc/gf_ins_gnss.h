@@ -28,7 +28,9 @@
  *              - v_E dh / ((R_N + h)^2 cos L)
  *   dh'  = dv_U,      dg = [0, 0, 2 g dh / (sqrt(R_M R_N) + h)]
  * (derivatives of the radii and of gravity with latitude are neglected: relative size
- * e^2 ~ 0.7% of terms that are themselves small). Noise w: accelerometer white noise
+ * e^2 ~ 0.7% of terms that are themselves small). The navigation blocks (phi, dv, dp)
+ * come from gf_ins_model (gf_ins_nav_blocks_sparse), shared with the calibration
+ * filter; the sensor-error columns are this filter's. Noise w: accelerometer white noise
  * (velocity random walk) into dv through C_b^n, gyro white noise (angle random walk)
  * into phi through -C_b^n, one driving noise per sensor-error state.
  *

@@ -139,25 +139,14 @@ static FmuStatus start_navigation(FmuInstance *instance, ModelData *d, double st
 
 FmuStatus model_exit_initialization(FmuInstance *instance, ModelData *d, double start_time_s)
 {
-    if (!fmu_skip_steps_reset(instance, d->skip_steps, &d->skipped))
-        return FMU_ERROR;
-    return start_navigation(instance, d, start_time_s);
+    return fmu_nav_exit_initialization(instance, d, start_time_s, start_navigation);
 }
 
 FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double h_s)
 {
-    int restart = 0;
-    if (fmu_skip_this_step(d->skip_steps, &d->skipped, &restart)) { /* start at the next sample */
-        if (!restart)
-            return FMU_OK;
-        /* a failed step changes no model data: the start writes the navigator in place
-         * (found by fuzzing: a refused start left a half-initialised solver); once per run */
-        ModelData saved = *d;
-        const FmuStatus s = start_navigation(instance, d, t_s + h_s);
-        if (s != FMU_OK)
-            *d = saved;
-        return s;
-    }
+    FmuStatus skipped;
+    if (fmu_nav_skip_step(instance, d, t_s + h_s, start_navigation, &skipped))
+        return skipped; /* inputs ignored; navigation (re)started for the next sample */
     double q[4], v[3], pos[3], w[3], f[3];
     uint8_t flags = 0;
     size_t done = 0;

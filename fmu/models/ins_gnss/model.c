@@ -389,9 +389,7 @@ static FmuStatus align_step(FmuInstance *instance, ModelData *d, double t_s, siz
 
 FmuStatus model_exit_initialization(FmuInstance *instance, ModelData *d, double start_time_s)
 {
-    if (!fmu_skip_steps_reset(instance, d->skip_steps, &d->skipped))
-        return FMU_ERROR;
-    return start_filter(instance, d, start_time_s);
+    return fmu_nav_exit_initialization(instance, d, start_time_s, start_filter);
 }
 
 /* One measurement input group: valid flag, time, and where the values sit. */
@@ -540,18 +538,9 @@ static void log_step_error(FmuInstance *instance, const ModelData *d, gf_status 
 
 FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double h_s)
 {
-    int restart = 0;
-    if (fmu_skip_this_step(d->skip_steps, &d->skipped, &restart)) { /* start at the next sample */
-        if (!restart)
-            return FMU_OK;
-        /* a failed step changes no model data: the start writes the navigator in place
-         * (found by fuzzing: a refused start left a half-initialised solver); once per run */
-        ModelData saved = *d;
-        const FmuStatus s = start_filter(instance, d, t_s + h_s);
-        if (s != FMU_OK)
-            *d = saved;
-        return s;
-    }
+    FmuStatus skipped;
+    if (fmu_nav_skip_step(instance, d, t_s + h_s, start_filter, &skipped))
+        return skipped; /* inputs ignored; navigation (re)started for the next sample */
     gf_ins_meas meas[N_MEAS_MAX];
     size_t n_meas = 0;
     if (!gather(instance, d, t_s, meas, &n_meas))

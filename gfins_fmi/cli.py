@@ -331,8 +331,12 @@ def _gfnav(args) -> int:
     deg = np.pi / 180
     nav = None
 
-    def columns(sol, rates):
-        return (_nav_columns(sol) + [rates.omega_rad_s[:, j] for j in range(3)]
+    def columns(t, sol, rates):
+        # the record's own times (the navigator's clock is t0 + k dt, which differs from
+        # them in the last digits): an output row joins its input row on t
+        cols = _nav_columns(sol)
+        cols[0] = t[:len(sol)]
+        return (cols + [rates.omega_rad_s[:, j] for j in range(3)]
                 + [rates.f_m_s2[:, j] for j in range(3)] + [rates.flags])
 
     def solve(start, block):
@@ -352,8 +356,8 @@ def _gfnav(args) -> int:
             sol, rates = nav.run(block[:, 1:n + 1], times.dt,
                                  h_ext_m=block[:, n + 1] if has_h else None, start_index=start)
         except (NonFiniteInputError, SampleError) as exc:
-            raise _Refused(exc, columns(exc.partial, exc.partial_rates), len(exc.partial)) from None
-        return columns(sol, rates)
+            raise _Refused(exc, columns(t, exc.partial, exc.partial_rates), len(exc.partial)) from None
+        return columns(t, sol, rates)
 
     status, rows = _stream(args, reader, _NAV_COLUMNS + _RATE_COLUMNS,
                            [np.float64] * (len(_NAV_COLUMNS) + 6) + [np.uint8], solve, "navigated")

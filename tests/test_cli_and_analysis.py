@@ -137,6 +137,8 @@ def test_gfnav_csv(tmp_path):
                                   tr.gyro_rad_s[0]).run(A, 0.01)
     assert sol.shape == (len(A), 21)
     np.testing.assert_allclose(np.radians(sol[:, 1]), ref.lat_rad, rtol=0, atol=5e-12)
+    # the output rows carry the record's own times, to the bit (a row joins its input on t)
+    np.testing.assert_array_equal(sol[:, 0], np.loadtxt(src, delimiter=",", usecols=0))
     proc = run("gfnav", str(src), str(dst), "--layout", "cube6", "--lever-arm", "0.1",
                "--lat0", "30", "--lon0", "114", check=False)
     assert proc.returncode == 2 and "needs 7 or 8 columns" in proc.stderr

@@ -444,6 +444,15 @@ def test_subsample_groups_exact_drive(exact_drive, m):
     # ZUPT needs the detector per sample: the samples are stepped one by one
     zu = start(tr, quiet_config(subsamples=m, zupt=True)).run(imu)
     assert len(zu.t_s) == n
+    # a NaN in the second sample of a group: reported at its own index; the partial
+    # solution holds the groups before it and the group's first sample, stepped alone
+    acc = imu.accel.copy()
+    acc[1001, 2] = np.nan
+    with pytest.raises(FilterError, match="IMU sample 1001") as ei:
+        start(tr, quiet_config(subsamples=m, propagation_interval_s=prop_s)).run(
+            Rec(t_s=imu.t_s, gyro=imu.gyro, accel=acc, kind="increments"), chunk=600)
+    assert ei.value.index == 1001 and len(ei.value.partial) == 1000 // m + 1
+    assert ei.value.partial.t_s[-1] == imu.t_s[1000]
 
 
 def test_subsamples_config_is_checked():

@@ -617,8 +617,15 @@ class IntegratedNavigator:
         smoother : keep what the RTS smoother needs (at the covariance epochs: ~4 kB per
             epoch with 15 states) for :meth:`IntegratedSolution.smooth`; beyond
             ``spill_bytes`` it goes to memory-mapped files in ``spill_dir``.
-        chunk : IMU samples per C call.
+        chunk : IMU samples per C call (rounded up to a multiple of ``config.subsamples``,
+            so that the cut does not change the result).
         progress : a progress bar (tqdm).
+
+        Returns
+        -------
+        IntegratedSolution
+            One row per IMU sample, or per navigation update with ``config.subsamples``
+            > 1 (``t_s`` says when).
 
         Raises
         ------

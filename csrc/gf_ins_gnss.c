@@ -1946,6 +1946,19 @@ gf_status gf_ins_forward_backward(gf_ins_filter *f, size_t n, const double *t_s,
 
 /* ---- coarse alignment at rest (for the FMU's alignment phase) ----------------------------- */
 
+/* q_bn of C_b^n whose rows are the east, north and up unit vectors in body axes */
+static void q_from_enu_axes(const double *e, const double *n, const double *u, double *q_bn)
+{
+    gf_mat3 C;
+    for (int j = 0; j < 3; ++j) {
+        C.m[0][j] = e[j];
+        C.m[1][j] = n[j];
+        C.m[2][j] = u[j];
+    }
+    gf_q_from_dcm(&C, q_bn);
+    gf_q_normalize(q_bn, q_bn);
+}
+
 gf_status gf_ins_coarse_align(const double *f_b_m_s2, const double *w_b_rad_s, double *q_bn)
 {
     if (!f_b_m_s2 || !w_b_rad_s || !q_bn)
@@ -1963,14 +1976,7 @@ gf_status gf_ins_coarse_align(const double *f_b_m_s2, const double *w_b_rad_s, d
     gf_v3_scale(e, 1.0 / en, e);
     gf_v3_scale(f_b_m_s2, 1.0 / fn, u);
     gf_v3_cross(u, e, nn);
-    gf_mat3 C;
-    for (int j = 0; j < 3; ++j) {
-        C.m[0][j] = e[j];
-        C.m[1][j] = nn[j];
-        C.m[2][j] = u[j];
-    }
-    gf_q_from_dcm(&C, q_bn);
-    gf_q_normalize(q_bn, q_bn);
+    q_from_enu_axes(e, nn, u, q_bn);
     return GF_OK;
 }
 
@@ -1994,14 +2000,7 @@ gf_status gf_ins_level_align(const double *f_b_m_s2, double *q_bn)
         return GF_ERR_SINGULAR_GEOMETRY;
     gf_v3_scale(nn, 1.0 / nnn, nn);
     gf_v3_cross(nn, u, e);
-    gf_mat3 C;
-    for (int j = 0; j < 3; ++j) {
-        C.m[0][j] = e[j];
-        C.m[1][j] = nn[j];
-        C.m[2][j] = u[j];
-    }
-    gf_q_from_dcm(&C, q_bn);
-    gf_q_normalize(q_bn, q_bn);
+    q_from_enu_axes(e, nn, u, q_bn);
     return GF_OK;
 }
 

@@ -587,3 +587,23 @@ def test_alignment_from_gnss_travel_never_fast(travel):
         with pytest.raises(FmuRunError, match=match):
             run_ins_gnss_fmu(imu, g, config=cfg, initial=init, fmi_version=3,
                              parameters={"align_time": 10.0, "align_heading": 1, name: value})
+
+
+def test_alignment_from_gnss_travel_nonfinite_sample(travel):
+    """A NaN IMU sample in the step that brings the fast GNSS epoch is an FMU error naming
+    the input; the outputs before it are the aligning mechanization's (aligning 1)."""
+    d, imu, q_imu, cfg = travel
+    g = d.gnss
+    sp = np.hypot(g.vel_enu_m_s[:, 0], g.vel_enu_m_s[:, 1])
+    j = int(np.flatnonzero((g.t_s > 10.0) & (sp > 1.0))[0])
+    k = int(np.searchsorted(imu.t_s, g.t_s[j] - 1e-9))
+    gyro = imu.gyro.copy()
+    gyro[k, 1] = np.nan
+    bad = Rec(t_s=imu.t_s, gyro=gyro, accel=imu.accel, kind="increments")
+    nav = gf.NavState(np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3), float(g.lat_rad[0]),
+                      float(g.lon_rad[0]), float(g.h_m[0]), float(d.initial.t_s))
+    with pytest.raises(FmuRunError, match="is not finite") as exc:
+        run_ins_gnss_fmu(bad, g, config=cfg, initial=InitialState(nav), fmi_version=3,
+                         parameters={"align_time": 10.0, "align_heading": 1})
+    part = exc.value.partial
+    assert len(part.t_s) == k and np.all(np.isfinite(part.lat_rad))

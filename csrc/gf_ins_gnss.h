@@ -436,6 +436,23 @@ gf_status gf_ins_forward_backward(gf_ins_filter *f, size_t n, const double *t_s,
  * rest on the Earth —, or w x f below 1e-3 |w| |f|: a pole, or no Earth rate seen). */
 gf_status gf_ins_coarse_align(const double *f_b_m_s2, const double *w_b_rad_s, double *q_bn);
 
+/* Levelling at rest without a heading (for gyros that cannot see the Earth rate): the
+ * attitude whose roll and pitch put the mean specific force f_b (m/s^2, body axes) on
+ * the local vertical and whose heading is 0: up = f / |f|, north = the body's forward
+ * axis y projected on the horizontal plane, east = north x up; C_b^n has the rows east,
+ * north, up (in body axes), q_bn its quaternion. The heading is then found otherwise
+ * (gf_ins_rotate_heading). Errors: GF_ERR_NONFINITE_INPUT, GF_ERR_SINGULAR_GEOMETRY (|f|
+ * not in (5, 15) m/s^2 — not at rest on the Earth —, or the forward axis within 0.06 deg
+ * of the vertical: no heading to define). */
+gf_status gf_ins_level_align(const double *f_b_m_s2, double *q_bn);
+
+/* Rotates a navigation attitude q_bn and velocity v_n (ENU, m/s; NULL: none) about the
+ * local vertical so that the heading (clockwise from north) grows by dpsi_rad and roll
+ * and pitch stay: C_b^n <- R_up(-dpsi) C_b^n, v_n <- R_up(-dpsi) v_n (R_up(a): rotation
+ * by a counterclockwise seen from above). In place. Errors: GF_ERR_NULL_POINTER,
+ * GF_ERR_NONFINITE_INPUT (nothing written). */
+gf_status gf_ins_rotate_heading(double *q_bn, double *v_n_m_s, double dpsi_rad);
+
 /* The continuous error model at the filter's nominal state with specific force f_b and
  * rate w_ib_b (body): F (n x n), G (n x (n - 3)) and the noise intensities q (n - 3):
  * noise inputs = accelerometer white noise (3), gyro white noise (3), one per sensor

@@ -526,12 +526,14 @@ def ins_gnss_fmu_parameters(config, initial) -> dict:
         std0_accel_scale=vec(given(initial.accel_scale_std, config.accel_scale_std)),
         std0_baro_bias=float(given(initial.baro_bias_std_m, config.baro_bias_std_m)),
         std0_odo_scale=float(given(initial.odometer_scale_std, config.odometer_scale_std)),
-        align_time=0.0)     # the batch API starts from the given attitude (no alignment phase)
+        # the batch API starts from the given attitude (no alignment phase); the alignment
+        # parameters at their spec defaults
+        align_time=0.0, align_heading=0, align_min_speed=1.0, align_travel_std=float(np.radians(10.0)))
     return params
 
 
 _INS_FLOAT_OUT = ("q", "v", "lat", "lon", "h", "time_s", "std", "sensors", "nis", "update_time")
-_INS_INT_OUT = ("standstill", "update_status", "update_count")
+_INS_INT_OUT = ("standstill", "update_status", "update_count", "aligning")
 _INS_GNSS_IN = ("gnss_time_s", "gnss_lat_rad", "gnss_lon_rad", "gnss_h_m", "gnss_vel_enu_m_s",
                 "gnss_pos_std_m", "gnss_vel_std_m_s")
 _INS_KINDS = 7     # per-kind monitoring outputs: GF_INS_MEAS_GNSS_POS .. GF_INS_MEAS_ZARU

@@ -325,6 +325,18 @@ static void test_states(void)
     bad = *live;
     bad.skipped = 3;
     CHECK(ins_gnss_state_problem(&bad) != NULL, "skipped");
+    bad = *live;
+    bad.align_travel = 2;
+    CHECK(ins_gnss_state_problem(&bad) != NULL, "align_travel not a flag");
+    bad = *live;
+    bad.align_heading = 5;
+    CHECK((why = ins_gnss_state_problem(&bad)) != NULL && strstr(why, "align_heading"), "align_heading");
+    bad = *live;   /* the travel phase flag without the alignment from the travel */
+    bad.align_travel = 1;
+    CHECK((why = ins_gnss_state_problem(&bad)) != NULL && strstr(why, "align_travel"), "align_travel");
+    bad.aligning = 1;
+    bad.align_heading = 1;
+    CHECK(ins_gnss_state_problem(&bad) == NULL, "travel phase state valid: %s", ins_gnss_state_problem(&bad));
 
     fmu_steps(c, N / 2, N, g_fmu, g_ist);
     CHECK(fmi2SetFMUstate(c, st) == fmi2OK, "set state");

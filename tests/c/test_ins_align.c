@@ -243,6 +243,53 @@ static void test_coarse_align(void)
     CHECK(gf_ins_coarse_align(f_bad, w, q) == GF_ERR_SINGULAR_GEOMETRY, "absurd specific force");
 }
 
+/* Levelling without a heading and the rotation about the vertical: the specific force of
+ * a known attitude at rest (f^n = (0, 0, g), body = C^T navigation, C written here from
+ * the quaternion's definition) gives back its roll and pitch with heading 0; rotating that
+ * attitude by the true heading gives the attitude back, and a velocity along heading 0
+ * (north) turns to (sin psi, cos psi); a forward axis on the vertical and NaN are refused. */
+static void test_level_align_and_rotate(void)
+{
+    const double g = 9.79;
+    double worst = 0.0, worst_v = 0.0;
+    for (int c = 0; c < 8; ++c) {
+        const double e[3] = {(37.0 + 45.0 * c) * DEG, (c % 3 - 1) * 20.0 * DEG, (c % 5 - 2) * 40.0 * DEG};
+        double q[4], q2[4], e2[3];
+        gf_euler_to_quat(e, q);
+        const double q0 = q[0], q1 = q[1], q2_ = q[2], q3 = q[3];
+        const double C[3][3] = {{q0 * q0 + q1 * q1 - q2_ * q2_ - q3 * q3, 2 * (q1 * q2_ - q0 * q3), 2 * (q1 * q3 + q0 * q2_)},
+                                {2 * (q1 * q2_ + q0 * q3), q0 * q0 - q1 * q1 + q2_ * q2_ - q3 * q3, 2 * (q2_ * q3 - q0 * q1)},
+                                {2 * (q1 * q3 - q0 * q2_), 2 * (q2_ * q3 + q0 * q1), q0 * q0 - q1 * q1 - q2_ * q2_ + q3 * q3}};
+        const double fb[3] = {C[2][0] * g, C[2][1] * g, C[2][2] * g};
+        CHECK(gf_ins_level_align(fb, q2) == GF_OK, "level align %d", c);
+        gf_quat_to_euler(q2, e2);
+        /* heading 0 (or 2 pi by round-off), pitch and roll as given */
+        worst = fmax(worst, fmin(fabs(e2[0]), fabs(e2[0] - 2 * PI)));
+        worst = fmax(worst, fmax(fabs(e2[1] - e[1]), fabs(e2[2] - e[2])));
+        double v[3] = {0.0, 3.0, 0.5};
+        CHECK(gf_ins_rotate_heading(q2, v, e[0]) == GF_OK, "rotate %d", c);
+        const double *a = q, *b = q2;
+        const double x = a[0] * b[1] - a[1] * b[0] - a[2] * b[3] + a[3] * b[2];
+        const double y = a[0] * b[2] + a[1] * b[3] - a[2] * b[0] - a[3] * b[1];
+        const double z = a[0] * b[3] - a[1] * b[2] + a[2] * b[1] - a[3] * b[0];
+        worst = fmax(worst, 2.0 * sqrt(x * x + y * y + z * z));
+        worst_v = fmax(worst_v, fmax(fabs(v[0] - 3.0 * sin(e[0])), fabs(v[1] - 3.0 * cos(e[0]))));
+        worst_v = fmax(worst_v, fabs(v[2] - 0.5));
+    }
+    printf("levelling + rotation about the vertical: worst angle %.3g rad, velocity %.3g m/s\n",
+           worst, worst_v);
+    /* round-off: a unit vector normalised, a DCM to quaternion, one product: a few 1e-16 */
+    CHECK(worst < 1e-13 && worst_v < 1e-13, "level/rotate error %.3g rad, %.3g m/s", worst, worst_v);
+    const double f_fwd_up[3] = {0, 9.8, 0}, f_nan[3] = {0, NAN, 9.8}, f_bad[3] = {0, 0, 30.0};
+    double q[4] = {1, 0, 0, 0}, v[3] = {1, 2, 3};
+    CHECK(gf_ins_level_align(f_fwd_up, q) == GF_ERR_SINGULAR_GEOMETRY, "forward axis vertical");
+    CHECK(gf_ins_level_align(f_bad, q) == GF_ERR_SINGULAR_GEOMETRY, "absurd specific force");
+    CHECK(gf_ins_level_align(f_nan, q) == GF_ERR_NONFINITE_INPUT, "NaN specific force");
+    CHECK(gf_ins_rotate_heading(q, v, NAN) == GF_ERR_NONFINITE_INPUT && q[0] == 1 && v[0] == 1,
+          "NaN angle refused, nothing written");
+    CHECK(gf_ins_rotate_heading(NULL, v, 0.1) == GF_ERR_NULL_POINTER, "NULL attitude");
+}
+
 static void test_reverse_signs(void)
 {
     gf_ins_config c = base_config();
@@ -502,6 +549,7 @@ int main(void)
     test_speed_update();
     test_odometer_mounting();
     test_coarse_align();
+    test_level_align_and_rotate();
     test_reverse_signs();
     test_round_trip();
     test_forward_backward_driver();

@@ -168,10 +168,18 @@ static void log_bad_config(FmuInstance *instance, const gf_ins_config *c, int32_
     }
 }
 
+/* Where the filter starts: attitude, velocity, position, sensor-error estimates and the
+ * heading 1-sigma (NaN: std0_att[2]). */
+typedef struct {
+    double q_bn[4], v_n_m_s[3], lat_rad, lon_rad, h_m, sensors[GF_INS_N_SENSORS], heading_std_rad;
+} StartPoint;
+
 /* The initial state and its uncertainty; 0 when a parameter was refused (logged). P0 is
  * diagonal, position converted from metres east, north, up to (dlat, dlon, dh) with the
- * radii of gf_earth at (lat0, h0), as gfins_fmi.estimation.InitialState.covariance. */
-static int initial_covariance(FmuInstance *instance, const ModelData *d, int32_t n, double *P0)
+ * radii of gf_earth at the start position s, as gfins_fmi.estimation.InitialState.covariance;
+ * the heading std is s->heading_std_rad unless NaN. */
+static int initial_covariance(FmuInstance *instance, const ModelData *d, const StartPoint *s,
+                              int32_t n, double *P0)
 {
     if (!(fabs(d->lat0_rad) < GF_HALF_PI * (89.0 / 90.0))) {
         fmu_log_error(instance, "parameter lat0 = %g rad: |lat0| must be below 89 deg (the ENU "
@@ -225,13 +233,16 @@ static int initial_covariance(FmuInstance *instance, const ModelData *d, int32_t
         return 0;
     }
     gf_earth e;
-    if (gf_earth_update(&e, d->lat0_rad, d->h0_m, NULL, 1.0) != GF_OK) {
-        fmu_log_error(instance, "parameter h0 = %g m is absurd", d->h0_m);
+    if (gf_earth_update(&e, s->lat_rad, s->h_m, NULL, 1.0) != GF_OK) {
+        fmu_log_error(instance, "start height %g m is absurd (parameter h0 or the GNSS height)",
+                      s->h_m);
         return 0;
     }
     const double east = sd[GF_INS_IDX_POS], north = sd[GF_INS_IDX_POS + 1];
-    sd[GF_INS_IDX_POS] = north / (e.R_M_m + d->h0_m);                          /* dlat */
-    sd[GF_INS_IDX_POS + 1] = east / ((e.R_N_m + d->h0_m) * e.cos_lat);         /* dlon */
+    sd[GF_INS_IDX_POS] = north / (e.R_M_m + s->h_m);                           /* dlat */
+    sd[GF_INS_IDX_POS + 1] = east / ((e.R_N_m + s->h_m) * e.cos_lat);          /* dlon */
+    if (!isnan(s->heading_std_rad))
+        sd[GF_INS_IDX_ATT + 2] = s->heading_std_rad;
     memset(P0, 0, (size_t)(n * n) * sizeof *P0);
     for (int i = 0; i < n; ++i)
         P0[i * n + i] = sd[i] * sd[i];
@@ -249,24 +260,38 @@ static void reset_monitor(ModelData *d)
     d->n_unused = 0;
 }
 
-/* Validates the parameters and starts the filter at t0_s with attitude q and velocity v. */
-static FmuStatus start_filter_with(FmuInstance *instance, ModelData *d, double t0_s,
-                                   const double *q, const double *v)
+/* The start point of the parameters with attitude q and velocity v. */
+static StartPoint start_point(const ModelData *d, const double *q, const double *v)
+{
+    StartPoint s;
+    memcpy(s.q_bn, q, sizeof s.q_bn);
+    memcpy(s.v_n_m_s, v, sizeof s.v_n_m_s);
+    s.lat_rad = d->lat0_rad;
+    s.lon_rad = d->lon0_rad;
+    s.h_m = d->h0_m;
+    memcpy(s.sensors, d->sensors0, sizeof s.sensors);
+    s.heading_std_rad = NAN;
+    return s;
+}
+
+/* Validates the parameters and starts the filter at t0_s from s. */
+static FmuStatus start_filter_at(FmuInstance *instance, ModelData *d, double t0_s,
+                                 const StartPoint *s)
 {
     double P0[GF_INS_MAX_STATES * GF_INS_MAX_STATES];
     int32_t n = 0, bad = 0;
     if (gf_ins_state_count(&d->cfg, &n) != GF_OK) {
         /* the core's check names the field; the filter is not touched */
         memset(P0, 0, sizeof P0);
-        gf_ins_init(&d->filter, &d->cfg, t0_s, q, v, d->lat0_rad, d->lon0_rad,
-                    d->h0_m, d->sensors0, P0, &bad);
+        gf_ins_init(&d->filter, &d->cfg, t0_s, s->q_bn, s->v_n_m_s, s->lat_rad, s->lon_rad,
+                    s->h_m, s->sensors, P0, &bad);
         log_bad_config(instance, &d->cfg, bad);
         return FMU_ERROR;
     }
-    if (!initial_covariance(instance, d, n, P0))
+    if (!initial_covariance(instance, d, s, n, P0))
         return FMU_ERROR;
-    const gf_status st = gf_ins_init(&d->filter, &d->cfg, t0_s, q, v, d->lat0_rad,
-                                     d->lon0_rad, d->h0_m, d->sensors0, P0, &bad);
+    const gf_status st = gf_ins_init(&d->filter, &d->cfg, t0_s, s->q_bn, s->v_n_m_s, s->lat_rad,
+                                     s->lon_rad, s->h_m, s->sensors, P0, &bad);
     if (st != GF_OK) {
         if (bad)
             log_bad_config(instance, &d->cfg, bad);
@@ -279,6 +304,14 @@ static FmuStatus start_filter_with(FmuInstance *instance, ModelData *d, double t
     reset_monitor(d);
     publish(d);
     return FMU_OK;
+}
+
+/* Validates the parameters and starts the filter at t0_s with attitude q and velocity v. */
+static FmuStatus start_filter_with(FmuInstance *instance, ModelData *d, double t0_s,
+                                   const double *q, const double *v)
+{
+    const StartPoint s = start_point(d, q, v);
+    return start_filter_at(instance, d, t0_s, &s);
 }
 
 /* The alignment phase's limits (those of gfins_fmi.estimation.alignment.coarse_align) */
@@ -295,7 +328,19 @@ static FmuStatus start_filter(FmuInstance *instance, ModelData *d, double t0_s)
                       d->align_time_s);
         return FMU_ERROR;
     }
-    if (d->align_time_s > 0.0 && !(fabs(d->lat0_rad) <= ALIGN_MAX_LAT_RAD)) {
+    if (d->align_heading != 0 && d->align_heading != 1) {
+        fmu_log_error(instance, "parameter align_heading = %d must be 0 (gyrocompassing) or 1 "
+                      "(from the GNSS direction of travel)", (int)d->align_heading);
+        return FMU_ERROR;
+    }
+    if (d->align_heading == 1 &&
+        !(isfinite(d->align_min_speed_m_s) && d->align_min_speed_m_s > 0.0 &&
+          isfinite(d->align_travel_std_rad) && d->align_travel_std_rad > 0.0)) {
+        fmu_log_error(instance, "parameters align_min_speed = %g m/s and align_travel_std = %g rad "
+                      "must be finite and > 0", d->align_min_speed_m_s, d->align_travel_std_rad);
+        return FMU_ERROR;
+    }
+    if (d->align_time_s > 0.0 && d->align_heading == 0 && !(fabs(d->lat0_rad) <= ALIGN_MAX_LAT_RAD)) {
         fmu_log_error(instance, "align_time = %g s: an alignment at rest finds the heading from "
                       "the Earth rate, which is nearly vertical beyond 85 deg latitude (lat0 = "
                       "%g rad); give q0 and set align_time = 0", d->align_time_s, d->lat0_rad);
@@ -303,12 +348,31 @@ static FmuStatus start_filter(FmuInstance *instance, ModelData *d, double t0_s)
     }
     const FmuStatus st = start_filter_with(instance, d, t0_s, d->q0, d->v0_m_s);
     d->aligning = d->align_time_s > 0.0;
+    d->align_travel = 0;
     d->align_n = d->align_have_t = 0;
     d->align_t0_s = d->align_t_prev_s = t0_s;
     memset(d->align_f_sum, 0, sizeof d->align_f_sum);
     memset(d->align_w_sum, 0, sizeof d->align_w_sum);
     d->align_fn_sum = d->align_fn2_sum = d->align_wn_sum = 0.0;
     return st;
+}
+
+/* After a start at t_s inside a run: with rates this doStep's sample starts the filter's
+ * record; with increments the next one covers (t, t_next]. */
+static FmuStatus begin_record(FmuInstance *instance, ModelData *d, double t_s)
+{
+    if (d->cfg.input != GF_SINS_INPUT_INCREMENTS) {
+        const gf_status st = gf_ins_step(&d->filter, t_s, d->gyro_rad_s, d->accel_m_s2, 0, NULL,
+                                         NULL, NULL);
+        if (st != GF_OK) {
+            fmu_log_error(instance, "t = %.9g s: the first sample after the alignment was refused (%s)",
+                          t_s, gf_status_string(st));
+            return FMU_ERROR;
+        }
+    }
+    d->started = 1;
+    publish(d);
+    return FMU_OK;
 }
 
 /* One doStep of the alignment phase: the sample (increments over (t_prev, t], or rates
@@ -363,26 +427,149 @@ static FmuStatus align_step(FmuInstance *instance, ModelData *d, double t_s, siz
     double f_mean[3], w_mean[3], q[4];
     gf_v3_scale(d->align_f_sum, 1.0 / n, f_mean);
     gf_v3_scale(d->align_w_sum, 1.0 / n, w_mean);
+    const double zero[3] = {0.0, 0.0, 0.0};
+    if (d->align_heading == 1) {
+        /* levelling only; the heading comes from the travel (travel_step) */
+        if (gf_ins_level_align(f_mean, q) != GF_OK) {
+            fmu_log_error(instance, "t = %.9g s: no levelling from the alignment phase (mean |f| "
+                          "%g m/s2 must be near g, and the body's forward axis y must not be "
+                          "vertical)", t_s, gf_v3_norm(f_mean));
+            return FMU_ERROR;
+        }
+        /* the rate at rest is the gyro bias (the Earth rate, below the bias of gyros that
+         * cannot gyrocompass, is left in), as alignment.align_static_then_gnss does */
+        StartPoint s = start_point(d, q, zero);
+        memcpy(s.sensors, w_mean, sizeof w_mean);
+        if (start_filter_at(instance, d, t_s, &s) != FMU_OK || begin_record(instance, d, t_s) != FMU_OK)
+            return FMU_ERROR;
+        d->align_travel = 1;   /* aligning stays 1 */
+        fmu_log_info(instance, "t = %.9g s: levelled (roll %.3f deg, pitch %.3f deg); heading "
+                     "from the first GNSS velocity above %g m/s", t_s,
+                     d->euler_rad[2] * 180.0 / GF_PI, d->euler_rad[1] * 180.0 / GF_PI,
+                     d->align_min_speed_m_s);
+        publish(d);
+        return FMU_OK;
+    }
     if (gf_ins_coarse_align(f_mean, w_mean, q) != GF_OK) {
         fmu_log_error(instance, "t = %.9g s: no attitude from the alignment phase (mean |f| %g "
                       "m/s2; the rate must not be parallel to the specific force: the gyros must "
                       "see the Earth rate)", t_s, gf_v3_norm(f_mean));
         return FMU_ERROR;
     }
-    const double zero[3] = {0.0, 0.0, 0.0};
     if (start_filter_with(instance, d, t_s, q, zero) != FMU_OK)
         return FMU_ERROR;
     d->aligning = 0;
-    if (!increments) {
-        /* this rate sample starts the filter's record */
-        const gf_status st = gf_ins_step(&d->filter, t_s, gyro, accel, 0, NULL, NULL, NULL);
-        if (st != GF_OK) {
-            fmu_log_error(instance, "t = %.9g s: the first sample after the alignment was refused (%s)",
-                          t_s, gf_status_string(st));
-            return FMU_ERROR;
-        }
+    if (begin_record(instance, d, t_s) != FMU_OK)
+        return FMU_ERROR;
+    publish(d);
+    return FMU_OK;
+}
+
+/* align_heading = 1 after the phase at rest: the filter (levelled, heading 0, no
+ * measurement updates: they are reported stale) mechanizes until a GNSS epoch with a
+ * velocity faster than align_min_speed. At that epoch (valid at t_m, delivered with the
+ * sample at t) the mechanized attitude at t is turned about the vertical so that the
+ * body's forward axis y points along the GNSS velocity (heading atan2(vE, vN)), the
+ * velocity is the GNSS velocity, the position the antenna's less the lever arm (C_b^n
+ * gnss_lever_arm) moved on by v (t - t_m), and the filter restarts there with std0_* and
+ * the heading 1-sigma sqrt(align_travel_std^2 + s^2), s = the direction 1-sigma of the
+ * GNSS velocity, sqrt(vN^2 sE^2 + vE^2 sN^2) / (vE^2 + vN^2). The epoch is used up by the
+ * start (not applied as an update). A failure there restores d (one copy per run). */
+static void log_step_error(FmuInstance *instance, const ModelData *d, gf_status st, double t_s,
+                           const double *gyro, const double *accel);
+
+/* The filter's step without measurements (NHC / ZUPT, if configured, are heading-free). */
+static FmuStatus mechanize(FmuInstance *instance, ModelData *d, double t_s)
+{
+    const int increments = d->cfg.input == GF_SINS_INPUT_INCREMENTS;
+    const double *gyro = increments ? d->dtheta_rad : d->gyro_rad_s;
+    const double *accel = increments ? d->dv_m_s : d->accel_m_s2;
+    gf_ins_innovation entries[LOG_MAX];
+    gf_ins_log log = {LOG_MAX, 0, 0, entries};
+    const gf_status st = gf_ins_step(&d->filter, t_s, gyro, accel, 0, NULL, NULL, &log);
+    if (st != GF_OK) {
+        log_step_error(instance, d, st, t_s, gyro, accel);
+        return FMU_ERROR;
     }
-    d->started = 1;   /* increments: the next one covers (t, t_next] */
+    for (size_t i = 0; i < log.count; ++i)
+        record_update(d, entries[i].type, entries[i].status, entries[i].nis, entries[i].t_s);
+    return FMU_OK;
+}
+
+static FmuStatus travel_end(FmuInstance *instance, ModelData *d, double t_s,
+                            const gf_ins_meas *pos, const gf_ins_meas *vel);
+
+static FmuStatus travel_step(FmuInstance *instance, ModelData *d, double t_s, size_t n_meas,
+                             const gf_ins_meas *meas)
+{
+    const gf_ins_meas *pos = NULL, *vel = NULL;
+    for (size_t j = 0; j < n_meas; ++j) {
+        if (meas[j].type == GF_INS_MEAS_GNSS_POS)
+            pos = &meas[j];
+        else if (meas[j].type == GF_INS_MEAS_GNSS_VEL)
+            vel = &meas[j];
+    }
+    if (pos && vel && hypot(vel->z[0], vel->z[1]) > d->align_min_speed_m_s)
+        return travel_end(instance, d, t_s, pos, vel);
+    if (mechanize(instance, d, t_s) != FMU_OK)
+        return FMU_ERROR;
+    for (size_t j = 0; j < n_meas; ++j)
+        record_update(d, meas[j].type, GF_INS_REJECTED_STALE, NAN, meas[j].t_s);
+    d->n_unused += n_meas;
+    publish(d);
+    return FMU_OK;
+}
+
+static FmuStatus travel_end(FmuInstance *instance, ModelData *d, double t_s,
+                            const gf_ins_meas *pos, const gf_ins_meas *vel)
+{
+    if (!(fabs(pos->z[0]) < GF_HALF_PI * (89.0 / 90.0))) {
+        fmu_log_error(instance, "t = %.9g s: the GNSS epoch that would give the heading is at "
+                      "latitude %g rad: the filter needs |lat| below 89 deg", t_s, pos->z[0]);
+        return FMU_ERROR;
+    }
+    const ModelData saved = *d;
+    if (mechanize(instance, d, t_s) != FMU_OK) {
+        *d = saved;
+        return FMU_ERROR;
+    }
+    const gf_ins_filter *f = &d->filter;
+    StartPoint s;
+    double euler[3], lever_n[3];
+    memcpy(s.q_bn, f->nav.q_bn, sizeof s.q_bn);
+    gf_quat_to_euler(s.q_bn, euler);
+    const double ve = vel->z[0], vn = vel->z[1], sp2 = ve * ve + vn * vn;
+    const double psi_rad = atan2(ve, vn);
+    gf_ins_rotate_heading(s.q_bn, NULL, psi_rad - euler[0]);
+    const double s_dir = sqrt(vn * vn * vel->std[0] * vel->std[0] +
+                              ve * ve * vel->std[1] * vel->std[1]) / sp2;
+    s.heading_std_rad = hypot(d->align_travel_std_rad, s_dir);
+    memcpy(s.v_n_m_s, vel->z, sizeof s.v_n_m_s);
+    memcpy(s.sensors, f->sensors, sizeof s.sensors);
+    gf_q_rotate(s.q_bn, d->cfg.gnss_lever_m, lever_n);
+    const double dt = t_s - pos->t_s;
+    double dp[3];   /* IMU position - antenna position at t_m, then moved on to t (m, ENU) */
+    for (int i = 0; i < 3; ++i)
+        dp[i] = s.v_n_m_s[i] * dt - lever_n[i];
+    gf_earth e;
+    if (gf_earth_update(&e, pos->z[0], pos->z[2], NULL, 1.0) != GF_OK) {
+        *d = saved;
+        fmu_log_error(instance, "t = %.9g s: GNSS height %g m is absurd", t_s, pos->z[2]);
+        return FMU_ERROR;
+    }
+    s.lat_rad = pos->z[0] + dp[1] / (e.R_M_m + pos->z[2]);
+    s.lon_rad = pos->z[1] + dp[0] / ((e.R_N_m + pos->z[2]) * e.cos_lat);
+    s.h_m = pos->z[2] + dp[2];
+    if (start_filter_at(instance, d, t_s, &s) != FMU_OK || begin_record(instance, d, t_s) != FMU_OK) {
+        *d = saved;
+        return FMU_ERROR;
+    }
+    d->aligning = 0;
+    d->align_travel = 0;
+    fmu_log_info(instance, "t = %.9g s: heading from the GNSS direction of travel at %.9g s "
+                 "(%.3g m/s): %.2f deg, 1-sigma %.2f deg (turned by %.2f deg); alignment done",
+                 t_s, pos->t_s, sqrt(sp2), d->euler_rad[0] * 180.0 / GF_PI,
+                 s.heading_std_rad * 180.0 / GF_PI, (psi_rad - euler[0]) * 180.0 / GF_PI);
     publish(d);
     return FMU_OK;
 }
@@ -546,7 +733,8 @@ FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double 
     if (!gather(instance, d, t_s, meas, &n_meas))
         return FMU_ERROR;
     if (d->aligning)
-        return align_step(instance, d, t_s, n_meas, meas);
+        return d->align_travel ? travel_step(instance, d, t_s, n_meas, meas)
+                               : align_step(instance, d, t_s, n_meas, meas);
     gf_ins_filter *f = &d->filter;
     const int increments = f->cfg.input == GF_SINS_INPUT_INCREMENTS;
     if (increments && !d->started) {
@@ -589,8 +777,12 @@ const char *ins_gnss_state_problem(const ModelData *d)
         return "skip_steps / skipped out of range";
     if (d->started != 0 && d->started != 1)
         return "started is not 0 or 1";
-    if ((d->aligning & ~1) || (d->align_have_t & ~1) || d->align_n < 0)
+    if ((d->aligning & ~1) || (d->align_have_t & ~1) || d->align_n < 0 || (d->align_travel & ~1))
         return "alignment phase flags or count out of range";
+    if (d->align_heading != 0 && d->align_heading != 1)
+        return "align_heading is not 0 or 1";
+    if (d->align_travel && !(d->aligning && d->align_heading == 1 && d->started == 1))
+        return "align_travel is set outside the alignment from the travel";
     if (f->n_states == 0 && f->kf.n == 0 && f->ukf_w.n == 0)
         return NULL; /* not started yet (before exitInitializationMode) */
     int32_t n = 0;

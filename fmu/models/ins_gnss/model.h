@@ -20,6 +20,8 @@ typedef struct ModelData {
     double std0_gyro_scale[3], std0_accel_scale[3], std0_baro_bias_m, std0_odo_scale;
     int32_t skip_steps;
     double align_time_s;                 /* > 0: an alignment phase at rest first (s) */
+    int32_t align_heading;               /* 0: gyrocompassing; 1: heading from GNSS travel */
+    double align_min_speed_m_s, align_travel_std_rad;
     /* inputs */
     double dtheta_rad[3], dv_m_s[3], gyro_rad_s[3], accel_m_s2[3];
     int32_t gnss_valid, gnss_vel_valid;
@@ -44,6 +46,9 @@ typedef struct ModelData {
     int32_t align_n, align_have_t;
     double align_t0_s, align_t_prev_s, align_f_sum[3], align_w_sum[3];
     double align_fn_sum, align_fn2_sum, align_wn_sum;
+    /* align_heading = 1: 1 after the phase at rest (levelled, heading 0) until a GNSS
+     * epoch faster than align_min_speed gives the heading; the filter mechanizes meanwhile */
+    int32_t align_travel;
     gf_ins_filter filter;
 } ModelData;
 

@@ -237,7 +237,10 @@ def _outputs():
              "1: the standstill detector says the IMU is still (zupt = 1)", "Int32"),
         _out("aligning", None, (), "aligning",
              "1 during the alignment phase (align_time > 0): the navigation outputs are the "
-             "initial state's until it ends", "Int32"),
+             "initial state's while at rest; with align_heading = 1 then those of the "
+             "mechanization with the heading unknown (heading relative to that at the end of "
+             "the phase at rest) until a GNSS epoch faster than align_min_speed ends it — "
+             "without one it stays 1", "Int32"),
     ]
 
 
@@ -265,7 +268,25 @@ MODEL = dict(
            "Earth rate, gf_ins_coarse_align; q0 and v0 are not used, the velocity is 0) and "
            "the filter starts from it at the end of the phase with std0_*; motion during the "
            "phase (std of |f| above 0.2 m/s2 or mean |w| above 0.05 rad/s) and |lat0| above "
-           "85 deg are errors. 0: start from q0, v0"),
+           "85 deg are errors (align_heading = 0). 0: start from q0, v0"),
+        _p("align_heading", None, 0, "align_heading", "How the alignment phase (align_time > "
+           "0) finds the heading. 0: gyrocompassing at rest (the gyros must see the Earth "
+           "rate: navigation or tactical grade). 1: from the direction of travel, for gyros "
+           "that cannot gyrocompass: the phase at rest only levels (roll and pitch from the "
+           "mean specific force; the mean rate at rest becomes the gyro-bias estimate), then "
+           "the IMU is mechanized with heading 0 from the position lat0, lon0, h0 (aligning "
+           "stays 1, measurements are not used) until the first GNSS epoch with velocity "
+           "(gnss_vel_valid = 1) whose horizontal speed exceeds align_min_speed: the attitude "
+           "is turned about the vertical so that the body's forward axis y points along that "
+           "velocity, the velocity and position are set to the epoch's (position less the "
+           "lever arm) and the filter starts there with std0_* (heading std: align_travel_std "
+           "combined with the direction std of the GNSS velocity); that epoch is used up by "
+           "the start (no update with it)", "Int32"),
+        _p("align_min_speed", "m/s", 1.0, "align_min_speed_m_s", "align_heading = 1: the "
+           "horizontal GNSS speed above which its direction gives the heading, > 0"),
+        _p("align_travel_std", "rad", 10.0 * DEG, "align_travel_std_rad", "align_heading = 1: "
+           "1-sigma angle between the body's forward axis y and the direction of travel "
+           "(mounting misalignment, side slip), > 0"),
         *_COMMON["imu_inputs"](),
         *_measurement_inputs(),
         *_outputs(),

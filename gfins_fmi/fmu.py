@@ -550,7 +550,10 @@ def _monitor_innovations(counts, counts_before, update_time, update_status, nis)
     counts = np.asarray(counts)
     if len(counts) == 0:
         return np.zeros(0, _INNOV_DTYPE)
-    grew = counts != np.vstack([np.asarray(counts_before)[None, :], counts[:-1]])
+    # a count that changed is an update, unless the kind says "none yet" (status -1):
+    # the monitoring restarts at the end of an alignment phase, and its counts drop to 0
+    changed = counts != np.vstack([np.asarray(counts_before)[None, :], counts[:-1]])
+    grew = changed & (np.asarray(update_status) != -1)
     r, k = np.nonzero(grew)
     t = np.asarray(update_time)[r, k]
     order = np.lexsort((k, t, r))

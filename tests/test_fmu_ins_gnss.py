@@ -546,6 +546,9 @@ def test_alignment_from_gnss_travel(travel, version):
     assert rms < 1.5 * rms_ref and e_p.max() < 1.5, (rms, rms_ref, e_p.max(), e_r.max())
     # while aligning the outputs are the mechanization's: at rest the start position
     assert sol.lat_rad[0] == g.lat_rad[0]
+    # the innovation log rebuilt from the monitoring outputs has no entry for the counts'
+    # restart at the end of the alignment (status -1, "none yet"; it had one per kind)
+    assert len(sol.innovations) and not np.any(sol.innovations["status"] == -1)
 
 
 @pytest.mark.parametrize("version", [2, 3])

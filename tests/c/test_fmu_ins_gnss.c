@@ -419,6 +419,38 @@ static void test_refusals(void)
     fmi2FreeInstance(c);
 }
 
+/* A refused step of the alignment phase at rest changes no model data: a NaN IMU sample
+ * with a GNSS epoch delivered beside it (the epoch used to be recorded as stale first). */
+static void test_alignment_refusal(void)
+{
+    fmi2Component c = open_ready(GF_INS_EKF, 0);
+    set_real(c, "align_time", 1.0);
+    CHECK(fmi2ExitInitializationMode(c) == fmi2OK, "alignment phase of 1 s accepted");
+    for (int k = 0; k < 20; ++k) {
+        set_vec(c, "dtheta", g_truth[k].dtheta_rad, 3);
+        set_vec(c, "dv", g_truth[k].dv_m_s, 3);
+        CHECK(fmi2DoStep(c, k * H_S, H_S, fmi2True) == fmi2OK, "aligning step %d", k);
+    }
+    static ModelData before;
+    const ModelData *live = &((FmuInstance *)c)->s.data;
+    const double nan3[3] = {NAN, NAN, NAN}, std3[3] = {1.0, 1.0, 2.0};
+    set_vec(c, "dtheta", nan3, 3);
+    set_int(c, "gnss_valid", 1);
+    set_real(c, "gnss_time_s", 20 * H_S);
+    set_real(c, "gnss_lat_rad", g_truth[20].lat_rad);
+    set_real(c, "gnss_lon_rad", g_truth[20].lon_rad);
+    set_real(c, "gnss_h_m", g_truth[20].h_m);
+    set_vec(c, "gnss_vel_enu_m_s", g_truth[20].v_n_m_s, 3);
+    set_vec(c, "gnss_pos_std_m", std3, 3);
+    set_vec(c, "gnss_vel_std_m_s", std3, 3);
+    memcpy(&before, live, sizeof before);
+    g_log[0] = '\0';
+    CHECK(fmi2DoStep(c, 20 * H_S, H_S, fmi2True) == fmi2Error, "NaN IMU sample while aligning accepted");
+    CHECK(strstr(g_log, "NaN or Inf (alignment phase)") != NULL, "log: %s", g_log);
+    CHECK(memcmp(&before, live, sizeof before) == 0, "the refused step changed no model data");
+    fmi2FreeInstance(c);
+}
+
 /* ---- damaged and crafted states (fmu2_test.h) ------------------------------------------ */
 
 static fmi2Status ins_step(fmi2Component c, double t_s)
@@ -475,5 +507,6 @@ int main(void)
     test_equals_core(GF_INS_EKF, 2);
     test_states();
     test_refusals();
+    test_alignment_refusal();
     TEST_MAIN_END();
 }

@@ -382,21 +382,22 @@ static FmuStatus align_step(FmuInstance *instance, ModelData *d, double t_s, siz
                             const gf_ins_meas *meas)
 {
     const int increments = d->cfg.input == GF_SINS_INPUT_INCREMENTS;
-    for (size_t j = 0; j < n_meas; ++j)   /* not used while aligning: reported as stale */
-        record_update(d, meas[j].type, GF_INS_REJECTED_STALE, NAN, meas[j].t_s);
-    d->n_unused += n_meas;
     const double *gyro = increments ? d->dtheta_rad : d->gyro_rad_s;
     const double *accel = increments ? d->dv_m_s : d->accel_m_s2;
+    /* the sample's checks first: a refused step changes no model data */
     if (!gf_all_finite(gyro, 3) || !gf_all_finite(accel, 3)) {
         fmu_log_error(instance, "t = %.9g s: IMU input holds NaN or Inf (alignment phase)", t_s);
         return FMU_ERROR;
     }
+    if (increments && d->align_have_t && !(t_s - d->align_t_prev_s > 0.0)) {
+        fmu_log_error(instance, "t = %.9g s: the time did not advance (alignment phase)", t_s);
+        return FMU_ERROR;
+    }
+    for (size_t j = 0; j < n_meas; ++j)   /* not used while aligning: reported as stale */
+        record_update(d, meas[j].type, GF_INS_REJECTED_STALE, NAN, meas[j].t_s);
+    d->n_unused += n_meas;
     if (!increments || d->align_have_t) {
         const double dt = t_s - d->align_t_prev_s;
-        if (increments && !(dt > 0.0)) {
-            fmu_log_error(instance, "t = %.9g s: the time did not advance (alignment phase)", t_s);
-            return FMU_ERROR;
-        }
         const double k = increments ? 1.0 / dt : 1.0;
         double f[3], w[3];
         gf_v3_scale(accel, k, f);

@@ -1445,6 +1445,15 @@ static void meas_directed(const gf_ins_filter *f, const gf_ins_meas *in, gf_ins_
  * measurements are meas[0], meas[stride], ... (stride -1: a backward walk over a record
  * stored in increasing time). Times are compared in the filter's direction: with
  * dir = -1 (reversed) time decreases, and every difference below is dir * (a - b). */
+/* A sample within the absurd-sample limits: |gyro| <= max_rate k, |accel| <= max_f k
+ * (k = 1 for rates, the interval for increments; NaN fails) */
+static inline int within_limits(const gf_ins_config *c, const double g[3], const double a[3],
+                                double k)
+{
+    const double wm = c->max_rate_rad_s * k, fm = c->max_specific_force_m_s2 * k;
+    return gf_v3_dot(g, g) <= wm * wm && gf_v3_dot(a, a) <= fm * fm;
+}
+
 /* After a sample (or a group of them) that ends at the filter's time: on the regular
  * grid, the covariance propagation and the internal updates (NHC, ZUPT, ZARU) that are due.
  * Measurement instants propagate too, but do not move the grid. */
@@ -1500,12 +1509,8 @@ static gf_status ins_step(gf_ins_filter *f, double t_s, const double *gyro_in, c
                    epochs->capacity - epochs->count < n_meas + 2))
         return GF_ERR_BAD_SIZE;
     /* the absurd-sample limits, checked here so that an error leaves the filter unchanged */
-    {
-        const double k = rates ? 1.0 : T;
-        const double wm = f->cfg.max_rate_rad_s * k, fm = f->cfg.max_specific_force_m_s2 * k;
-        if (!(gf_v3_dot(gyro, gyro) <= wm * wm) || !(gf_v3_dot(accel, accel) <= fm * fm))
-            return GF_ERR_OUT_OF_RANGE;
-    }
+    if (!within_limits(&f->cfg, gyro, accel, rates ? 1.0 : T))
+        return GF_ERR_OUT_OF_RANGE;
 
     gf_status st = GF_OK;
     if (first_rate) {
@@ -1630,8 +1635,7 @@ static gf_status group_step(gf_ins_filter *f, int m, const double *t_s, const do
         if (!(fabs(dt[i] - mean) <= 0.01 * mean && dt[i] <= c->max_imu_gap_s) ||
             !gf_all_finite(gi, 3) || !gf_all_finite(ai, 3))
             return GF_OK;
-        const double wm = c->max_rate_rad_s * dt[i], fm = c->max_specific_force_m_s2 * dt[i];
-        if (!(gf_v3_dot(gi, gi) <= wm * wm) || !(gf_v3_dot(ai, ai) <= fm * fm))
+        if (!within_limits(c, gi, ai, dt[i]))
             return GF_OK;
         compensate(f, gi, ai, dt[i], g + 3 * i, a + 3 * i);
     }

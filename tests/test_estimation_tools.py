@@ -234,7 +234,7 @@ def test_cli_integrate(tmp_path):
                "--outages", "15,20,25"])
     assert rc == 0
     sol = np.loadtxt(out, delimiter=",", skiprows=1)
-    assert sol.shape[1] == 33 and np.all(np.isfinite(sol))
+    assert sol.shape[1] == 35 and np.all(np.isfinite(sol))
     assert (tmp_path / "walk.innovations.csv").is_file() and (tmp_path / "walk.smoothed.csv").is_file()
     with pytest.raises(SystemExit) as ei:            # refused at parse time, in the CLI's terms
         main(["integrate", str(d / "imu_1730_sf.csv"), str(d / "gnss_1730_sf.pos"), str(out),
@@ -249,6 +249,16 @@ def test_cli_integrate(tmp_path):
                  "--subsamples", "2"]) == 0
     sol2 = np.loadtxt(out2, delimiter=",", skiprows=1)
     assert 0.5 * len(sol) < len(sol2) < 0.9 * len(sol) and np.all(np.isfinite(sol2))
+    # --odometer-mount reaches the filter (two more states); with neither odometer nor NHC
+    # nothing observes them: the boresight columns (the last two) stay exactly 0
+    out3 = tmp_path / "walk3.csv"
+    assert main(["integrate", str(d / "imu_1730_sf.csv"), str(d / "gnss_1730_sf.pos"), str(out3),
+                 "--imu-format", "rtk_walk", "--grade", "consumer", "--static", "9",
+                 "--subsamples", "2", "--odometer-mount"]) == 0
+    with open(out3) as fh:
+        assert fh.readline().strip().split(",")[-2:] == ["odo_pitch_rad", "odo_heading_rad"]
+    sol3 = np.loadtxt(out3, delimiter=",", skiprows=1)
+    assert sol3.shape == sol2.shape and np.all(sol3[:, -2:] == 0.0)
     with pytest.raises(SystemExit) as ei:
         main(["integrate", str(d / "imu_1730_sf.csv"), str(d / "gnss_1730_sf.pos"), str(out2),
               "--imu-format", "rtk_walk", "--subsamples", "5"])

@@ -58,7 +58,7 @@ static gf_status start(gf_ins_filter *f, const gf_ins_config *c, const double v[
     double P[GF_INS_MAX_STATES * GF_INS_MAX_STATES];
     double d[GF_INS_MAX_STATES];
     for (int i = 0; i < n; ++i)
-        d[i] = kStd[i < 15 ? i : 16];       /* the odometer scale state last */
+        d[i] = kStd[i < 15 ? i : 16];       /* the odometer scale (and boresight) states last */
     diag_P(n, d, P);
     const double e[3] = {30 * DEG, 1 * DEG, -2 * DEG};
     double q[4];
@@ -388,6 +388,7 @@ static void test_reverse_signs(void)
     gf_ins_config c = base_config();
     c.scale_states = 1;
     c.odo_state = 1;
+    c.odo_mount_state = 1;         /* 25 states: the boresight angles keep their sign */
     gf_ins_filter f;
     const double v[3] = {5.0, -3.0, 0.2};
     CHECK(start(&f, &c, v, 0.0) == GF_OK, "init");

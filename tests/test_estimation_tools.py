@@ -333,8 +333,8 @@ def test_imu_mount_in_the_simulation(drive):
     p, h = np.radians(1.0), np.radians(-1.5)
     d0 = simulate_drive(prof, T, 0.01, imu=TACTICAL, seed=1, truth=truth)
     d = simulate_drive(prof, T, 0.01, imu=TACTICAL, seed=1, truth=truth, imu_mount_rad=(p, h))
-    C = np.array([tj.quat_to_dcm(q) for q in d.truth.q_bn])          # C_b^n of the IMU
-    C0 = np.array([tj.quat_to_dcm(q) for q in d0.truth.q_bn])
+    C = tj.quat_to_dcm(d.truth.q_bn)                                  # C_b^n of the IMU
+    C0 = tj.quat_to_dcm(d0.truth.q_bn)
     vb = np.einsum("kji,kj->ki", C, d.truth.v_n_m_s)
     moving = np.linalg.norm(vb, axis=1) > 1.0
     axis = np.array([np.sin(h) * np.cos(p), np.cos(h) * np.cos(p), np.sin(p)])

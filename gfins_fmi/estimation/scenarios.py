@@ -92,7 +92,7 @@ def mount_imu(truth: VehicleRecord, imu_mount_rad=(0.0, 0.0)) -> VehicleRecord:
     q_mb = euler_to_quat(m[1], m[0], 0.0)           # C_m^b
     C_mb = quat_to_dcm(q_mb)
     q_bm = q_mb * np.array([1.0, -1.0, -1.0, -1.0])   # conjugate: C_b^m
-    q = np.array([_qmul(qk, q_bm) for qk in truth.q_bn])
+    q = _qmul(np.asarray(truth.q_bn, dtype=float), q_bm)
     rot = lambda a: None if a is None else np.asarray(a) @ C_mb.T
     return dataclasses.replace(truth, q_bn=q, gyro_rad_s=rot(truth.gyro_rad_s),
                                accel_m_s2=rot(truth.accel_m_s2), dtheta_rad=rot(truth.dtheta_rad),

@@ -22,6 +22,7 @@
 #define S_SA 9
 #define S_BARO 12
 #define S_ODO 13
+#define S_MOUNT 14   /* pitch, heading */
 /* two times closer than this are the same instant (s) */
 #define GF_INS_TIME_EPS_S 1e-9
 /* propagation intervals up to this use Phi = I + F T (see gf_ins_gnss.h) */
@@ -79,7 +80,7 @@ static int config_check(const gf_ins_config *c)
         return 2;
     if (c->filter != GF_INS_EKF && c->filter != GF_INS_UKF)
         return 3;
-    if ((c->scale_states | c->baro_state | c->odo_state) & ~1)
+    if ((c->scale_states | c->baro_state | c->odo_state | c->odo_mount_state) & ~1)
         return 4;
     if (!nonneg_finite(c->prop_interval_s))
         return 5;
@@ -94,7 +95,7 @@ static int config_check(const gf_ins_config *c)
                             q->accel_bias_std_m_s2, q->accel_bias_tau_s, q->gyro_scale_std,
                             q->gyro_scale_tau_s, q->accel_scale_std, q->accel_scale_tau_s,
                             q->baro_bias_std_m, q->baro_bias_tau_s, q->odo_scale_std,
-                            q->odo_scale_tau_s};
+                            q->odo_scale_tau_s, q->odo_mount_std_rad, q->odo_mount_tau_s};
     for (size_t i = 0; i < sizeof noise / sizeof noise[0]; ++i)
         if (!nonneg_finite(noise[i]))
             return 10 + (int)i;
@@ -129,7 +130,8 @@ gf_status gf_ins_state_count(const gf_ins_config *cfg, int32_t *n_states)
         return GF_ERR_NULL_POINTER;
     if (config_check(cfg))
         return GF_ERR_BAD_PARAMETER;
-    *n_states = GF_INS_BASE_STATES + 6 * cfg->scale_states + cfg->baro_state + cfg->odo_state;
+    *n_states = GF_INS_BASE_STATES + 6 * cfg->scale_states + cfg->baro_state + cfg->odo_state +
+                2 * cfg->odo_mount_state;
     return GF_OK;
 }
 
@@ -148,7 +150,7 @@ typedef struct sensor_block {
     int idx, sens, len;
 } sensor_block;
 
-static int sensor_blocks(const gf_ins_filter *f, sensor_block b[6])
+static int sensor_blocks(const gf_ins_filter *f, sensor_block b[7])
 {
     int nb = 0;
     b[nb++] = (sensor_block){IBG, S_BG, 3};
@@ -161,6 +163,8 @@ static int sensor_blocks(const gf_ins_filter *f, sensor_block b[6])
         b[nb++] = (sensor_block){f->idx_baro, S_BARO, 1};
     if (f->idx_odo >= 0)
         b[nb++] = (sensor_block){f->idx_odo, S_ODO, 1};
+    if (f->idx_mount >= 0)
+        b[nb++] = (sensor_block){f->idx_mount, S_MOUNT, 2};
     return nb;
 }
 
@@ -182,7 +186,7 @@ static void hyp_from_error(const gf_ins_filter *f, const double q_nom[4], const 
     out->lon = lon - dx[IP + 1];
     out->h = h - dx[IP + 2];
     memcpy(out->s, sens, sizeof out->s);
-    sensor_block b[6];
+    sensor_block b[7];
     const int nb = sensor_blocks(f, b);
     for (int k = 0; k < nb; ++k)
         for (int i = 0; i < b[k].len; ++i)
@@ -225,7 +229,7 @@ static void error_from_hyp(const gf_ins_filter *f, const gf_sins_state *nom, con
     gf_q_conj(nom->q_bn, qc);
     gf_q_mul(hy->q, qc, qd);                 /* q(phi) = q_true (x) q_nom^* */
     gf_q_to_rotvec(qd, dx + IA);
-    sensor_block b[6];
+    sensor_block b[7];
     const int nb = sensor_blocks(f, b);
     for (int k = 0; k < nb; ++k)
         for (int i = 0; i < b[k].len; ++i)
@@ -276,6 +280,12 @@ gf_status gf_ins_init(gf_ins_filter *f, const gf_ins_config *cfg, double t0_s,
     }
     if (!isfinite(t0_s) || (sensors0 && !gf_all_finite(sensors0, GF_INS_N_SENSORS)))
         return GF_ERR_NONFINITE_INPUT;
+    for (int i = 0; sensors0 && i < 2; ++i)
+        if (!(fabs(cfg->odo_mount_rad[i] + sensors0[S_MOUNT + i]) < GF_HALF_PI)) {
+            if (bad)
+                *bad = 37;   /* the boresight angles used: odo_mount_rad + the correction */
+            return GF_ERR_BAD_PARAMETER;
+        }
     gf_sins_config sc;
     gf_sins_config_default(&sc);
     sc.input = cfg->input;
@@ -309,7 +319,7 @@ gf_status gf_ins_init(gf_ins_filter *f, const gf_ins_config *cfg, double t0_s,
     f->cfg = *cfg;
     f->n_states = n;
     int next = GF_INS_BASE_STATES;
-    f->idx_sg = f->idx_sa = f->idx_baro = f->idx_odo = -1;
+    f->idx_sg = f->idx_sa = f->idx_baro = f->idx_odo = f->idx_mount = -1;
     if (cfg->scale_states) {
         f->idx_sg = next;
         f->idx_sa = next + 3;
@@ -319,6 +329,10 @@ gf_status gf_ins_init(gf_ins_filter *f, const gf_ins_config *cfg, double t0_s,
         f->idx_baro = next++;
     if (cfg->odo_state)
         f->idx_odo = next++;
+    if (cfg->odo_mount_state) {
+        f->idx_mount = next;
+        next += 2;
+    }
     f->nav = nav;
     if (sensors0)
         memcpy(f->sensors, sensors0, sizeof f->sensors);
@@ -375,6 +389,8 @@ static void process_noise(const gf_ins_filter *f, double *q_diag)
         q_diag[f->idx_baro] = gm_intensity(nz->baro_bias_std_m, nz->baro_bias_tau_s);
     if (f->idx_odo >= 0)
         q_diag[f->idx_odo] = gm_intensity(nz->odo_scale_std, nz->odo_scale_tau_s);
+    for (int i = 0; f->idx_mount >= 0 && i < 2; ++i)
+        q_diag[f->idx_mount + i] = gm_intensity(nz->odo_mount_std_rad, nz->odo_mount_tau_s);
 }
 
 _Static_assert(GF_INS_MAX_STATES <= 64, "row masks of F are 64 bits");
@@ -421,6 +437,8 @@ static void error_model(const gf_ins_filter *f, const gf_mat3 *C, const double v
         FF(f->idx_baro, f->idx_baro) = gm_rate(nz->baro_bias_tau_s);
     if (f->idx_odo >= 0 && nz->odo_scale_tau_s > 0.0)
         FF(f->idx_odo, f->idx_odo) = gm_rate(nz->odo_scale_tau_s);
+    for (int i = 0; f->idx_mount >= 0 && nz->odo_mount_tau_s > 0.0 && i < 2; ++i)
+        FF(f->idx_mount + i, f->idx_mount + i) = gm_rate(nz->odo_mount_tau_s);
 #undef FF
     if (q_diag)
         process_noise(f, q_diag);
@@ -590,9 +608,9 @@ static GF_ALWAYS_INLINE void transition_rows(const size_t S, int n, const double
     }
 }
 
-/* the stride is GF_PADDED(n): 16, 20 or 24 for 15 .. 23 states */
-_Static_assert(GF_PADDED(GF_INS_BASE_STATES) == 16 && GF_PADDED(NMAX) == 24,
-               "transition() handles the strides 16, 20 and 24");
+/* the stride is GF_PADDED(n): 16, 20, 24 or 28 for 15 .. 25 states */
+_Static_assert(GF_PADDED(GF_INS_BASE_STATES) == 16 && GF_PADDED(NMAX) == 28,
+               "transition() handles the strides 16, 20, 24 and 28");
 GF_VECTOR_CLONES
 static void transition(size_t s, int n, const double *F, const uint64_t *fmask, double T,
                        int second_order, double *A, uint64_t *amask)
@@ -601,8 +619,10 @@ static void transition(size_t s, int n, const double *F, const uint64_t *fmask, 
         transition_rows(16, n, F, fmask, T, second_order, A, amask);
     else if (s == 20)
         transition_rows(20, n, F, fmask, T, second_order, A, amask);
-    else
+    else if (s == 24)
         transition_rows(24, n, F, fmask, T, second_order, A, amask);
+    else
+        transition_rows(28, n, F, fmask, T, second_order, A, amask);
 }
 
 static gf_status propagate_ekf(gf_ins_filter *f, gf_ins_epochs *ep)
@@ -716,6 +736,8 @@ static gf_status propagate_ukf(gf_ins_filter *f, gf_ins_epochs *ep)
         decay[f->idx_baro] = gm_decay(nz->baro_bias_tau_s, T);
     if (f->idx_odo >= 0)
         decay[f->idx_odo] = gm_decay(nz->odo_scale_tau_s, T);
+    for (int i = 0; f->idx_mount >= 0 && i < 2; ++i)
+        decay[f->idx_mount + i] = gm_decay(nz->odo_mount_tau_s, T);
     for (int p = 0; p < np; ++p) {
         nav_hyp h0, h1;
         hyp_from_state(f, &f->nav0, f->sensors0, X + p * n, &h0);
@@ -855,28 +877,51 @@ static void hyp_rate(const gf_ins_filter *f, const nav_hyp *hy, const double w_c
 }
 
 /* C_b^m of the odometer's mounting: the transpose of C_m^b = Rz(-heading_m) Rx(pitch_m)
- * (the Euler convention of gf_sins.h without roll); identity for zero angles (exactly:
- * cos 0 = 1, sin 0 = 0, so the products below keep their bits) */
-static void odo_mount(const gf_ins_filter *f, double M[3][3])
+ * (the Euler convention of gf_sins.h without roll) at pitch_m = cfg.odo_mount_rad[0] +
+ * s[S_MOUNT], heading_m = cfg.odo_mount_rad[1] + s[S_MOUNT + 1] (s: the hypothesis'
+ * sensor estimates); identity for zero angles (exactly: cos 0 = 1, sin 0 = 0, so the
+ * products below keep their bits). dMp, dMh (may be NULL) receive dM/dpitch_m and
+ * dM/dheading_m, entry by entry (rad^-1). */
+static void odo_mount(const gf_ins_filter *f, const double *s, double M[3][3], double dMp[3][3],
+                      double dMh[3][3])
 {
-    const double sp = sin(f->cfg.odo_mount_rad[0]), cp = cos(f->cfg.odo_mount_rad[0]);
-    const double sh = sin(f->cfg.odo_mount_rad[1]), ch = cos(f->cfg.odo_mount_rad[1]);
+    const double p = f->cfg.odo_mount_rad[0] + s[S_MOUNT];
+    const double hd = f->cfg.odo_mount_rad[1] + s[S_MOUNT + 1];
+    const double sp = sin(p), cp = cos(p), sh = sin(hd), ch = cos(hd);
     /* rows of C_b^m = columns of C_m^b: the odometer's x, y (forward), z axes in body */
     M[0][0] = ch;       M[0][1] = -sh;      M[0][2] = 0.0;
     M[1][0] = sh * cp;  M[1][1] = ch * cp;  M[1][2] = sp;
     M[2][0] = -sh * sp; M[2][1] = -ch * sp; M[2][2] = cp;
+    if (dMp) {
+        dMp[0][0] = 0.0;      dMp[0][1] = 0.0;      dMp[0][2] = 0.0;
+        dMp[1][0] = -sh * sp; dMp[1][1] = -ch * sp; dMp[1][2] = cp;
+        dMp[2][0] = -sh * cp; dMp[2][1] = -ch * cp; dMp[2][2] = -sp;
+    }
+    if (dMh) {
+        dMh[0][0] = -sh;      dMh[0][1] = -ch;      dMh[0][2] = 0.0;
+        dMh[1][0] = ch * cp;  dMh[1][1] = -sh * cp; dMh[1][2] = 0.0;
+        dMh[2][0] = -ch * sp; dMh[2][1] = sh * sp;  dMh[2][2] = 0.0;
+    }
+}
+
+/* velocity of the odometer point in body axes: C^T v + w_eb x l */
+static void odo_body_velocity(const gf_ins_filter *f, const nav_hyp *hy, const double w_comp[3],
+                              double ub[3])
+{
+    double w_ib[3], w_eb[3], vb[3], wl[3];
+    hyp_rate(f, hy, w_comp, w_ib, w_eb);
+    gf_m3t_mul_v3(&hy->C, hy->v, vb);
+    gf_v3_cross(w_eb, f->cfg.odo_lever_m, wl);
+    gf_v3_add(vb, wl, ub);
 }
 
 /* velocity of the odometer point in the odometer's axes: C_b^m (C^T v + w_eb x l) */
 static void odo_point_velocity(const gf_ins_filter *f, const nav_hyp *hy, const double w_comp[3],
                                double out[3])
 {
-    double w_ib[3], w_eb[3], vb[3], wl[3], ub[3], M[3][3];
-    hyp_rate(f, hy, w_comp, w_ib, w_eb);
-    gf_m3t_mul_v3(&hy->C, hy->v, vb);
-    gf_v3_cross(w_eb, f->cfg.odo_lever_m, wl);
-    gf_v3_add(vb, wl, ub);
-    odo_mount(f, M);
+    double ub[3], M[3][3];
+    odo_body_velocity(f, hy, w_comp, ub);
+    odo_mount(f, hy->s, M, NULL, NULL);
     for (int i = 0; i < 3; ++i)
         out[i] = M[i][0] * ub[0] + M[i][1] * ub[1] + M[i][2] * ub[2];
 }
@@ -997,7 +1042,11 @@ static void meas_jacobian(const gf_ins_filter *f, const local_frame *lf, const n
     case GF_INS_MEAS_ODO:
     case GF_INS_MEAS_NHC: {
         /* u = C_b^m (C^T v + w_eb x l): du = C_b^m (C^T dv - C^T [v x] phi - [l x] dw)
-         * (the mounting M = C_b^m is a fixed parameter) */
+         * + (dM/dpitch_m ub) dpitch_m + (dM/dheading_m ub) dheading_m, ub = C^T v + w_eb x l
+         * the odometer point's body velocity and dM/d. the entry-wise derivatives of
+         * M = C_b^m (odo_mount). The states are true - estimated and z_err = predicted -
+         * measured, so the boresight columns are -k1 (dM/d. ub)_a; the other terms as
+         * before (dv, phi, dw are computed - true). */
         double Vx[3][3], Lx[3][3], CtV[3][3], M[3][3], MCt[3][3], MCtV[3][3], MLx[3][3];
         skew_rows(nom->v, Vx);
         skew_rows(f->cfg.odo_lever_m, Lx);
@@ -1008,7 +1057,7 @@ static void meas_jacobian(const gf_ins_filter *f, const local_frame *lf, const n
                     acc += nom->C.m[k][i] * Vx[k][j];
                 CtV[i][j] = acc;
             }
-        odo_mount(f, M);
+        odo_mount(f, nom->s, M, NULL, NULL);
         for (int i = 0; i < 3; ++i)
             for (int j = 0; j < 3; ++j) {
                 MCt[i][j] = M[i][0] * nom->C.m[j][0] + M[i][1] * nom->C.m[j][1] + M[i][2] * nom->C.m[j][2];
@@ -1026,6 +1075,16 @@ static void meas_jacobian(const gf_ins_filter *f, const local_frame *lf, const n
                 HH(r, IBG + j) = -k1 * MLx[a][j];
                 if (f->idx_sg >= 0)
                     HH(r, f->idx_sg + j) = -k1 * MLx[a][j] * w[j];
+            }
+        }
+        if (f->idx_mount >= 0) {
+            double ub[3], Md[3][3], dMp[3][3], dMh[3][3];
+            odo_body_velocity(f, nom, w_comp, ub);
+            odo_mount(f, nom->s, Md, dMp, dMh);
+            for (int r = 0; r < m; ++r) {
+                const int a = rows[r];
+                HH(r, f->idx_mount) = -k1 * gf_v3_dot(dMp[a], ub);
+                HH(r, f->idx_mount + 1) = -k1 * gf_v3_dot(dMh[a], ub);
             }
         }
         if (type == GF_INS_MEAS_ODO && f->idx_odo >= 0) {
@@ -1386,9 +1445,9 @@ static int layout_is_valid(const gf_ins_filter *f)
     const int n = f->n_states;
     if (n < GF_INS_BASE_STATES || n > NMAX || (size_t)n != f->kf.n)
         return 0;
-    const int32_t idx[4] = {f->idx_sg, f->idx_sa, f->idx_baro, f->idx_odo};
-    const int len[4] = {3, 3, 1, 1};
-    for (int i = 0; i < 4; ++i)
+    const int32_t idx[5] = {f->idx_sg, f->idx_sa, f->idx_baro, f->idx_odo, f->idx_mount};
+    const int len[5] = {3, 3, 1, 1, 2};
+    for (int i = 0; i < 5; ++i)
         if (idx[i] != -1 && (idx[i] < GF_INS_BASE_STATES || idx[i] + len[i] > n))
             return 0;
     return f->ukf_w.n == (size_t)n && f->hist_head >= 0 && f->hist_head < GF_INS_HISTORY &&
@@ -1408,8 +1467,9 @@ gf_status gf_ins_filter_check(const gf_ins_filter *f)
     next += f->cfg.scale_states ? 6 : 0;
     const int32_t baro = f->cfg.baro_state ? next++ : -1;
     const int32_t odo = f->cfg.odo_state ? next++ : -1;
+    const int32_t mount = f->cfg.odo_mount_state ? next : -1;
     if (f->idx_sg != sg || f->idx_sa != (sg < 0 ? -1 : sg + 3) || f->idx_baro != baro ||
-        f->idx_odo != odo)
+        f->idx_odo != odo || f->idx_mount != mount)
         return GF_ERR_BAD_SIZE;
     if ((f->have_sample & ~1) || (f->standstill & ~1))
         return GF_ERR_BAD_PARAMETER;

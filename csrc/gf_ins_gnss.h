@@ -12,7 +12,10 @@
  * optional blocks, appended in this order when enabled (indices in gf_ins_filter.idx_*):
  *   dsg (3) gyro scale-factor error, dsa (3) accelerometer scale-factor error
  *           (dimensionless: measured = (1 + s) true + b), 15 + 6 = 21 states (issue 11);
- *   dbb (1) barometer bias b_true - b_estimated, m;  dko (1) odometer scale error.
+ *   dbb (1) barometer bias b_true - b_estimated, m;  dko (1) odometer scale error;
+ *   dmo (2) odometer boresight error (pitch, heading of the odometer axes in the body
+ *           frame, true - estimated, rad; the nominal angles are cfg.odo_mount_rad +
+ *           the sensors[] correction, fed back like the other sensor estimates).
  * Sensor errors are first-order Gauss-Markov processes (seed 004: "first-order Markov
  * drifts"), x' = -x / tau + w, E[w w] = 2 sigma^2 / tau; tau = 0 makes a random constant.
  *
@@ -61,8 +64,10 @@
  *   GNSS velocity: v_ant = v + C_b^n (w_eb^b x l),  w_eb^b = w_ib^b - C_n^b w_ie^n.
  *   barometer: h + b_baro.  odometer: (1 + k) [C_b^m (C_n^b v + w_eb^b x l_odo)]_y
  *   (forward), C_m^b = Rz(-heading_m) Rx(pitch_m) the odometer's mounting (boresight,
- *   odo_mount_rad; identity by default).  non-holonomic: [C_b^m (C_n^b v + w_eb^b x
- *   l_odo)]_x,z = 0.  ZUPT: v = 0.
+ *   odo_mount_rad + the estimated correction; identity by default).  non-holonomic:
+ *   [C_b^m (C_n^b v + w_eb^b x l_odo)]_x,z = 0.  With odo_mount_state the rows of both
+ *   take d/dpitch_m and d/dheading_m of C_b^m (exact derivatives of its entries, see
+ *   meas_jacobian).  ZUPT: v = 0.
  *   ZARU: w_ib^b - C_n^b w_ie^n = 0 (mean over the standstill detector's window).
  *   speed (tachometer, seed 003 section 1.2.2, its eq. 7-8 linearised; the scan lost the
  *   equations, so derived here): y = (1 + k) sqrt(v_E^2 + v_N^2), k the odometer scale
@@ -94,7 +99,8 @@
  * v_r,true = -dv; the gyro increments are negated, so the bias the reverse filter sees
  * is -b (dbg_r = -dbg, its estimate negated too); attitude, position, accelerometer
  * bias (f unchanged), scale factors ((1 + s)(-w) - b keeps s) and barometer/odometer
- * errors are unchanged. Check on F: with x_r = D x, dx_r/dtau = -D F D x_r, and the
+ * errors (scale and boresight angles: the odometer axes do not turn with time) are
+ * unchanged. Check on F: with x_r = D x, dx_r/dtau = -D F D x_r, and the
  * forward formula of F evaluated on the reversed nominal (-v, -w_ie, -w_en, -w_ib, same
  * f, C, position) gives exactly -D F D block by block (e.g. phi-phi: -[w_in x] changes
  * sign, phi-dv: dw_en/dv keeps it, dv-phi: [f^n x] keeps it, dv-dv: -(2 w_ie + w_en) x
@@ -130,12 +136,13 @@ extern "C" {
 #define GF_INS_IDX_BG 9
 #define GF_INS_IDX_BA 12
 #define GF_INS_BASE_STATES 15
-#define GF_INS_MAX_STATES 23
+#define GF_INS_MAX_STATES 25
 
 /* Sensor-error estimates, in this order in every array of them ("sensors"):
  * gyro bias (3, rad/s), accelerometer bias (3, m/s^2), gyro scale (3), accelerometer
- * scale (3), barometer bias (m), odometer scale. */
-#define GF_INS_N_SENSORS 14
+ * scale (3), barometer bias (m), odometer scale, odometer boresight correction (pitch,
+ * heading, rad: added to cfg.odo_mount_rad). */
+#define GF_INS_N_SENSORS 16
 
 /* Measurement types */
 #define GF_INS_MEAS_GNSS_POS 1     /* z: antenna lat rad, lon rad, h m; std: E, N, U m */
@@ -175,6 +182,8 @@ typedef struct gf_ins_noise {
     double baro_bias_tau_s;
     double odo_scale_std;
     double odo_scale_tau_s;
+    double odo_mount_std_rad;       /* odometer boresight (pitch and heading) */
+    double odo_mount_tau_s;
 } gf_ins_noise;
 
 typedef struct gf_ins_config {
@@ -184,6 +193,7 @@ typedef struct gf_ins_config {
     int32_t scale_states;           /* 1: gyro and accelerometer scale factors (21 states) */
     int32_t baro_state;             /* 1: barometer bias state */
     int32_t odo_state;              /* 1: odometer scale-factor state */
+    int32_t odo_mount_state;        /* 1: odometer boresight states (pitch, heading) */
     double prop_interval_s;         /* covariance propagation interval, s; 0: every sample */
     double max_imu_gap_s;           /* a longer IMU interval is an error (GF_ERR_BAD_TIME) */
     double max_rate_rad_s;          /* absurd-sample limits of the mechanization */
@@ -210,9 +220,11 @@ typedef struct gf_ins_config {
                                        older ones, and all past ones with 0, are stale */
     double speed_min_m_s;           /* GF_INS_MEAS_SPEED refused at or below this INS
                                        horizontal speed, m/s (>= 0; default 0.5) */
-    double odo_mount_rad[2];        /* odometer boresight, fixed: pitch (nose-up +) and
-                                       heading (clockwise +) of its measuring axes in the
-                                       body frame, rad, |.| < pi/2; 0, 0: body axes */
+    double odo_mount_rad[2];        /* odometer boresight: pitch (nose-up +) and heading
+                                       (clockwise +) of its measuring axes in the body
+                                       frame, rad, |.| < pi/2; 0, 0: body axes. The angles
+                                       used are these + the sensors[] boresight correction
+                                       (estimated with odo_mount_state) */
     int32_t subsamples;             /* 1..4 IMU samples per navigation update in gf_ins_run
                                        (increments only; see gf_ins_run); 0 or 1: one */
 } gf_ins_config;
@@ -282,6 +294,7 @@ typedef struct gf_ins_filter {
     gf_ins_config cfg;
     int32_t n_states;
     int32_t idx_sg, idx_sa, idx_baro, idx_odo;   /* first index of each optional block; -1 absent */
+    int32_t idx_mount;              /* odometer boresight block (2); -1 absent */
     gf_sins_state nav;              /* nominal navigation state (the corrected mechanization) */
     double sensors[GF_INS_N_SENSORS];/* estimated sensor errors, fed back */
     gf_kalman kf;                   /* error state (0 between updates) and covariance */
@@ -312,7 +325,7 @@ typedef struct gf_ins_filter {
  * limit 0.5 s, UKF alpha 1e-3... see gf_ins_gnss.c; noise all zero (set it). */
 gf_status gf_ins_config_default(gf_ins_config *cfg);
 
-/* Number of states of a configuration (15 .. 23). Errors: GF_ERR_BAD_PARAMETER. */
+/* Number of states of a configuration (15 .. 25). Errors: GF_ERR_BAD_PARAMETER. */
 gf_status gf_ins_state_count(const gf_ins_config *cfg, int32_t *n_states);
 
 /* Starts the filter at t0_s with the nominal attitude q_bn, ENU velocity, position, the

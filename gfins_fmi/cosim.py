@@ -1093,7 +1093,7 @@ def integrated_recording(system: System, result, kind: str = "master") -> dict:
                                nav("update_status", 7)[rows].astype(np.int64), nav("nis", 7)[rows])
     out["solution"] = IntegratedSolution(
         T[rows], nav("q", 4)[rows], nav("v", 3)[rows], nav("lat")[rows], nav("lon")[rows],
-        nav("h")[rows], nav("std", 9)[rows], nav("sensors", 14)[rows],
+        nav("h")[rows], nav("std", 9)[rows], nav("sensors", 16)[rows],
         nav("standstill")[rows].astype(bool), inn, system.sources.get("config"))
     return out
 

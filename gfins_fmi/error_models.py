@@ -41,8 +41,8 @@ accelerometer bias (m/s^2) not yet compensated; optional blocks follow (see
 
 
 def ins_state_names(scale_states: bool = False, baro_state: bool = False,
-                    odo_state: bool = False) -> tuple:
-    """State names of a filter configuration (15 to 23 states, gf_ins_gnss.h order)."""
+                    odo_state: bool = False, odo_mount_state: bool = False) -> tuple:
+    """State names of a filter configuration (15 to 25 states, gf_ins_gnss.h order)."""
     names = list(INS_STATES)
     if scale_states:
         names += ["sg_x", "sg_y", "sg_z", "sa_x", "sa_y", "sa_z"]
@@ -50,12 +50,14 @@ def ins_state_names(scale_states: bool = False, baro_state: bool = False,
         names += ["b_baro"]
     if odo_state:
         names += ["k_odo"]
+    if odo_mount_state:
+        names += ["odo_pitch", "odo_heading"]
     return tuple(names)
 
 
 def ins_error_matrices(lat_rad: float, h_m: float, v_enu_m_s, q_bn, f_b_m_s2, w_ib_b_rad_s,
                        *, scale_states: bool = False, baro_state: bool = False,
-                       odo_state: bool = False, tau_s=None):
+                       odo_state: bool = False, odo_mount_state: bool = False, tau_s=None):
     """The continuous error model of the integrated-navigation filter, x' = F x + G w:
     **the definition** that the C filter (csrc/gf_ins_gnss.c) implements; tests compare
     the two at several states, and this one with a numerical linearisation of the
@@ -80,7 +82,7 @@ def ins_error_matrices(lat_rad: float, h_m: float, v_enu_m_s, q_bn, f_b_m_s2, w_
     f_b_m_s2, w_ib_b_rad_s : specific force and angular rate, body axes
     scale_states, baro_state, odo_state : the optional blocks
     tau_s : dict of correlation times (s) by block name ("bg", "ba", "sg", "sa", "baro",
-        "odo"); missing or 0: random constant
+        "odo", "odo_mount"); missing or 0: random constant
 
     Returns
     -------
@@ -109,7 +111,7 @@ def ins_error_matrices(lat_rad: float, h_m: float, v_enu_m_s, q_bn, f_b_m_s2, w_
     Jen_p = np.zeros((3, 3))
     Jen_p[:, 0] = [0.0, 0.0, vE / (Rn * cL ** 2)]
     Jen_p[:, 2] = [vN / Rm ** 2, -vE / Rn ** 2, -vE * tL / Rn ** 2]
-    names = ins_state_names(scale_states, baro_state, odo_state)
+    names = ins_state_names(scale_states, baro_state, odo_state, odo_mount_state)
     n = len(names)
     ix = {k: names.index(k) for k in names}
     V, P, A = slice(0, 3), slice(3, 6), slice(6, 9)
@@ -144,6 +146,8 @@ def ins_error_matrices(lat_rad: float, h_m: float, v_enu_m_s, q_bn, f_b_m_s2, w_
         blocks["baro"] = [ix["b_baro"]]
     if odo_state:
         blocks["odo"] = [ix["k_odo"]]
+    if odo_mount_state:
+        blocks["odo_mount"] = [ix["odo_pitch"], ix["odo_heading"]]
     unknown = set(tau) - set(blocks)
     if unknown:
         raise ValueError(f"tau_s has no block {sorted(unknown)}; blocks: {sorted(blocks)}")
@@ -165,7 +169,7 @@ def ins_error_model(lat_rad: float, h_m: float, v_enu_m_s, q_bn, f_b_m_s2, w_ib_
     import control
     F, G = ins_error_matrices(lat_rad, h_m, v_enu_m_s, q_bn, f_b_m_s2, w_ib_b_rad_s, **kwargs)
     names = ins_state_names(kwargs.get("scale_states", False), kwargs.get("baro_state", False),
-                            kwargs.get("odo_state", False))
+                            kwargs.get("odo_state", False), kwargs.get("odo_mount_state", False))
     n = len(names)
     inputs = ["w_a_x", "w_a_y", "w_a_z", "w_g_x", "w_g_y", "w_g_z"] + [f"w_{k}" for k in names[9:]]
     return control.ss(F, G, np.eye(n), np.zeros((n, n - 3)), inputs=inputs,

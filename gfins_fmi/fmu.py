@@ -460,6 +460,7 @@ _INS_CONFIG_FIELDS = {
     "propagation_interval": "prop_interval_s", "max_imu_gap": "max_imu_gap_s",
     "max_rate": "max_rate_rad_s", "max_specific_force": "max_specific_force_m_s2",
     "scale_states": "scale_states", "baro_state": "baro_state", "odo_state": "odo_state",
+    "odo_mount_state": "odo_mount_state",
     "ukf_alpha": "ukf_alpha", "ukf_beta": "ukf_beta", "ukf_kappa": "ukf_kappa",
     "gyro_arw": "noise.gyro_arw_rad_sqrt_s", "accel_vrw": "noise.accel_vrw_m_s_sqrt_s",
     "gyro_bias_std": "noise.gyro_bias_std_rad_s", "gyro_bias_tau": "noise.gyro_bias_tau_s",
@@ -468,6 +469,7 @@ _INS_CONFIG_FIELDS = {
     "accel_scale_std": "noise.accel_scale_std", "accel_scale_tau": "noise.accel_scale_tau_s",
     "baro_bias_std": "noise.baro_bias_std_m", "baro_bias_tau": "noise.baro_bias_tau_s",
     "odo_scale_std": "noise.odo_scale_std", "odo_scale_tau": "noise.odo_scale_tau_s",
+    "odo_mount_std": "noise.odo_mount_std_rad", "odo_mount_tau": "noise.odo_mount_tau_s",
     "gnss_lever_arm": "gnss_lever_m", "odo_lever_arm": "odo_lever_m", "gate_prob": "gate_prob",
     "gate_reset_count": "gate_reset_count", "max_latency": "max_latency_s",
     "nhc": "nhc", "nhc_std": "nhc_std_m_s", "nhc_interval": "nhc_interval_s", "zupt": "zupt",
@@ -513,7 +515,7 @@ def ins_gnss_fmu_parameters(config, initial) -> dict:
     def given(x, default):
         return default if x is None else x
 
-    sensors = np.zeros(14) if initial.sensors is None else np.asarray(initial.sensors, float)
+    sensors = np.zeros(16) if initial.sensors is None else np.asarray(initial.sensors, float)
     params.update(
         q0=np.asarray(nav.q_bn, float).tolist(), v0=np.asarray(nav.v_n_m_s, float).tolist(),
         lat0=float(nav.lat_rad), lon0=float(nav.lon_rad), h0=float(nav.h_m),
@@ -526,6 +528,9 @@ def ins_gnss_fmu_parameters(config, initial) -> dict:
         std0_accel_scale=vec(given(initial.accel_scale_std, config.accel_scale_std)),
         std0_baro_bias=float(given(initial.baro_bias_std_m, config.baro_bias_std_m)),
         std0_odo_scale=float(given(initial.odometer_scale_std, config.odometer_scale_std)),
+        std0_odo_mount=np.broadcast_to(np.asarray(given(initial.odometer_mount_std_rad,
+                                                        config.odometer_mount_std_rad), float),
+                                       (2,)).tolist(),
         # the batch API starts from the given attitude (no alignment phase); the alignment
         # parameters at their spec defaults
         align_time=0.0, align_heading=0, align_min_speed=1.0, align_travel_std=float(np.radians(10.0)))

@@ -85,7 +85,8 @@ def _filter_at(lat, h, v, euler, **cfg_kw):
 
 
 @pytest.mark.parametrize("state", STATES)
-@pytest.mark.parametrize("opts", [{}, {"scale_factors": True, "baro_bias": True, "odometer_scale": True}])
+@pytest.mark.parametrize("opts", [{}, {"scale_factors": True, "baro_bias": True, "odometer_scale": True,
+                                       "odometer_mount": True, "odometer_mount_tau_s": 900.0}])
 def test_c_error_model_is_the_definition(state, opts):
     """The C filter's F and G equal error_models.ins_error_matrices (the definition)."""
     lat, h, v, euler, fb, wb = state
@@ -93,10 +94,10 @@ def test_c_error_model_is_the_definition(state, opts):
     F_c, G_c, q_c = nav.error_model(fb, wb)
     tau = {"bg": 300.0, "ba": 600.0}
     if opts:
-        tau.update({"baro": 3600.0})
+        tau.update({"baro": 3600.0, "odo_mount": 900.0})
     F_py, G_py = ins_error_matrices(lat, h, v, list(nav._f.nav.q_bn), fb, wb,
                                     scale_states=bool(opts), baro_state=bool(opts),
-                                    odo_state=bool(opts), tau_s=tau)
+                                    odo_state=bool(opts), odo_mount_state=bool(opts), tau_s=tau)
     # same formulas evaluated in a different order: round-off relative to each entry's
     # terms (largest products ~ 1e1; entries as small as 1e-13 rad/(m s))
     scale = np.maximum(np.abs(F_py), 1e-300)

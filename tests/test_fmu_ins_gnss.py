@@ -53,10 +53,10 @@ CASES = {
     "ekf": dict(),
     "ukf": dict(filter="ukf"),
     # every measurement kind, every optional state, NHC, propagation at every sample
-    "ekf-aided-23": dict(scale_factors=True, baro_bias=True, odometer_scale=True, nhc=True,
-                         propagation_interval_s=0.0),
-    "ukf-aided-23": dict(filter="ukf", scale_factors=True, baro_bias=True, odometer_scale=True,
-                         nhc=True),
+    "ekf-aided-25": dict(scale_factors=True, baro_bias=True, odometer_scale=True, nhc=True,
+                         odometer_mount=True, propagation_interval_s=0.0),
+    "ukf-aided-25": dict(filter="ukf", scale_factors=True, baro_bias=True, odometer_scale=True,
+                         nhc=True, odometer_mount=True, odometer_mount_tau_s=900.0),
     "ekf-rates": dict(input="rates"),
 }
 
@@ -157,7 +157,7 @@ def test_fmu_state_restore_reproduces_the_run(rec, version, serialize):
     """FMU state taken mid-run (after 1 200 samples), continued, restored and continued
     again — in the same instance, or serialized into a fresh one — gives the same rows,
     which are the batch API's."""
-    cfg, imu, gnss, baro, odo = _case(rec, "ukf-aided-23")
+    cfg, imu, gnss, baro, odo = _case(rec, "ukf-aided-25")
     init = _initial(rec[0])
     kw = dict(config=cfg, initial=init, fmi_version=version)
     mid = 1200
@@ -216,7 +216,7 @@ REFUSED = [
     ("ukf_kappa", -100.0, "ukf_kappa = -100"),             # with filter = 1 below
     ("lat0", 1.56, "parameter lat0 = 1.56 rad: \\|lat0\\| must be below 89 deg"),
     ("h0", float("nan"), "q0, v0, lon0 and h0 must be finite"),
-    ("sensors0", [0.0] * 13 + [float("nan")], "sensors0 must be finite"),
+    ("sensors0", [0.0] * 15 + [float("nan")], "sensors0 must be finite"),
     ("std0_pos", [1.0, 0.0, 1.0], "parameter std0_pos = \\[1, 0, 1\\] m: every element"),
     ("std0_att", [1e-3, 1e-3, -1.0], "std0_att"),
     ("std0_baro_bias", 0.0, "std0_baro_bias = 0 m"),       # with baro_state = 1 below

@@ -338,7 +338,7 @@ def align_static_then_gnss(imu, gnss, static_window_s: tuple, *, min_speed_m_s: 
     al = coarse_align(imu, t0, t1, lat, gyro_bias_std_rad_s=gyro_bias_std_rad_s,
                       accel_bias_std_m_s2=accel_bias_std_m_s2, **coarse_kw)
     notes = list(al.notes)
-    sensors = np.zeros(14)
+    sensors = np.zeros(16)
     if al.heading_method == "gyrocompass":
         heading, hstd = al.euler_rad[0], al.heading_std_rad
         notes.append(f"heading by gyrocompassing: {np.degrees(heading):.2f} +- {np.degrees(hstd):.2f} deg")

@@ -66,6 +66,9 @@ def add_parser(sub) -> None:
                    help="KF-GINS files: GPS week, to put seconds-of-week on the RTKLIB time scale")
     p.add_argument("--baro", type=pathlib.Path, help="BaroRecord CSV (barometric height)")
     p.add_argument("--odometer", type=pathlib.Path, help="OdometerRecord CSV (forward speed)")
+    p.add_argument("--odometer-mount", action="store_true",
+                   help="estimate the odometer's boresight (pitch, heading of the vehicle axes in "
+                        "the IMU's; FilterConfig.odometer_mount): with --odometer and/or --nhc")
     p.add_argument("--truth", type=pathlib.Path, help="reference: KF-GINS .nav or TruthRecord CSV")
     p.add_argument("--grade", choices=_GRADES, default="tactical",
                    help="IMU noise model (gfins_fmi.estimation.scenarios); overridden by --noise")
@@ -188,7 +191,7 @@ def run(args) -> int:
     cfg = FilterConfig(imu=_noise(args), filter=args.filter, input=imu.kind,
                        propagation_interval_s=args.propagation_interval,
                        gnss_lever_arm_m=tuple(args.lever_arm), zupt=args.zupt, nhc=args.nhc,
-                       subsamples=args.subsamples)
+                       odometer_mount=args.odometer_mount, subsamples=args.subsamples)
     deg = math.pi / 180.0
     if args.initial:
         lat, lon, h, hd, pt, rl = args.initial

@@ -42,17 +42,18 @@ UPDATE_STATUS = {int(lib.GF_INS_ACCEPTED): "accepted", int(lib.GF_INS_REJECTED_G
                  int(lib.GF_INS_REJECTED_LOW_SPEED): "low_speed"}
 #: the sensor-error estimates, in the order of every ``sensors`` array
 SENSOR_NAMES = ("bg_x_rad_s", "bg_y_rad_s", "bg_z_rad_s", "ba_x_m_s2", "ba_y_m_s2", "ba_z_m_s2",
-                "sg_x", "sg_y", "sg_z", "sa_x", "sa_y", "sa_z", "baro_bias_m", "odo_scale")
+                "sg_x", "sg_y", "sg_z", "sa_x", "sa_y", "sa_z", "baro_bias_m", "odo_scale",
+                "odo_pitch_rad", "odo_heading_rad")
 N_SENSORS = int(lib.GF_INS_N_SENSORS)
 
 # gf_ins_init's *bad codes -> the FilterConfig field to change
-_BAD_FIELD = {1: "input", 2: "coning", 3: "filter", 4: "scale_factors/baro_bias/odometer_scale",
+_BAD_FIELD = {1: "input", 2: "coning", 3: "filter", 4: "scale_factors/baro_bias/odometer_scale/odometer_mount",
               5: "propagation_interval_s", 6: "max_imu_gap_s",
               7: "max_rate_rad_s/max_specific_force_m_s2", 8: "ukf_alpha/ukf_beta/ukf_kappa",
               30: "gnss_lever_arm_m/odometer_lever_arm_m", 31: "gate_probability",
               32: "nhc_std_m_s/nhc_interval_s", 33: "zupt_std_m_s/zaru_std_rad_s/zupt_interval_s",
               34: "standstill_window_s/standstill_accel_std_m_s2/standstill_gyro_rad_s",
-              35: "max_latency_s", 36: "speed_min_m_s", 37: "odometer_mount_rad", 38: "subsamples"}
+              35: "max_latency_s", 36: "speed_min_m_s", 37: "odometer_mount_rad (+ the initial correction in sensors)", 38: "subsamples"}
 
 
 class FilterError(GfinsError, ValueError):
@@ -68,7 +69,8 @@ class FilterError(GfinsError, ValueError):
 def state_names(config: "FilterConfig") -> tuple:
     """The error-state names of a configuration (see ``error_models.ins_state_names``)."""
     from gfins_fmi.error_models import ins_state_names
-    return ins_state_names(config.scale_factors, config.baro_bias, config.odometer_scale)
+    return ins_state_names(config.scale_factors, config.baro_bias, config.odometer_scale,
+                           config.odometer_mount)
 
 
 def _vec3(name, value, unit):
@@ -105,6 +107,12 @@ class FilterConfig:
     odometer_mount_rad : (pitch, heading) of the odometer's measuring axes in the body
         frame (boresight, fixed parameters; nose-up and clockwise positive, |.| < 90 deg):
         the odometer and the non-holonomic constraints then act along those axes.
+    odometer_mount, odometer_mount_std_rad, odometer_mount_tau_s : estimate the odometer
+        boresight: two states (pitch, heading corrections to ``odometer_mount_rad``, rad,
+        Gauss-Markov std/tau, tau 0 = random constant), observed through the odometer and
+        NHC updates while the vehicle moves; the estimated correction is the output
+        ``sensors`` columns ``odo_pitch_rad``, ``odo_heading_rad`` (the angles used are
+        ``odometer_mount_rad`` + those).
     gate_probability : NIS gate (chi-square probability; None: no gate).
     gate_reset_count : after this many consecutive gate rejections of one measurement kind
         the next one is applied anyway (logged as "forced"), so that a filter that has
@@ -154,6 +162,9 @@ class FilterConfig:
     gnss_lever_arm_m: tuple = (0.0, 0.0, 0.0)
     odometer_lever_arm_m: tuple = (0.0, 0.0, 0.0)
     odometer_mount_rad: tuple = (0.0, 0.0)
+    odometer_mount: bool = False
+    odometer_mount_std_rad: float = 0.035
+    odometer_mount_tau_s: float = 0.0
     gate_probability: Optional[float] = 0.9999
     gate_reset_count: int = 5
     nhc: bool = False
@@ -206,7 +217,8 @@ class FilterConfig:
 
     @property
     def n_states(self) -> int:
-        return 15 + 6 * bool(self.scale_factors) + bool(self.baro_bias) + bool(self.odometer_scale)
+        return 15 + 6 * bool(self.scale_factors) + bool(self.baro_bias) + bool(self.odometer_scale) \
+            + 2 * bool(self.odometer_mount)
 
     def noise_si(self) -> dict:
         """The process noise in SI, as the C filter takes it (see :class:`ImuNoise` for
@@ -234,7 +246,9 @@ class FilterConfig:
                     gyro_scale_std=self.gyro_scale_std, gyro_scale_tau_s=self.gyro_scale_tau_s,
                     accel_scale_std=self.accel_scale_std, accel_scale_tau_s=self.accel_scale_tau_s,
                     baro_bias_std_m=self.baro_bias_std_m, baro_bias_tau_s=self.baro_bias_tau_s,
-                    odo_scale_std=self.odometer_scale_std, odo_scale_tau_s=self.odometer_scale_tau_s)
+                    odo_scale_std=self.odometer_scale_std, odo_scale_tau_s=self.odometer_scale_tau_s,
+                    odo_mount_std_rad=self.odometer_mount_std_rad,
+                    odo_mount_tau_s=self.odometer_mount_tau_s)
 
     def _c(self):
         cfg = ffi.new("gf_ins_config *")
@@ -245,6 +259,7 @@ class FilterConfig:
         cfg.scale_states = int(bool(self.scale_factors))
         cfg.baro_state = int(bool(self.baro_bias))
         cfg.odo_state = int(bool(self.odometer_scale))
+        cfg.odo_mount_state = int(bool(self.odometer_mount))
         cfg.prop_interval_s = float(self.propagation_interval_s)
         cfg.max_imu_gap_s = float(self.max_imu_gap_s)
         cfg.max_rate_rad_s = float(self.max_rate_rad_s)
@@ -295,6 +310,7 @@ class InitialState:
     accel_scale_std: Optional[float] = None
     baro_bias_std_m: Optional[float] = None
     odometer_scale_std: Optional[float] = None
+    odometer_mount_std_rad: Optional[object] = None   # (pitch, heading) or one for both, rad
     sensors: Optional[np.ndarray] = None      # initial estimates (SENSOR_NAMES order)
 
     def covariance(self, config: FilterConfig) -> np.ndarray:
@@ -323,6 +339,10 @@ class InitialState:
         if config.odometer_scale:
             d.append(self.odometer_scale_std if self.odometer_scale_std is not None
                      else config.odometer_scale_std)
+        if config.odometer_mount:
+            m = self.odometer_mount_std_rad if self.odometer_mount_std_rad is not None \
+                else config.odometer_mount_std_rad
+            d += list(np.broadcast_to(np.asarray(m, dtype=float), (2,)))
         d = np.asarray(d, float)
         if not (np.all(np.isfinite(d)) and np.all(d > 0)):
             names = state_names(config)
@@ -419,7 +439,7 @@ class IntegratedSolution:
     t_s (n,), q_bn (n, 4), v_n_m_s (n, 3) ENU, lat_rad, lon_rad, h_m (n,);
     std (n, 9): 1-sigma of velocity E, N, U (m/s), position E, N, U (m), attitude
         E, N, U (rad);
-    sensors (n, 14): sensor-error estimates (``SENSOR_NAMES``);
+    sensors (n, 16): sensor-error estimates (``SENSOR_NAMES``);
     standstill (n,) bool: the detector's output;
     innovations: structured array, one row per update (t_s, type, status, m, nis, r[3],
         s_std[3]; ``MEAS_TYPES``, ``UPDATE_STATUS``);
@@ -855,7 +875,7 @@ def _smooth(sol: IntegratedSolution, progress: bool) -> SmoothedSolution:
     f = ffi.new("gf_ins_filter *")
     f.n_states = n
     cfg = sol.config
-    f.idx_sg = f.idx_sa = f.idx_baro = f.idx_odo = -1
+    f.idx_sg = f.idx_sa = f.idx_baro = f.idx_odo = f.idx_mount = -1
     nxt = 15
     if cfg.scale_factors:
         f.idx_sg, f.idx_sa = nxt, nxt + 3
@@ -865,6 +885,9 @@ def _smooth(sol: IntegratedSolution, progress: bool) -> SmoothedSolution:
         nxt += 1
     if cfg.odometer_scale:
         f.idx_odo = nxt
+        nxt += 1
+    if cfg.odometer_mount:
+        f.idx_mount = nxt
     et = np.ascontiguousarray(ep["t_s"])
     dx = np.ascontiguousarray(ep["dx"])
     t_rows = np.ascontiguousarray(sol.t_s)

@@ -77,19 +77,55 @@ def town_drive(duration_s: float = 1800.0, speed_m_s: float = 12.0, **start) -> 
     return VehicleProfile(segments=segs, **start)
 
 
+def mount_imu(truth: VehicleRecord, imu_mount_rad=(0.0, 0.0)) -> VehicleRecord:
+    """The truth of an IMU mounted off the vehicle's axes (see :func:`simulate_drive`,
+    ``imu_mount_rad``); the record itself for (0, 0)."""
+    import dataclasses
+    from gfins_fmi.sins import quat_to_euler
+    from gfins_fmi.trajectory import _qmul, euler_to_quat, quat_to_dcm
+    m = np.asarray(imu_mount_rad, dtype=float)
+    if m.shape != (2,) or not np.all(np.abs(m) < np.pi / 2):
+        raise ValueError(f"imu_mount_rad must be (pitch, heading) in rad, each inside "
+                         f"(-pi/2, pi/2); got {imu_mount_rad!r}")
+    if not np.any(m):
+        return truth
+    q_mb = euler_to_quat(m[1], m[0], 0.0)           # C_m^b
+    C_mb = quat_to_dcm(q_mb)
+    q_bm = q_mb * np.array([1.0, -1.0, -1.0, -1.0])   # conjugate: C_b^m
+    q = _qmul(np.asarray(truth.q_bn, dtype=float), q_bm)
+    rot = lambda a: None if a is None else np.asarray(a) @ C_mb.T
+    return dataclasses.replace(truth, q_bn=q, gyro_rad_s=rot(truth.gyro_rad_s),
+                               accel_m_s2=rot(truth.accel_m_s2), dtheta_rad=rot(truth.dtheta_rad),
+                               dv_m_s=rot(truth.dv_m_s), gyro_dot_rad_s2=rot(truth.gyro_dot_rad_s2),
+                               euler_rad=quat_to_euler(q), motion=None)
+
+
 def simulate_drive(profile: VehicleProfile, duration_s: float, dt_s: float = 0.01, *,
                    imu: ImuNoise = TACTICAL, gnss: Optional[GnssReceiver] = None,
                    baro: Optional[Barometer] = None, odometer: Optional[Odometer] = None,
-                   seed: int = 0, truth: Optional[VehicleRecord] = None) -> SimulatedDrive:
+                   seed: int = 0, truth: Optional[VehicleRecord] = None,
+                   imu_mount_rad=(0.0, 0.0)) -> SimulatedDrive:
     """Simulate a drive: the vehicle, its IMU increments with ``imu`` errors (seeded by
     ``seed``) and the aiding sensors (seeded by ``seed`` too, through gf_aiding_sim).
 
     ``truth`` reuses a vehicle run made with the same profile, duration and dt_s (Monte
     Carlo runs share it; only the sensor errors change).
+
+    ``imu_mount_rad`` = (pitch, heading), rad, |.| < pi/2: the IMU is mounted off the
+    vehicle's axes so that the vehicle's axes (along which it rolls, the odometer
+    measures and the non-holonomic constraints hold) have this pitch (nose-up +) and
+    heading (clockwise +) in the IMU's axes: C_m^b = Rz(-heading) Rx(pitch) (vehicle m ->
+    IMU b, the Euler convention of :func:`gfins_fmi.trajectory.euler_to_quat`), the
+    boresight that ``FilterConfig.odometer_mount_rad`` describes. The truth record is
+    then the IMU's: attitude C_b^n = C_m^n (C_m^b)^T, rates, specific forces and
+    increments rotated by C_m^b (exact for a fixed rotation); positions, velocities and
+    the aiding sensors (GNSS antenna and odometer lever arms in the vehicle's axes,
+    ``C_m^b l`` in the IMU's) are the vehicle's.
     """
     if truth is None or gnss is not None or baro is not None or odometer is not None:
         truth = simulate_vehicle(profile, duration_s, dt_s, gnss=gnss, baro=baro,
                                  odometer=odometer, seed=seed)
+    truth = mount_imu(truth, imu_mount_rad)
     n = len(truth.t_s) - 1
     rng = np.random.default_rng(seed)
     parts = imu.sample_parts(n, dt_s, rng)

@@ -186,7 +186,8 @@ static fmi2Component open_ready(int filter, int skip)
 
 /* ---- outputs: navigation, std, sensors, time, per-kind NIS (doubles) and status ------- */
 
-enum { N_OUT = 4 + 3 + 3 + 9 + 14 + 1 + 7, N_IOUT = 7 };
+enum { O_TIME = 19 + GF_INS_N_SENSORS, O_NIS = O_TIME + 1 };
+enum { N_OUT = 4 + 3 + 3 + 9 + GF_INS_N_SENSORS + 1 + 7, N_IOUT = 7 };
 static double g_fmu[N][N_OUT], g_fmu2[N][N_OUT], g_core[N][N_OUT];
 static int g_ist[N][N_IOUT], g_ist2[N][N_IOUT], g_icore[N][N_IOUT];
 
@@ -200,7 +201,7 @@ static void fmu_steps(fmi2Component c, int k0, int k1, double out[][N_OUT], int 
     *p++ = vr("lon");
     *p++ = vr("h");
     vrs("std", 9, p); p += 9;
-    vrs("sensors", 14, p); p += 14;
+    vrs("sensors", GF_INS_N_SENSORS, p); p += GF_INS_N_SENSORS;
     *p++ = vr("time_s");
     vrs("nis", 7, p);
     vrs("update_status", 7, ri);
@@ -265,9 +266,9 @@ static void core_run(int filter, int k0)
         o[8] = f.nav.lon_rad;
         o[9] = f.nav.h_m;
         memcpy(o + 10, f.std9, 9 * sizeof *o);
-        memcpy(o + 19, f.sensors, 14 * sizeof *o);
-        o[33] = f.t_s;
-        memcpy(o + 34, nis, 7 * sizeof *o);
+        memcpy(o + 19, f.sensors, GF_INS_N_SENSORS * sizeof *o);
+        o[O_TIME] = f.t_s;
+        memcpy(o + O_NIS, nis, 7 * sizeof *o);
         memcpy(g_icore[k], status, sizeof status);
     }
 }
@@ -289,8 +290,8 @@ static void test_equals_core(int filter, int skip)
     /* every kind was used: GNSS accepted, the late epoch stale, baro, odometer, NHC */
     CHECK(g_ist[N - 1][0] >= 0 && g_ist[N - 1][2] == GF_INS_ACCEPTED &&
           g_ist[N - 1][3] == GF_INS_ACCEPTED && g_ist[N - 1][4] >= 0, "kinds used");
-    CHECK(g_ist[1450][0] == GF_INS_REJECTED_STALE && isnan(g_fmu[1450][34]), "stale epoch");
-    CHECK(g_ist[1400][0] == GF_INS_ACCEPTED && g_fmu[1400][34] > 0.0, "GNSS epoch");
+    CHECK(g_ist[1450][0] == GF_INS_REJECTED_STALE && isnan(g_fmu[1450][O_NIS]), "stale epoch");
+    CHECK(g_ist[1400][0] == GF_INS_ACCEPTED && g_fmu[1400][O_NIS] > 0.0, "GNSS epoch");
     /* and it navigates: exact data keep it within centimetres of the truth */
     CHECK(fabs(g_fmu[N - 1][7] - g_truth[N - 1].lat_rad) * 6.4e6 < 0.05, "navigates");
 }

@@ -58,7 +58,7 @@ static gf_status start(gf_ins_filter *f, const gf_ins_config *c, const double v[
     double P[GF_INS_MAX_STATES * GF_INS_MAX_STATES];
     double d[GF_INS_MAX_STATES];
     for (int i = 0; i < n; ++i)
-        d[i] = kStd[i < 15 ? i : 16];       /* the odometer scale state last */
+        d[i] = kStd[i < 15 ? i : 16];       /* the odometer scale (and boresight) states last */
     diag_P(n, d, P);
     const double e[3] = {30 * DEG, 1 * DEG, -2 * DEG};
     double q[4];
@@ -203,6 +203,99 @@ static void test_odometer_mounting(void)
           "mounting angle beyond 90 deg refused");
 }
 
+/* The boresight states' columns of H (odo_mount_state): the update they make equals the
+ * one computed here from central differences of the filter's own measurement prediction
+ * with respect to the mounting angles (r = prediction - measurement, so dr/dtheta = dy/
+ * dtheta), with only the two boresight states uncertain (the others at 1e-9: their part
+ * of S is ~1e-17 of it): dx = P H^T S^-1 r, H = -dy/dtheta (states true - estimated).
+ * A tilted, turned attitude, a velocity with all body components and a lever arm make
+ * every term of dM/dtheta ub count. Central differences with eps = 1e-6 rad: truncation
+ * ~eps^2 |y| ~ 1e-11, round-off ~1e-16 |y| / eps ~ 1e-9: tolerance 1e-7 relative. */
+static void mount_run(double dp, double dh, int type, int with_state, double r[2],
+                      double sens[2], double s_std[2])
+{
+    gf_ins_config c = base_config();
+    c.odo_mount_rad[0] = 0.02 + dp;
+    c.odo_mount_rad[1] = -0.03 + dh;
+    c.odo_lever_m[0] = -0.7;
+    c.odo_lever_m[1] = 1.1;
+    c.odo_lever_m[2] = -0.4;
+    c.odo_mount_state = with_state;
+    c.nhc = type == GF_INS_MEAS_NHC;
+    c.nhc_std_m_s = 0.05;
+    c.gate_prob = 0.0;
+    const int n = 15 + 2 * with_state;
+    double sd[17], P[17 * 17];
+    for (int i = 0; i < n; ++i)
+        sd[i] = i >= 15 ? 0.02 : 1e-9;
+    diag_P(n, sd, P);
+    const double e[3] = {40 * DEG, 3 * DEG, -4 * DEG};
+    double q[4];
+    CHECK(gf_euler_to_quat(e, q) == GF_OK, "attitude");
+    const double v[3] = {3.0, 4.0, 0.5};
+    gf_ins_filter f;
+    int32_t bad;
+    CHECK(gf_ins_init(&f, &c, 0.0, q, v, 30 * DEG, 114 * DEG, 0.0, NULL, P, &bad) == GF_OK, "init");
+    gf_ins_innovation lg[4];
+    gf_ins_log log = {4, 0, 0, lg};
+    const double g[3] = {0.001, -0.002, 0.003}, a[3] = {0.01, 0.02, 0.098};
+    if (type == GF_INS_MEAS_ODO) {
+        gf_ins_meas m = {GF_INS_MEAS_ODO, 0.0, {4.5, 0, 0}, {0.02, 0, 0}};
+        CHECK(gf_ins_step(&f, 0.01, g, a, 1, &m, NULL, &log) == GF_OK, "odometer update");
+    } else {
+        for (int k = 1; k <= 10; ++k)
+            CHECK(gf_ins_step(&f, 0.01 * k, g, a, 0, NULL, NULL, &log) == GF_OK, "step");
+    }
+    CHECK(log.count == 1 && lg[0].type == type && lg[0].status == GF_INS_ACCEPTED, "one update");
+    for (int i = 0; i < 2; ++i) {
+        r[i] = lg[0].r[i];
+        s_std[i] = lg[0].s_std[i];
+        sens[i] = f.sensors[14 + i];
+    }
+}
+
+static void test_odometer_mount_jacobian(void)
+{
+    const double eps = 1e-6;
+    const int types[2] = {GF_INS_MEAS_ODO, GF_INS_MEAS_NHC};
+    for (int t = 0; t < 2; ++t) {
+        const int m = types[t] == GF_INS_MEAS_ODO ? 1 : 2;
+        const double R = types[t] == GF_INS_MEAS_ODO ? 0.02 * 0.02 : 0.05 * 0.05;
+        double r0[2], s0[2], sd[2], rp[2], rm[2], dum[2], H[2][2];
+        for (int j = 0; j < 2; ++j) {
+            mount_run(j == 0 ? eps : 0.0, j == 1 ? eps : 0.0, types[t], 0, rp, dum, dum);
+            mount_run(j == 0 ? -eps : 0.0, j == 1 ? -eps : 0.0, types[t], 0, rm, dum, dum);
+            for (int i = 0; i < m; ++i)
+                H[i][j] = -(rp[i] - rm[i]) / (2.0 * eps);
+        }
+        mount_run(0.0, 0.0, types[t], 1, r0, s0, sd);
+        /* S = R + H P H^T (P = 0.02^2 I on the boresight), dx = P H^T S^-1 r */
+        const double p = 0.02 * 0.02;
+        double S[2][2] = {{R, 0}, {0, R}};
+        for (int i = 0; i < m; ++i)
+            for (int k = 0; k < m; ++k)
+                S[i][k] += p * (H[i][0] * H[k][0] + H[i][1] * H[k][1]);
+        double y[2];
+        if (m == 1)
+            y[0] = r0[0] / S[0][0];
+        else {
+            const double det = S[0][0] * S[1][1] - S[0][1] * S[1][0];
+            y[0] = (S[1][1] * r0[0] - S[0][1] * r0[1]) / det;
+            y[1] = (-S[1][0] * r0[0] + S[0][0] * r0[1]) / det;
+        }
+        for (int j = 0; j < 2; ++j) {
+            double dx = 0.0;
+            for (int i = 0; i < m; ++i)
+                dx += p * H[i][j] * y[i];
+            CHECK(fabs(s0[j] - dx) <= 1e-7 * fabs(dx) && fabs(dx) > 1e-4,
+                  "boresight update %d of type %d: %.12g, from differences %.12g", j, types[t],
+                  s0[j], dx);
+        }
+        for (int i = 0; i < m; ++i)
+            CHECK(fabs(sd[i] - sqrt(S[i][i])) <= 1e-7 * sqrt(S[i][i]), "innovation std row %d: %.12g vs %.12g", i, sd[i], sqrt(S[i][i]));
+    }
+}
+
 /* Coarse alignment: the specific force and Earth rate of a known attitude at rest,
  * written here from their definitions (f^n = (0, 0, g), w_ie^n = (0, W cos L, W sin L),
  * body = C^T navigation), give the attitude back to round-off; gravity parallel to the
@@ -295,6 +388,7 @@ static void test_reverse_signs(void)
     gf_ins_config c = base_config();
     c.scale_states = 1;
     c.odo_state = 1;
+    c.odo_mount_state = 1;         /* 25 states: the boresight angles keep their sign */
     gf_ins_filter f;
     const double v[3] = {5.0, -3.0, 0.2};
     CHECK(start(&f, &c, v, 0.0) == GF_OK, "init");
@@ -548,6 +642,7 @@ int main(void)
 {
     test_speed_update();
     test_odometer_mounting();
+    test_odometer_mount_jacobian();
     test_coarse_align();
     test_level_align_and_rotate();
     test_reverse_signs();

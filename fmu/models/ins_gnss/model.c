@@ -80,14 +80,15 @@ static void log_bad_config(FmuInstance *instance, const gf_ins_config *c, int32_
     static const char *const noise_names[] = {
         "gyro_arw", "accel_vrw", "gyro_bias_std", "gyro_bias_tau", "accel_bias_std",
         "accel_bias_tau", "gyro_scale_std", "gyro_scale_tau", "accel_scale_std",
-        "accel_scale_tau", "baro_bias_std", "baro_bias_tau", "odo_scale_std", "odo_scale_tau"};
+        "accel_scale_tau", "baro_bias_std", "baro_bias_tau", "odo_scale_std", "odo_scale_tau",
+        "odo_mount_std", "odo_mount_tau"};
     const gf_ins_noise *q = &c->noise;
     const double noise[] = {q->gyro_arw_rad_sqrt_s, q->accel_vrw_m_s_sqrt_s,
                             q->gyro_bias_std_rad_s, q->gyro_bias_tau_s,
                             q->accel_bias_std_m_s2, q->accel_bias_tau_s, q->gyro_scale_std,
                             q->gyro_scale_tau_s, q->accel_scale_std, q->accel_scale_tau_s,
                             q->baro_bias_std_m, q->baro_bias_tau_s, q->odo_scale_std,
-                            q->odo_scale_tau_s};
+                            q->odo_scale_tau_s, q->odo_mount_std_rad, q->odo_mount_tau_s};
     if (bad >= 10 && bad < 10 + (int32_t)(sizeof noise / sizeof noise[0])) {
         fmu_log_error(instance, "parameter %s = %g must be finite and >= 0",
                       noise_names[bad - 10], noise[bad - 10]);
@@ -106,9 +107,9 @@ static void log_bad_config(FmuInstance *instance, const gf_ins_config *c, int32_
                       (int)c->filter);
         break;
     case 4:
-        fmu_log_error(instance, "parameters scale_states = %d, baro_state = %d, odo_state = %d "
-                      "must each be 0 or 1", (int)c->scale_states, (int)c->baro_state,
-                      (int)c->odo_state);
+        fmu_log_error(instance, "parameters scale_states = %d, baro_state = %d, odo_state = %d, "
+                      "odo_mount_state = %d must each be 0 or 1", (int)c->scale_states,
+                      (int)c->baro_state, (int)c->odo_state, (int)c->odo_mount_state);
         break;
     case 5:
         fmu_log_error(instance, "parameter propagation_interval = %g s must be finite and >= 0",
@@ -209,6 +210,7 @@ static int initial_covariance(FmuInstance *instance, const ModelData *d, const S
         {"std0_accel_scale", "", d->std0_accel_scale, 3, d->cfg.scale_states},
         {"std0_baro_bias", "m", &d->std0_baro_bias_m, 1, d->cfg.baro_state},
         {"std0_odo_scale", "", &d->std0_odo_scale, 1, d->cfg.odo_state},
+        {"std0_odo_mount", "rad", d->std0_odo_mount_rad, 2, d->cfg.odo_mount_state},
     };
     double sd[GF_INS_MAX_STATES];
     int k = 0;
@@ -220,6 +222,9 @@ static int initial_covariance(FmuInstance *instance, const ModelData *d, const S
             if (blocks[b].n == 3)
                 fmu_log_error(instance, "parameter %s = [%g, %g, %g] %s: every element must be "
                               "finite and > 0", blocks[b].name, x[0], x[1], x[2], blocks[b].unit);
+            else if (blocks[b].n == 2)
+                fmu_log_error(instance, "parameter %s = [%g, %g] %s: every element must be "
+                              "finite and > 0", blocks[b].name, x[0], x[1], blocks[b].unit);
             else
                 fmu_log_error(instance, "parameter %s = %g %s must be finite and > 0",
                               blocks[b].name, x[0], blocks[b].unit);
@@ -801,8 +806,9 @@ const char *ins_gnss_state_problem(const ModelData *d)
         idx_baro = next++;
     if (f->cfg.odo_state)
         idx_odo = next++;
+    const int32_t idx_mount = f->cfg.odo_mount_state ? next : -1;
     if (f->idx_sg != idx_sg || f->idx_sa != idx_sa || f->idx_baro != idx_baro ||
-        f->idx_odo != idx_odo)
+        f->idx_odo != idx_odo || f->idx_mount != idx_mount)
         return "filter idx_* do not match its configuration";
     if (f->kf.n != (size_t)n || f->ukf_w.n != (size_t)n)
         return "filter kf.n or ukf_w.n differs from n_states";

@@ -18,6 +18,7 @@ typedef struct ModelData {
     double std0_vel_m_s[3], std0_pos_m[3], std0_att_rad[3];
     double std0_gyro_bias_rad_s[3], std0_accel_bias_m_s2[3];
     double std0_gyro_scale[3], std0_accel_scale[3], std0_baro_bias_m, std0_odo_scale;
+    double std0_odo_mount_rad[2];
     int32_t skip_steps;
     double align_time_s;                 /* > 0: an alignment phase at rest first (s) */
     int32_t align_heading;               /* 0: gyrocompassing; 1: heading from GNSS travel */

@@ -75,6 +75,8 @@ def _filter_parameters():
            "scale-factor states (21 states)", "Int32"),
         _p("baro_state", None, 0, c + "baro_state", "1: barometer bias state", "Int32"),
         _p("odo_state", None, 0, c + "odo_state", "1: odometer scale-factor state", "Int32"),
+        _p("odo_mount_state", None, 0, c + "odo_mount_state", "1: odometer boresight states "
+           "(pitch, heading of its axes in the body frame)", "Int32"),
         _p("ukf_alpha", None, 0.5, c + "ukf_alpha", "UKF sigma-point spread alpha, > 0 "
            "(seed 004: small; 0.5 keeps the points within ~2 sigma)"),
         _p("ukf_beta", None, 2.0, c + "ukf_beta", "UKF beta (2: Gaussian)"),
@@ -107,6 +109,10 @@ def _filter_parameters():
            "Odometer scale-factor error, Gauss-Markov std, >= 0"),
         _p("odo_scale_tau", "s", 0.0, q + "odo_scale_tau_s",
            "Odometer scale-factor correlation time, >= 0"),
+        _p("odo_mount_std", "rad", 0.035, q + "odo_mount_std_rad",
+           "Odometer boresight (pitch, heading), Gauss-Markov std, >= 0"),
+        _p("odo_mount_tau", "s", 0.0, q + "odo_mount_tau_s",
+           "Odometer boresight correlation time, >= 0 (0: random constant)"),
         _p("gnss_lever_arm", "m", 0.0, c + "gnss_lever_m",
            "GNSS antenna phase centre from the IMU, body right-front-up", shape=(3,)),
         _p("odo_lever_arm", "m", 0.0, c + "odo_lever_m",
@@ -147,7 +153,8 @@ def _initial_uncertainty():
     return [
         _p("sensors0", None, 0.0, "sensors0", "Initial sensor-error estimates (gyro bias 3 "
            "rad/s, accelerometer bias 3 m/s2, gyro scale 3, accelerometer scale 3, "
-           "barometer bias m, odometer scale)", shape=(14,)),
+           "barometer bias m, odometer scale, odometer boresight correction pitch and "
+           "heading rad)", shape=(16,)),
         _p("std0_vel", "m/s", 0.1, "std0_vel_m_s", "Initial 1-sigma of the velocity, "
            "east, north, up, > 0", shape=(3,)),
         _p("std0_pos", "m", 1.0, "std0_pos_m", "Initial 1-sigma of the position, east, "
@@ -167,6 +174,9 @@ def _initial_uncertainty():
            "Initial 1-sigma of the barometer bias (baro_state = 1), > 0"),
         _p("std0_odo_scale", None, 0.01, "std0_odo_scale",
            "Initial 1-sigma of the odometer scale factor (odo_state = 1), > 0"),
+        _p("std0_odo_mount", "rad", 0.035, "std0_odo_mount_rad",
+           "Initial 1-sigma of the odometer boresight pitch and heading (odo_mount_state "
+           "= 1), > 0", shape=(2,)),
     ]
 
 
@@ -217,9 +227,10 @@ def _outputs():
         _out("time_s", "s", (), "nav_time_s", "Time that the navigation outputs describe"),
         _out("std", None, (9,), "std9", "1-sigma: velocity east, north, up (m/s), position "
              "east, north, up (m), attitude east, north, up (rad)"),
-        _out("sensors", None, (14,), "sensors", "Sensor-error estimates: gyro bias (3, "
+        _out("sensors", None, (16,), "sensors", "Sensor-error estimates: gyro bias (3, "
              "rad/s), accelerometer bias (3, m/s2), gyro scale (3), accelerometer scale (3), "
-             "barometer bias (m), odometer scale"),
+             "barometer bias (m), odometer scale, odometer boresight correction (pitch, "
+             "heading, rad)"),
         _out("n_imu", None, (), "n_imu", "IMU samples processed", "Int32"),
         _out("n_updates", None, (), "n_updates", "Updates accepted", "Int32"),
         _out("n_rejected", None, (), "n_rejected",

@@ -27,6 +27,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     c.zupt = fz_u8(d) & 1;
     c.nhc = fz_u8(d) % 4 == 0;
     c.subsamples = c.input == GF_SINS_INPUT_INCREMENTS ? 1 + fz_u8(d) % 4 : 1;
+    c.odo_mount_state = fz_u8(d) % 4 == 0;        /* odometer boresight states (25 at most) */
     int32_t n_states = 0;
     if (gf_ins_state_count(&c, &n_states) != GF_OK)
         return 0;

@@ -470,7 +470,8 @@ _INS_CONFIG_FIELDS = {
     "baro_bias_std": "noise.baro_bias_std_m", "baro_bias_tau": "noise.baro_bias_tau_s",
     "odo_scale_std": "noise.odo_scale_std", "odo_scale_tau": "noise.odo_scale_tau_s",
     "odo_mount_std": "noise.odo_mount_std_rad", "odo_mount_tau": "noise.odo_mount_tau_s",
-    "gnss_lever_arm": "gnss_lever_m", "odo_lever_arm": "odo_lever_m", "gate_prob": "gate_prob",
+    "gnss_lever_arm": "gnss_lever_m", "odo_lever_arm": "odo_lever_m", "odo_mount": "odo_mount_rad",
+    "gate_prob": "gate_prob",
     "gate_reset_count": "gate_reset_count", "max_latency": "max_latency_s",
     "nhc": "nhc", "nhc_std": "nhc_std_m_s", "nhc_interval": "nhc_interval_s", "zupt": "zupt",
     "zupt_std": "zupt_std_m_s", "zaru_std": "zaru_std_rad_s", "zupt_interval": "zupt_interval_s",
@@ -505,7 +506,7 @@ def ins_gnss_fmu_parameters(config, initial) -> dict:
         value = c
         for part in path.split("."):
             value = getattr(value, part)
-        params[name] = [float(x) for x in value] if name.endswith("lever_arm") else value
+        params[name] = [float(x) for x in value] if name.endswith(("lever_arm", "mount")) else value
     nav = initial.nav
     noise = config.noise_si()
 

@@ -52,9 +52,11 @@ def _initial(tr, k=0, cls=InitialState):
 CASES = {
     "ekf": dict(),
     "ukf": dict(filter="ukf"),
-    # every measurement kind, every optional state, NHC, propagation at every sample
+    # every measurement kind, every optional state, NHC, propagation at every sample, a
+    # configured odometer boresight (FMU parameter odo_mount)
     "ekf-aided-25": dict(scale_factors=True, baro_bias=True, odometer_scale=True, nhc=True,
-                         odometer_mount=True, propagation_interval_s=0.0),
+                         odometer_mount=True, propagation_interval_s=0.0,
+                         odometer_mount_rad=(0.01, -0.02)),
     "ukf-aided-25": dict(filter="ukf", scale_factors=True, baro_bias=True, odometer_scale=True,
                          nhc=True, odometer_mount=True, odometer_mount_tau_s=900.0),
     "ekf-rates": dict(input="rates"),

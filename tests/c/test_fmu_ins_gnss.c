@@ -388,6 +388,7 @@ static void test_refusals(void)
     expect_refused("std0_odo_scale", "std0_odo_scale", NAN, 0, "std0_odo_scale = nan");
     expect_refused("lat0", "lat0", 1.56, 0, "parameter lat0 = 1.56 rad");
     expect_refused("skip_steps", "skip_steps", -1, 1, "skip_steps = -1 must be >= 0");
+    expect_refused("odo_mount", "odo_mount[2]", 2.0, 0, "parameter odo_mount = [0, 2] rad");
 
     /* a measurement valid after the sample it came with; then a non-finite GNSS input:
      * errors, the outputs keep the last good sample */

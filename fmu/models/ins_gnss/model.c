@@ -157,6 +157,11 @@ static void log_bad_config(FmuInstance *instance, const gf_ins_config *c, int32_
         fmu_log_error(instance, "parameter max_latency = %g s must be finite and >= 0",
                       c->max_latency_s);
         break;
+    case 37:
+        fmu_log_error(instance, "parameter odo_mount = [%g, %g] rad: each angle must be "
+                      "finite and below pi/2 in magnitude", c->odo_mount_rad[0],
+                      c->odo_mount_rad[1]);
+        break;
     case 34:
         fmu_log_error(instance, "parameters still_window = %g s, still_accel_std = %g m/s2 and "
                       "still_gyro = %g rad/s must be finite and > 0", c->still_window_s,

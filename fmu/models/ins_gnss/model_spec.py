@@ -117,6 +117,10 @@ def _filter_parameters():
            "GNSS antenna phase centre from the IMU, body right-front-up", shape=(3,)),
         _p("odo_lever_arm", "m", 0.0, c + "odo_lever_m",
            "Odometer wheel contact point from the IMU, body right-front-up", shape=(3,)),
+        _p("odo_mount", "rad", 0.0, c + "odo_mount_rad",
+           "Odometer boresight: pitch (nose-up +) and heading (clockwise +) of its measuring "
+           "axes in the body frame, each |.| < pi/2; the odometer and NHC act along those "
+           "axes (with odo_mount_state the filter estimates a correction to them)", shape=(2,)),
         _p("gate_prob", None, 0.9999, c + "gate_prob", "Innovation gate: a measurement "
            "whose NIS exceeds the chi-square quantile of this probability is rejected; "
            "0: no gate, else in (0, 1)"),

@@ -85,6 +85,16 @@ static inline void gf_ins_nav_blocks_sparse(const gf_mat3 *C, const double v[3],
                                             double *F, uint64_t *mask)
 {
 #define GF_FF_(i, j) (*gf_ins_f_entry(F, ld, mask, (i), (j)))
+/* the 3 x 3 block at (r, c) = s [a x] (s = +1 or -1: exact) */
+#define GF_SKEW_(r, c, a, s)                                                                \
+    do {                                                                                    \
+        GF_FF_((r) + 0, (c) + 1) = -(s) * (a)[2];                                           \
+        GF_FF_((r) + 0, (c) + 2) = (s) * (a)[1];                                            \
+        GF_FF_((r) + 1, (c) + 0) = (s) * (a)[2];                                            \
+        GF_FF_((r) + 1, (c) + 2) = -(s) * (a)[0];                                           \
+        GF_FF_((r) + 2, (c) + 0) = -(s) * (a)[1];                                           \
+        GF_FF_((r) + 2, (c) + 1) = (s) * (a)[0];                                            \
+    } while (0)
     gf_earth ea;
     gf_earth_from_sincos(&ea, sin_lat, cos_lat, h, v, earth_rate_sign);
     const double sL = ea.sin_lat, cL = ea.cos_lat, tL = ea.tan_lat;
@@ -110,27 +120,12 @@ static inline void gf_ins_nav_blocks_sparse(const gf_mat3 *C, const double v[3],
     GF_FF_(ia + 2, ip + 0) = dwie_dL[2] + dwen_dL[2];
     for (size_t i = 0; i < 3; ++i)
         GF_FF_(ia + i, ip + 2) = dwen_dh[i];
-    GF_FF_(ia + 0, ia + 1) = w_in[2];
-    GF_FF_(ia + 0, ia + 2) = -w_in[1];
-    GF_FF_(ia + 1, ia + 0) = -w_in[2];
-    GF_FF_(ia + 1, ia + 2) = w_in[0];
-    GF_FF_(ia + 2, ia + 0) = w_in[1];
-    GF_FF_(ia + 2, ia + 1) = -w_in[0];
+    GF_SKEW_(ia, ia, w_in, -1.0);    /* -[w_in x] */
     /* velocity: dv' = f^n x phi + v x (2 dw_ie + dw_en) - (2 w_ie + w_en) x dv + dg */
-    GF_FF_(iv + 0, ia + 1) = -f_n[2];
-    GF_FF_(iv + 0, ia + 2) = f_n[1];
-    GF_FF_(iv + 1, ia + 0) = f_n[2];
-    GF_FF_(iv + 1, ia + 2) = -f_n[0];
-    GF_FF_(iv + 2, ia + 0) = -f_n[1];
-    GF_FF_(iv + 2, ia + 1) = f_n[0];
+    GF_SKEW_(iv, ia, f_n, 1.0);      /* [f^n x] */
     double w2[3];
     gf_v3_axpy(ea.w_en_n_rad_s, 2.0, ea.w_ie_n_rad_s, w2); /* 2 w_ie + w_en */
-    GF_FF_(iv + 0, iv + 1) = w2[2];
-    GF_FF_(iv + 0, iv + 2) = -w2[1];
-    GF_FF_(iv + 1, iv + 0) = -w2[2];
-    GF_FF_(iv + 1, iv + 2) = w2[0];
-    GF_FF_(iv + 2, iv + 0) = w2[1];
-    GF_FF_(iv + 2, iv + 1) = -w2[0];
+    GF_SKEW_(iv, iv, w2, -1.0);      /* -[(2 w_ie + w_en) x] */
     /* v x (d w_en / dv) columns E, N; v x (2 dw_ie/dL + dw_en/dL), v x dw_en/dh */
     double c[3], d[3], dL_col[3], t3[3], dh_col[3];
     gf_v3_cross(v, dwen_dvE, c);
@@ -152,6 +147,7 @@ static inline void gf_ins_nav_blocks_sparse(const gf_mat3 *C, const double v[3],
     GF_FF_(ip + 1, ip + 0) = vE * tL / (RNh * cL);
     GF_FF_(ip + 1, ip + 2) = -vE / (RNh * RNh * cL);
     GF_FF_(ip + 2, iv + 2) = 1.0;
+#undef GF_SKEW_
 #undef GF_FF_
 }
 

@@ -19,19 +19,9 @@ import math
 import pathlib
 import sys
 
-from gfins_fmi.estimation.cli import _GRADES, _floats, _nonneg, _positive
+from gfins_fmi.estimation.cli import _GRADES, _count, _floats, _nonneg, _positive
 
 __all__ = ["add_parser", "run"]
-
-
-def _count(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}")
-    if v < 0:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
-    return v
 
 
 def add_parser(sub) -> argparse.ArgumentParser:

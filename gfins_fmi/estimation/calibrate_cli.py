@@ -15,33 +15,17 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
-import math
 import pathlib
 
+from gfins_fmi.estimation.cli import _finite, _nonneg
+
 __all__ = ["add_parser", "run"]
-
-
-def _finite(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}")
-    if not math.isfinite(v):
-        raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
-    return v
 
 
 def _latitude(text: str) -> float:
     v = _finite(text)
     if not abs(v) < 89.0:
         raise argparse.ArgumentTypeError(f"the latitude must be within +-89 deg (in degrees); got {v}")
-    return v
-
-
-def _nonneg(text: str) -> float:
-    v = _finite(text)
-    if v < 0:
-        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}")
     return v
 
 

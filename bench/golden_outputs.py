@@ -30,7 +30,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 RTK = ROOT / "tests" / "data" / "rtk_walk"
 DEG = np.pi / 180
 _TIMING = re.compile(r"\b\d+(\.\d+)?\s*(ms|s|min)\b.*(elapsed|took|wall|per s|/s)|it/s|s/it"
-                     r"|\d\d:\d\d<|\bin \d+(\.\d+)? ?s\b|\(\d+(\.\d+)? s\)")
+                     r"|\d\d:\d\d<|\bin \d+(\.\d+)? ?s\b|^report -> .*\(\d+(\.\d+)? s\)$")
 
 
 def _sha(data: bytes) -> str:

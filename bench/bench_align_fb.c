@@ -15,8 +15,8 @@
 #include <stdlib.h>
 #include <time.h>
 
-#include "gf_ins_gnss.h"
-#include "gf_sins.h"
+#include "est/gf_ins_gnss.h"
+#include "nav/gf_sins.h"
 
 static double now_s(void)
 {

@@ -19,8 +19,8 @@
 #include <string.h>
 #include <time.h>
 
-#include "gf_gfins.h"
-#include "gf_math.h"
+#include "base/gf_math.h"
+#include "gyrofree/gf_gfins.h"
 
 enum { N = 200000 };
 static double A[N * 12], q[N * 4], v[N * 3], p[N * 3];

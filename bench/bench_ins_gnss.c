@@ -18,7 +18,7 @@
 #include <string.h>
 #include <time.h>
 
-#include "gf_ins_gnss.h"
+#include "est/gf_ins_gnss.h"
 
 static double now_s(void)
 {

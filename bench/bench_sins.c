@@ -23,7 +23,7 @@
 #include <string.h>
 #include <time.h>
 
-#include "gf_sins.h"
+#include "nav/gf_sins.h"
 
 #ifndef GF_SINS_MAX_SUBSAMPLES /* a core from before the option: N = 1 only (the baseline) */
 #define GF_SINS_MAX_SUBSAMPLES 1

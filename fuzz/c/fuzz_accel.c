@@ -7,9 +7,9 @@
  * *n_done; a failed gf9_step or gf_gfins_step leaves the state unchanged; a state made
  * by init or a GF_OK step passes its gf_*_check. */
 #include "fuzz_data.h"
-#include "gf_accel_array.h"
-#include "gf_gfins.h"
-#include "gf_sins.h"
+#include "gyrofree/gf_accel_array.h"
+#include "gyrofree/gf_gfins.h"
+#include "nav/gf_sins.h"
 
 #define MAX_RUN 8
 

@@ -8,8 +8,8 @@
 #include <float.h>
 #include <string.h>
 
-#include "gf_accel_array.h"
-#include "gf_math.h"
+#include "base/gf_math.h"
+#include "gyrofree/gf_accel_array.h"
 #include "gf_test.h"
 
 static void independent_output(const double u[3], const double th[3], const double f[3],

@@ -23,10 +23,10 @@
 #include "fmi2Functions.h"
 #include "fmu_instance.h"
 #include "fmu2_test.h"
-#include "gf_gfins.h"
-#include "gf_math.h"
+#include "base/gf_math.h"
+#include "gyrofree/gf_gfins.h"
 #include "gf_test.h"
-#include "gf_vehicle.h"
+#include "sim/gf_vehicle.h"
 #include "turn_drive.h"
 
 #define H_S 0.01

@@ -35,11 +35,11 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "gf_accel_array.h"
-#include "gf_gfins.h"
-#include "gf_kalman.h"
-#include "gf_linalg.h"
-#include "gf_sins.h"
+#include "base/gf_linalg.h"
+#include "est/gf_kalman.h"
+#include "gyrofree/gf_accel_array.h"
+#include "gyrofree/gf_gfins.h"
+#include "nav/gf_sins.h"
 #include "gf_ref.h"
 #include "gf_test.h"
 

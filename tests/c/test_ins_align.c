@@ -23,8 +23,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "gf_ins_gnss.h"
-#include "gf_sins.h"
+#include "est/gf_ins_gnss.h"
+#include "nav/gf_sins.h"
 #include "gf_test.h"
 
 #define PI 3.14159265358979323846

@@ -4,7 +4,7 @@
 
 #include <stdint.h>
 
-#include "gf_accel_array.h"
+#include "gyrofree/gf_accel_array.h"
 
 typedef struct ModelData {
     /* parameters */

@@ -19,11 +19,15 @@ HERE = pathlib.Path(__file__).resolve().parent
 # Public headers (paths under csrc/, the one include root), in dependency order.
 HEADERS = [
     "base/gf_status.h",
-    "gyrofree/gf_accel_array.h",
+    "gyrofree/gf_array.h",
+    "gyrofree/gf9.h",
     "nav/gf_earth.h",
     "nav/gf_sins.h",
     "est/gf_kalman.h",
+    "gyrofree/gf_array_solver.h",
+    "gyrofree/gf_layout.h",
     "gyrofree/gf_gfins.h",
+    "gyrofree/gf_gfnav.h",
     "nav/gf_biquad.h",
     "nav/gf_imu_error.h",
     "sim/gf_vehicle.h",

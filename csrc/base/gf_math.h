@@ -25,6 +25,8 @@ extern "C" {
 
 #define GF_PI 3.14159265358979323846
 #define GF_HALF_PI (0.5 * GF_PI)
+#define GF_SQRT2 1.41421356237309504880
+#define GF_SQRT1_2 0.70710678118654752440
 
 /* 1 if all n values are finite. x - x is 0 for finite x and NaN for NaN or +-Inf, so
  * one sum tests every element without a branch per element. */

@@ -7,8 +7,12 @@
  * *n_done; a failed gf9_step or gf_gfins_step leaves the state unchanged; a state made
  * by init or a GF_OK step passes its gf_*_check. */
 #include "fuzz_data.h"
-#include "gyrofree/gf_accel_array.h"
+#include "gyrofree/gf9.h"
+#include "gyrofree/gf_array.h"
+#include "gyrofree/gf_array_solver.h"
 #include "gyrofree/gf_gfins.h"
+#include "gyrofree/gf_gfnav.h"
+#include "gyrofree/gf_layout.h"
 #include "nav/gf_sins.h"
 
 #define MAX_RUN 8

@@ -9,7 +9,8 @@
 #include <string.h>
 
 #include "base/gf_math.h"
-#include "gyrofree/gf_accel_array.h"
+#include "gyrofree/gf9.h"
+#include "gyrofree/gf_array.h"
 #include "gf_test.h"
 
 static void independent_output(const double u[3], const double th[3], const double f[3],

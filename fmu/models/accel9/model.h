@@ -4,7 +4,7 @@
 
 #include <stdint.h>
 
-#include "gyrofree/gf_accel_array.h"
+#include "gyrofree/gf9.h"
 
 typedef struct ModelData {
     /* parameters */

@@ -14,7 +14,9 @@
 
 #include "fmu_model.h"
 #include "base/gf_math.h"
-#include "gyrofree/gf_gfins.h"
+#include "gyrofree/gf9.h"
+#include "gyrofree/gf_array.h"
+#include "gyrofree/gf_layout.h"
 #include "model.h"
 
 /* Sensor outputs of a truth sample (IMU with errors and noise if asked; array), computed

@@ -4,7 +4,7 @@
 
 #include <stdint.h>
 
-#include "gyrofree/gf_accel_array.h"
+#include "gyrofree/gf_array.h"
 #include "nav/gf_imu_error.h"
 #include "sim/gf_aiding.h"
 #include "sim/gf_noise.h"

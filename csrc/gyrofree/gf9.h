@@ -1,63 +1,28 @@
-/* gf_accel_array.h — accelerometer arrays for gyro-free inertial navigation.
- *
- * Source: seed 000 (Qin, Xu, Li, "A new 9-accelerometer gyro-free INS solution").
- *
- * Output model of single-axis accelerometer i at body position u_i (m) with unit
- * sensing direction theta_i (seed 000, eq. 1-2 in vector form):
- *
- *     A_i = theta_i . [ f + omega_dot x u_i + omega x (omega x u_i) ]      (m/s^2)
- *
- * f is the specific force at the array centre (gravity enters through f), omega the
- * body angular rate (rad/s) and omega_dot its derivative (rad/s^2), all in body axes.
+/* gf9.h — the 9-accelerometer gyro-free solver of seed 000 (Qin, Xu, Li, "A new
+ * 9-accelerometer gyro-free INS solution"): its layout and the closed-form solution of
+ * each sample (eq. 3, 4, 6), on the array model of gf_array.h.
  *
  * Nothing here allocates or keeps global state: a solver's whole state is its
  * gf9_state struct, so any number of instances can run side by side.
  */
-#ifndef GF_ACCEL_ARRAY_H
-#define GF_ACCEL_ARRAY_H
+#ifndef GF9_H
+#define GF9_H
 
 #include <stddef.h>
 #include <stdint.h>
 
 #include "base/gf_status.h"
+#include "gyrofree/gf_array.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
 /* CDEF BEGIN */
-#define GF_ARRAY_MAX_SENSORS 64
-
-/* Geometry of an array of single-axis accelerometers. */
-typedef struct gf_array_geometry {
-    size_t n_sensors;                          /* 1 .. GF_ARRAY_MAX_SENSORS */
-    double u_m[GF_ARRAY_MAX_SENSORS][3];       /* positions, body frame, m */
-    double theta[GF_ARRAY_MAX_SENSORS][3];     /* unit sensing directions */
-} gf_array_geometry;
-
-/* Fills *geometry from n_sensors rows of u_m (n x 3, m) and theta (n x 3, unit).
- * Errors: GF_ERR_BAD_SIZE (n = 0 or > max), GF_ERR_NONFINITE_INPUT,
- * GF_ERR_SINGULAR_GEOMETRY (a zero sensing direction), GF_ERR_BAD_PARAMETER (a
- * direction whose norm differs from 1 by more than 1e-9). *bad_sensor (may be NULL)
- * receives the index of the offending sensor. */
-gf_status gf_array_geometry_set(gf_array_geometry *geometry, size_t n_sensors,
-                                const double *u_m, const double *theta,
-                                size_t *bad_sensor);
-
 /* The 9-accelerometer layout of seed 000 (table in eq. 1-2, with u_7..u_9 = l[...]
  * as the equations require; the scan's "sqrt(l)" is an OCR artefact).
  * Error: GF_ERR_BAD_PARAMETER unless 1e-6 m <= lever_arm_m < inf. */
 gf_status gf9_geometry(double lever_arm_m, gf_array_geometry *geometry);
-
-/* Forward model for n_samples samples: rows of f_m_s2, omega_rad_s, omega_dot_rad_s2
- * (each n x 3) -> A_m_s2 (n x n_sensors). On a non-finite input the run stops,
- * *n_done (may be NULL) = index of the bad sample, and GF_ERR_NONFINITE_INPUT is
- * returned (GF_ERR_OUT_OF_RANGE when finite inputs overflow the outputs); rows before
- * it are valid. */
-gf_status gf_array_forward(const gf_array_geometry *geometry, size_t n_samples,
-                           const double *f_m_s2, const double *omega_rad_s,
-                           const double *omega_dot_rad_s2, double *A_m_s2,
-                           size_t *n_done);
 
 /* Per-sample flags of the 9-accelerometer solver (bit k refers to axis k = x, y, z). */
 #define GF9_FLAG_NEG_OMEGA_SQ_X 1    /* omega_x^2 < 0 (noise): omega_x = integrated reference */
@@ -136,4 +101,4 @@ gf_status gf9_state_check(const gf9_state *state);
 }
 #endif
 
-#endif /* GF_ACCEL_ARRAY_H */
+#endif /* GF9_H */

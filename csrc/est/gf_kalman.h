@@ -17,7 +17,7 @@
  *     sequence of IEEE operations in every compiled form (AVX2, SSE2, plain C), so the
  *     results are equal bit for bit wherever the engine runs (tests/c/test_kalman.c);
  *   - the unscented transform of the sigma-point (unscented) Kalman filter with the
- *     scaled sigma points of seed 004 (section 2, eq. 25-38):
+ *     scaled sigma points of seed 004 (section 2, eq. 25-38; implemented in gf_ukf.c):
  *         lambda = alpha^2 (N + kappa) - N,  gamma = sqrt(N + lambda),
  *         W0m = lambda / (N + lambda),  W0c = W0m + 1 - alpha^2 + beta,
  *         Wi = 1 / (2 (N + lambda)),  i = 1..2N;

@@ -67,7 +67,7 @@
  *   odo_mount_rad + the estimated correction; identity by default).  non-holonomic:
  *   [C_b^m (C_n^b v + w_eb^b x l_odo)]_x,z = 0.  With odo_mount_state the rows of both
  *   take d/dpitch_m and d/dheading_m of C_b^m (exact derivatives of its entries, see
- *   meas_jacobian).  ZUPT: v = 0.
+ *   gf_ins_meas.c).  ZUPT: v = 0.
  *   ZARU: w_ib^b - C_n^b w_ie^n = 0 (mean over the standstill detector's window).
  *   speed (tachometer, seed 003 section 1.2.2, its eq. 7-8 linearised; the scan lost the
  *   equations, so derived here): y = (1 + k) sqrt(v_E^2 + v_N^2), k the odometer scale
@@ -78,6 +78,13 @@
  *   (no current, no lever-arm term: w x l is ~1e-3 of the speed on an AUV). At or below
  *   speed_min_m_s of INS horizontal speed the direction v_h / |v_h| is undefined or
  *   poorly known and the update is refused (logged GF_INS_REJECTED_LOW_SPEED).
+ * The models are one table of the kinds (gf_ins_meas.c: per kind its rows, prediction
+ * and Jacobian, one section each); gf_ins_meas_kind_info enumerates it and
+ * gf_ins_meas_model evaluates one kind at the filter's state. The linearised models H
+ * leave out one small term: the Earth rate in w_eb^b turns with the attitude and the
+ * latitude, which moves the GNSS velocity, odometer and NHC predictions by at most
+ * |w_ie| |l| (7.3e-5 m/s per rad for l = 1 m) and ZARU's by |w_ie| per rad of latitude;
+ * their H has no such entries (tests/c/test_ins_meas.c bounds the difference).
  * Measurements carry their time of validity; the IMU interval that contains it is
  * split there (increments in proportion to time, rates interpolated linearly), the
  * covariance is propagated to that instant and the update is made there. A measurement
@@ -322,7 +329,7 @@ typedef struct gf_ins_filter {
 } gf_ins_filter;
 
 /* Defaults: increments with coning, EKF, 15 states, propagation every 0.1 s, IMU gap
- * limit 0.5 s, UKF alpha 1e-3... see gf_ins_gnss.c; noise all zero (set it). */
+ * limit 0.5 s, UKF alpha 1e-3... see gf_ins_config.c; noise all zero (set it). */
 gf_status gf_ins_config_default(gf_ins_config *cfg);
 
 /* Number of states of a configuration (15 .. 25). Errors: GF_ERR_BAD_PARAMETER. */
@@ -331,7 +338,7 @@ gf_status gf_ins_state_count(const gf_ins_config *cfg, int32_t *n_states);
 /* Starts the filter at t0_s with the nominal attitude q_bn, ENU velocity, position, the
  * sensor-error estimates sensors0 (GF_INS_N_SENSORS; NULL = 0) and the error covariance
  * P0 (n x n, symmetric positive definite). Errors: GF_ERR_BAD_PARAMETER (configuration,
- * with *bad naming the field: see gf_ins_gnss.c), GF_ERR_NONFINITE_INPUT,
+ * with *bad naming the field: see gf_ins_config.c), GF_ERR_NONFINITE_INPUT,
  * GF_ERR_SINGULAR_GEOMETRY (P0 not positive definite). */
 gf_status gf_ins_init(gf_ins_filter *f, const gf_ins_config *cfg, double t0_s,
                       const double *q_bn, const double *v_n_m_s, double lat_rad,
@@ -497,6 +504,33 @@ gf_status gf_ins_apply_error(const gf_ins_filter *f, const double *dx, double *n
  * iterations on the closed-form distribution function from the Wilson-Hilferty start
  * (converged to ~1e-13 relative). */
 gf_status gf_chi2_quantile(int32_t m, double p, double *q);
+
+/* The measurement kinds (the table of gf_ins_meas.c): for a code GF_INS_MEAS_*, its rows
+ * (m: rows of z, H and R) and its name (as in the innovation logs: "gnss_pos", ...);
+ * rows and name may be NULL. Error: GF_ERR_BAD_PARAMETER for a code that is no kind
+ * (kinds are 1 .. GF_INS_N_MEAS_KINDS - 1 today; enumerate with this call). */
+gf_status gf_ins_meas_kind_info(int32_t kind, int32_t *rows, const char **name);
+
+/* The model of one measurement kind at the filter's current state, as its updates use it
+ * (the nominal's local frame for positions, the latest compensated rate w_ib_b_rad_s,
+ * ZARU the standstill detector's mean rate; after gf_ins_reverse the reversed nominal):
+ *   z_pred (rows, may be NULL): the kind's prediction from the nominal state corrected by
+ *     the error-state vector dx (n_states; NULL = 0) as the feedback corrects it
+ *     (gf_ins_apply_error), in the units the update compares with the measurement (GNSS
+ *     position: east, north, up metres about the nominal's position; the others as
+ *     measured, in the filter's direction of time);
+ *   H (rows x n_states, may be NULL): the Jacobian at the nominal that the EKF uses,
+ *     z_pred(0) - z_pred(dx) = H dx to first order (z_err = predicted - measured, the
+ *     states' signs as in the table above), with the small terms H leaves out (see
+ *     "Measurements");
+ *   *rows (may be NULL): the kind's rows.
+ * ms (may be NULL): a measurement of that kind, checked as gf_ins_step checks it and
+ * handed to the model (no kind's model reads it today). Errors: GF_ERR_NULL_POINTER,
+ * GF_ERR_BAD_PARAMETER (no such kind, a filter whose layout is out of range, ms of
+ * another kind or invalid), GF_ERR_NONFINITE_INPUT (dx), GF_ERR_SINGULAR_GEOMETRY (the
+ * kind refuses this nominal: a speed at or below speed_min_m_s). */
+gf_status gf_ins_meas_model(const gf_ins_filter *f, int32_t kind, const gf_ins_meas *ms,
+                            const double *dx, double *z_pred, double *H, int32_t *rows);
 /* CDEF END */
 
 #ifdef __cplusplus

@@ -156,7 +156,7 @@ gf_status gf_kalman_rts_step(size_t n, const double *P_post, const double *x_pos
 /* The structured predict works in rows padded to a multiple of 4 inside arrays of
  * GF_KF_MAX_N^2 doubles: n rows of stride GF_PADDED(n) fit only if the maximum is itself a
  * multiple of 4 (37 would overflow them by 111 doubles at n = 37). */
-_Static_assert(GF_KF_MAX_N % 4 == 0, "GF_KF_MAX_N must be a multiple of 4 (gf_kalman.c's padded work arrays)");
+_Static_assert(GF_KF_MAX_N % 4 == 0, "GF_KF_MAX_N must be a multiple of 4 (the engine's padded work arrays)");
 
 /* Checks a filter struct handed in by a caller (e.g. restored from saved bytes): n in
  * 1..GF_KF_MAX_N (GF_ERR_BAD_SIZE), x and the used n x n block of P finite

@@ -1,8 +1,9 @@
 /* fuzz_accel.c — libFuzzer target: accelerometer arrays and the gyro-free solvers
- * (gf_accel_array.h, gf_gfins.h): geometries (given, seed 000's nine, cube6, layout 12),
- * the forward model, the 9-accelerometer solver, the general array solver, the rate
- * strategies and the gyro-free navigator, with any parameters and samples, and damaged
- * solver states (as an FMU state restored from bytes).
+ * (gyrofree/: gf_array, gf9, gf_layout, gf_array_solver, gf_gfins, gf_gfnav): geometries
+ * (given, seed 000's nine, cube6, layout 12), the forward model, the 9-accelerometer
+ * solver, the general array solver, the rate strategies and the gyro-free navigator, with
+ * any parameters and samples, and damaged solver states (as an FMU state restored from
+ * bytes).
  * Oracles (fuzz_data.h): valid statuses; finite outputs on GF_OK and in the rows before
  * *n_done; a failed gf9_step or gf_gfins_step leaves the state unchanged; a state made
  * by init or a GF_OK step passes its gf_*_check. */

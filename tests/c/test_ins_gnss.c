@@ -1,6 +1,8 @@
-/* test_ins_align.c — the integrated-navigation filter's alignment entry points (issue 13,
- * seed 003): the tachometer speed measurement, reverse-time filtering (gf_ins_reverse,
- * gf_ins_run_backward) and the forward-backward driver (gf_ins_forward_backward).
+/* test_ins_gnss.c — the integrated-navigation filter (est/gf_ins_gnss.h) end to end: the
+ * tachometer speed measurement (issue 13, seed 003), the odometer boresight, the coarse
+ * alignment, levelling and heading rotation, reverse-time filtering (gf_ins_reverse,
+ * gf_ins_run_backward), the forward-backward driver (gf_ins_forward_backward) and grouped
+ * samples (subsamples). Its measurement models kind by kind: test_ins_meas.c.
  *
  * Truth never comes from the code under test:
  *   - odometer boresight: the speed and non-holonomic components of a body moving straight

@@ -57,7 +57,7 @@ static int history_at(const gf_ins_filter *f, double t, gf_sins_state *ref, doub
 
 /* A measurement valid at or before the filter's time: a delayed update, or stale. */
 gf_status ins_past_measurement(gf_ins_filter *f, const gf_ins_meas *ms, gf_ins_epochs *ep,
-                           gf_ins_log *log)
+                               gf_ins_log *log)
 {
     gf_sins_state ref;
     double w[3];
@@ -69,7 +69,8 @@ gf_status ins_past_measurement(gf_ins_filter *f, const gf_ins_meas *ms, gf_ins_e
         return ins_update_at(f, ms->type, ms, 0.0, &ref, w, ep, log);
     }
     f->n_rejected++;
-    ins_log_entry(log, ms->t_s, ms->type, GF_INS_REJECTED_STALE, ins_meas_model_of(ms->type)->rows, NAN, NULL, NULL);
+    ins_log_entry(log, ms->t_s, ms->type, GF_INS_REJECTED_STALE, ins_meas_model_of(ms->type)->rows,
+                  NAN, NULL, NULL);
     return GF_OK;
 }
 

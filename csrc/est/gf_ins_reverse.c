@@ -103,13 +103,13 @@ gf_status gf_ins_forward_backward(gf_ins_filter *f, size_t n, const double *t_s,
         }
         if (backward)
             st = ins_walk(f, 1, n, t_s, gyro, accel, t_start, n_before_end, meas, NULL, NULL, log,
-                      NULL, NULL);
+                          NULL, NULL);
         else if (p == 0)
             st = ins_walk(f, 0, n, t_s, gyro, accel, t_start, n_meas, meas, NULL, NULL, log, NULL,
-                      NULL);
+                          NULL);
         else
-            st = ins_walk(f, 0, n, t_s, gyro, accel, t_start, n_meas - j_first, meas + j_first, NULL,
-                      NULL, log, NULL, NULL);
+            st = ins_walk(f, 0, n, t_s, gyro, accel, t_start, n_meas - j_first, meas + j_first,
+                          NULL, NULL, log, NULL, NULL);
         if (st != GF_OK) {
             if (backward)           /* hand the filter back forward in time */
                 gf_ins_reverse(f);

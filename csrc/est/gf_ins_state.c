@@ -60,7 +60,7 @@ static void hyp_from_error(const gf_ins_filter *f, const double q_nom[4], const 
 }
 
 void ins_hyp_from_state(const gf_ins_filter *f, const gf_sins_state *nav, const double *sens,
-                    const double *dx, nav_hyp *out)
+                        const double *dx, nav_hyp *out)
 {
     hyp_from_error(f, nav->q_bn, nav->v_n_m_s, nav->lat_rad, nav->lon_rad, nav->h_m, sens, dx,
                    out);
@@ -68,7 +68,7 @@ void ins_hyp_from_state(const gf_ins_filter *f, const gf_sins_state *nav, const 
 
 /* dx of a hypothesis about a nominal: the inverse of hyp_from_error */
 void ins_error_from_hyp(const gf_ins_filter *f, const gf_sins_state *nom, const double *sens,
-                    const nav_hyp *hy, double *dx)
+                        const nav_hyp *hy, double *dx)
 {
     memset(dx, 0, (size_t)f->n_states * sizeof *dx);
     for (int i = 0; i < 3; ++i)

@@ -164,8 +164,9 @@ static gf_status ins_step(gf_ins_filter *f, double t_s, const double *gyro_in, c
         for (size_t j = 0; j < n_meas && st == GF_OK; ++j) {
             gf_ins_meas ms;
             ins_meas_directed(f, MS(j), &ms);
-            st = fabs(ms.t_s - f->t_s) <= GF_INS_TIME_EPS_S ? ins_update(f, ms.type, &ms, 0.0, epochs, log)
-                                                            : ins_past_measurement(f, &ms, epochs, log);
+            st = fabs(ms.t_s - f->t_s) <= GF_INS_TIME_EPS_S
+                     ? ins_update(f, ms.type, &ms, 0.0, epochs, log)
+                     : ins_past_measurement(f, &ms, epochs, log);
         }
         if (st != GF_OK)
             return st;
@@ -338,9 +339,9 @@ static int output_ok(const gf_ins_output *out)
  * stored in increasing time (gf_ins_run_backward: sample k = n-1 .. 0 takes the state to
  * t_s[k-1], t_start_s for k = 0, with increments; to t_s[k] with rates). out may be NULL. */
 gf_status ins_walk(gf_ins_filter *f, int backward, size_t n, const double *t_s,
-               const double *gyro, const double *accel, double t_start_s, size_t n_meas,
-               const gf_ins_meas *meas, gf_ins_output *out, gf_ins_epochs *epochs,
-               gf_ins_log *log, size_t *n_done, size_t *meas_done)
+                   const double *gyro, const double *accel, double t_start_s, size_t n_meas,
+                   const gf_ins_meas *meas, gf_ins_output *out, gf_ins_epochs *epochs,
+                   gf_ins_log *log, size_t *n_done, size_t *meas_done)
 {
     size_t k = 0, used = 0, row = 0;
     gf_status st = GF_OK;
@@ -425,7 +426,8 @@ gf_status gf_ins_run(gf_ins_filter *f, size_t n, const double *t_s, const double
     for (size_t j = 1; j < n_meas; ++j)
         if (!(dir * (meas[j].t_s - meas[j - 1].t_s) >= 0.0))
             return GF_ERR_BAD_TIME;
-    return ins_walk(f, 0, n, t_s, gyro, accel, 0.0, n_meas, meas, out, epochs, log, n_done, meas_done);
+    return ins_walk(f, 0, n, t_s, gyro, accel, 0.0, n_meas, meas, out, epochs, log, n_done,
+                    meas_done);
 }
 
 /* checks of a record stored in increasing time, and of its measurements */
@@ -467,5 +469,5 @@ gf_status gf_ins_run_backward(gf_ins_filter *f, size_t n, const double *t_s, con
     if (fabs(f->t_s - t_s[n - 1]) > GF_INS_TIME_EPS_S)
         return GF_ERR_BAD_TIME;
     return ins_walk(f, 1, n, t_s, gyro, accel, t_start_s, n_meas, meas, out, NULL, log, n_done,
-                meas_done);
+                    meas_done);
 }

@@ -14,7 +14,7 @@
 _Static_assert(GF_CHI2_MAX_DOF == GF_KF_MAX_M, "the gate's quantile covers every update size");
 
 void ins_log_entry(gf_ins_log *log, double t, int32_t type, int32_t status, int m, double nis,
-               const double *r, const double *s_std)
+                   const double *r, const double *s_std)
 {
     if (!log || !log->entries)
         return;
@@ -41,8 +41,8 @@ void ins_log_entry(gf_ins_log *log, double t, int32_t type, int32_t status, int 
  * error state is then taken as unchanged over the delay) and the correction goes to the
  * current nominal. */
 gf_status ins_update_at(gf_ins_filter *f, int32_t type, const gf_ins_meas *ms, double std_int,
-                    const gf_sins_state *ref, const double *w_ref, gf_ins_epochs *ep,
-                    gf_ins_log *log)
+                        const gf_sins_state *ref, const double *w_ref, gf_ins_epochs *ep,
+                        gf_ins_log *log)
 {
     const ins_meas_model *mm = ins_meas_model_of(type);
     const int n = f->n_states, m = mm->rows;
@@ -154,7 +154,7 @@ gf_status ins_update_at(gf_ins_filter *f, int32_t type, const gf_ins_meas *ms, d
 }
 
 gf_status ins_update(gf_ins_filter *f, int32_t type, const gf_ins_meas *ms, double std_int,
-                 gf_ins_epochs *ep, gf_ins_log *log)
+                     gf_ins_epochs *ep, gf_ins_log *log)
 {
     return ins_update_at(f, type, ms, std_int, &f->nav, f->w_ib_b_rad_s, ep, log);
 }

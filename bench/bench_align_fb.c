@@ -4,7 +4,8 @@
  * at 10 Hz and depth (a height measurement) at 1 Hz; EKF, 15 states, covariance
  * propagated every 0.1 s (the defaults).
  *
- *   gcc -O3 -ffp-contract=off -I csrc bench/bench_align_fb.c csrc/gf_*.c -lm -o bench_align_fb
+ *   gcc -O3 -ffp-contract=off -I csrc bench/bench_align_fb.c \
+ *       $(find csrc -name 'gf*.c' | sort) -lm -o bench_align_fb
  *   ./bench_align_fb [seconds 300] [rate Hz 200] [fb passes 1] [repeats 7]
  *
  * Prints the best of the repeats (process CPU time) for: one forward pass alone, and the
@@ -15,8 +16,8 @@
 #include <stdlib.h>
 #include <time.h>
 
-#include "gf_ins_gnss.h"
-#include "gf_sins.h"
+#include "est/gf_ins_gnss.h"
+#include "nav/gf_sins.h"
 
 static double now_s(void)
 {

@@ -19,8 +19,12 @@
 #include <string.h>
 #include <time.h>
 
-#include "gf_gfins.h"
-#include "gf_math.h"
+#include "base/gf_math.h"
+#include "gyrofree/gf9.h"
+#include "gyrofree/gf_array.h"
+#include "gyrofree/gf_gfins.h"
+#include "gyrofree/gf_gfnav.h"
+#include "gyrofree/gf_layout.h"
 
 enum { N = 200000 };
 static double A[N * 12], q[N * 4], v[N * 3], p[N * 3];

@@ -4,7 +4,8 @@
  * position + velocity at times between IMU samples, from an antenna 1.3 m from the IMU
  * (a lever arm fills the attitude and gyro-bias columns of H, as on a vehicle).
  *
- *   gcc -O3 -ffp-contract=off -I csrc bench/bench_ins_gnss.c csrc/gf_*.c -lm -o bench_ins_gnss
+ *   gcc -O3 -ffp-contract=off -I csrc bench/bench_ins_gnss.c \
+ *       $(find csrc -name 'gf*.c' | sort) -lm -o bench_ins_gnss
  *   ./bench_ins_gnss [filter 0=EKF 1=UKF] [propagation interval s, 0 = every sample]
  *                    [samples] [repeats] [subsamples per navigation update, 1..4]
  *
@@ -18,7 +19,7 @@
 #include <string.h>
 #include <time.h>
 
-#include "gf_ins_gnss.h"
+#include "est/gf_ins_gnss.h"
 
 static double now_s(void)
 {

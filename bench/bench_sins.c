@@ -6,8 +6,8 @@
  * built here from closed-form rates by 2-point Gauss-Legendre per interval; exactness
  * does not matter for timing), height held.
  *
- *   cc -O3 -std=c11 -ffp-contract=off -I csrc bench/bench_sins.c csrc/gf_*.c -lm \
- *      -o bench_sins
+ *   cc -O3 -std=c11 -ffp-contract=off -I csrc bench/bench_sins.c \
+ *      $(find csrc -name 'gf*.c' | sort) -lm -o bench_sins
  *   ./bench_sins [samples (default 10^6)] [repeats (default 7)] [N, all of 1..4 if absent]
  *
  * Prints, per N, the smallest and the median CPU time of the repeats
@@ -23,7 +23,7 @@
 #include <string.h>
 #include <time.h>
 
-#include "gf_sins.h"
+#include "nav/gf_sins.h"
 
 #ifndef GF_SINS_MAX_SUBSAMPLES /* a core from before the option: N = 1 only (the baseline) */
 #define GF_SINS_MAX_SUBSAMPLES 1

@@ -16,23 +16,27 @@ import sys
 import cffi
 
 HERE = pathlib.Path(__file__).resolve().parent
-# Public headers, in dependency order.
+# Public headers (paths under csrc/, the one include root), in dependency order.
 HEADERS = [
-    "gf_status.h",
-    "gf_accel_array.h",
-    "gf_earth.h",
-    "gf_sins.h",
-    "gf_kalman.h",
-    "gf_gfins.h",
-    "gf_biquad.h",
-    "gf_imu_error.h",
-    "gf_vehicle.h",
-    "gf_noise.h",
-    "gf_aiding_sim.h",
-    "gf_ins_gnss.h",
-    "gf_rotation.h",
-    "gf_ins_model.h",
-    "gf_syscal.h",
+    "base/gf_status.h",
+    "gyrofree/gf_array.h",
+    "gyrofree/gf9.h",
+    "nav/gf_earth.h",
+    "nav/gf_sins.h",
+    "est/gf_kalman.h",
+    "gyrofree/gf_array_solver.h",
+    "gyrofree/gf_layout.h",
+    "gyrofree/gf_gfins.h",
+    "gyrofree/gf_gfnav.h",
+    "nav/gf_biquad.h",
+    "nav/gf_imu_error.h",
+    "sim/gf_vehicle.h",
+    "sim/gf_noise.h",
+    "sim/gf_aiding.h",
+    "est/gf_ins_gnss.h",
+    "sim/gf_rot.h",
+    "est/gf_ins_model.h",
+    "est/gf_syscal.h",
 ]
 _BLOCK = re.compile(r"/\* CDEF BEGIN \*/(.*?)/\* CDEF END \*/", re.S)
 _COMMENT = re.compile(r"/\*.*?\*/", re.S)

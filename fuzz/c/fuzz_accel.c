@@ -1,15 +1,20 @@
 /* fuzz_accel.c — libFuzzer target: accelerometer arrays and the gyro-free solvers
- * (gf_accel_array.h, gf_gfins.h): geometries (given, seed 000's nine, cube6, layout 12),
- * the forward model, the 9-accelerometer solver, the general array solver, the rate
- * strategies and the gyro-free navigator, with any parameters and samples, and damaged
- * solver states (as an FMU state restored from bytes).
+ * (gyrofree/: gf_array, gf9, gf_layout, gf_array_solver, gf_gfins, gf_gfnav): geometries
+ * (given, seed 000's nine, cube6, layout 12), the forward model, the 9-accelerometer
+ * solver, the general array solver, the rate strategies and the gyro-free navigator, with
+ * any parameters and samples, and damaged solver states (as an FMU state restored from
+ * bytes).
  * Oracles (fuzz_data.h): valid statuses; finite outputs on GF_OK and in the rows before
  * *n_done; a failed gf9_step or gf_gfins_step leaves the state unchanged; a state made
  * by init or a GF_OK step passes its gf_*_check. */
 #include "fuzz_data.h"
-#include "gf_accel_array.h"
-#include "gf_gfins.h"
-#include "gf_sins.h"
+#include "gyrofree/gf9.h"
+#include "gyrofree/gf_array.h"
+#include "gyrofree/gf_array_solver.h"
+#include "gyrofree/gf_gfins.h"
+#include "gyrofree/gf_gfnav.h"
+#include "gyrofree/gf_layout.h"
+#include "nav/gf_sins.h"
 
 #define MAX_RUN 8
 

@@ -6,9 +6,9 @@
  * gf_biquad_init passes gf_biquad_check; apply then compensate returns the input (1e-6
  * relative) where both succeed. */
 #include "fuzz_data.h"
-#include "gf_biquad.h"
-#include "gf_imu_error.h"
-#include "gf_noise.h"
+#include "nav/gf_biquad.h"
+#include "nav/gf_imu_error.h"
+#include "sim/gf_noise.h"
 
 #define MAX_RUN 8
 

@@ -6,7 +6,7 @@
  * passes done; reversing twice restores the filter byte for byte; a filter after a
  * GF_OK driver call passes gf_ins_filter_check. */
 #include "fuzz_data.h"
-#include "gf_ins_gnss.h"
+#include "est/gf_ins_gnss.h"
 
 #define MAX_N 24
 #define MAX_M 8

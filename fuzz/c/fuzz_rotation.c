@@ -1,4 +1,4 @@
-/* fuzz_rotation.c — libFuzzer target: the rotating IMU of seed 001 (gf_rotation.h:
+/* fuzz_rotation.c — libFuzzer target: the rotating IMU of seed 001 (gf_rot.h:
  * schedules, poses, exact IMU increments on a static base, vehicle attitude from the
  * gimbal angles) and the system-level calibration filter (gf_syscal.h), with any
  * schedule, site, prior, parameters and samples, and damaged structs.
@@ -8,8 +8,8 @@
  * time, range) leave the filter as after the last good sample (here: unchanged when the
  * first sample is refused); a filter gf_syscal_init made passes gf_syscal_check. */
 #include "fuzz_data.h"
-#include "gf_rotation.h"
-#include "gf_syscal.h"
+#include "est/gf_syscal.h"
+#include "sim/gf_rot.h"
 
 #define MAX_RUN 8
 

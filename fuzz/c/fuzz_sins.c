@@ -6,8 +6,8 @@
  * gf_sins_step or gf_sins_set_navigation leaves the state unchanged; gf_sins_run's rows
  * before *n_done are finite. */
 #include "fuzz_data.h"
-#include "gf_earth.h"
-#include "gf_sins.h"
+#include "nav/gf_earth.h"
+#include "nav/gf_sins.h"
 
 #define MAX_RUN 16
 

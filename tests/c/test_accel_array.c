@@ -8,8 +8,9 @@
 #include <float.h>
 #include <string.h>
 
-#include "gf_accel_array.h"
-#include "gf_math.h"
+#include "base/gf_math.h"
+#include "gyrofree/gf9.h"
+#include "gyrofree/gf_array.h"
 #include "gf_test.h"
 
 static void independent_output(const double u[3], const double th[3], const double f[3],
@@ -275,7 +276,7 @@ static void test_solver_errors(void)
     CHECK(gf9_step(&bad, A, 0.01, &o) == GF_ERR_BAD_PARAMETER, "corrupt state refused");
 }
 
-/* Physical limits (gf_accel_array.h): |f| <= 1000 m/s^2 and |omega| <= 50 rad/s, as the
+/* Physical limits (gf9.h): |f| <= 1000 m/s^2 and |omega| <= 50 rad/s, as the
  * navigators' defaults; outputs built with independent_output for one sensor set. */
 static void outputs_of(const double f[3], const double w[3], const double wd[3], double A[9])
 {

@@ -10,10 +10,10 @@
 #include <math.h>
 #include <string.h>
 
-#include "gf_aiding_sim.h"
+#include "sim/gf_aiding.h"
 #include "gf_ref.h"
 #include "gf_test.h"
-#include "gf_vehicle.h"
+#include "sim/gf_vehicle.h"
 
 static gf_vehicle_profile turning_profile(void)
 {

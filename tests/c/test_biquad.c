@@ -23,7 +23,7 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "gf_biquad.h"
+#include "nav/gf_biquad.h"
 #include "gf_test.h"
 
 #define PI 3.14159265358979323846

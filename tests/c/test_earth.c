@@ -5,7 +5,7 @@
  * central differences of the closed-form radii. */
 #include <math.h>
 
-#include "gf_earth.h"
+#include "nav/gf_earth.h"
 #include "gf_ref.h"
 #include "gf_test.h"
 

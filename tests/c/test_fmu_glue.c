@@ -48,7 +48,7 @@
 #include "fmi3Functions.h"
 #include "fmu_instance.h" /* FmuSnapshot (to corrupt states), model_vars.h */
 #include "fmu_state_ref.h"  /* the serialized format and an independent CRC-32 */
-#include "gf_accel_array.h"
+#include "gyrofree/gf9.h"
 #include "gf_test.h"
 
 /* ---- samples and truth ------------------------------------------------------------ */

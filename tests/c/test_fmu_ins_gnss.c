@@ -20,11 +20,11 @@
 #include "fmi2Functions.h"
 #include "fmu_instance.h"
 #include "fmu2_test.h"
-#include "gf_earth.h"
-#include "gf_ins_gnss.h"
-#include "gf_math.h"
+#include "base/gf_math.h"
+#include "est/gf_ins_gnss.h"
+#include "nav/gf_earth.h"
 #include "gf_test.h"
-#include "gf_vehicle.h"
+#include "sim/gf_vehicle.h"
 #include "turn_drive.h"
 
 #define H_S 0.01

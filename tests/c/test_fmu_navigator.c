@@ -23,10 +23,14 @@
 #include "fmi2Functions.h"
 #include "fmu_instance.h"
 #include "fmu2_test.h"
-#include "gf_gfins.h"
-#include "gf_math.h"
+#include "base/gf_math.h"
+#include "gyrofree/gf9.h"
+#include "gyrofree/gf_array.h"
+#include "gyrofree/gf_array_solver.h"
+#include "gyrofree/gf_gfins.h"
+#include "gyrofree/gf_gfnav.h"
 #include "gf_test.h"
-#include "gf_vehicle.h"
+#include "sim/gf_vehicle.h"
 #include "turn_drive.h"
 
 #define H_S 0.01

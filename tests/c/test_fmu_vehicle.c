@@ -25,12 +25,13 @@
 #include "fmi2Functions.h"
 #include "fmu_instance.h"
 #include "fmu2_test.h"
-#include "gf_aiding_sim.h"
-#include "gf_gfins.h"
-#include "gf_math.h"
-#include "gf_rotation.h"
+#include "base/gf_math.h"
+#include "gyrofree/gf9.h"
+#include "gyrofree/gf_array.h"
+#include "sim/gf_aiding.h"
+#include "sim/gf_rot.h"
 #include "gf_test.h"
-#include "gf_vehicle.h"
+#include "sim/gf_vehicle.h"
 
 #define H_S 0.01
 enum { N = 3000 };   /* 30 s: rest, start, into the straight run */

@@ -35,11 +35,15 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "gf_accel_array.h"
-#include "gf_gfins.h"
-#include "gf_kalman.h"
-#include "gf_linalg.h"
-#include "gf_sins.h"
+#include "base/gf_linalg.h"
+#include "est/gf_kalman.h"
+#include "gyrofree/gf9.h"
+#include "gyrofree/gf_array.h"
+#include "gyrofree/gf_array_solver.h"
+#include "gyrofree/gf_gfins.h"
+#include "gyrofree/gf_gfnav.h"
+#include "gyrofree/gf_layout.h"
+#include "nav/gf_sins.h"
 #include "gf_ref.h"
 #include "gf_test.h"
 

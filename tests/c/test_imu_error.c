@@ -19,7 +19,7 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "gf_imu_error.h"
+#include "nav/gf_imu_error.h"
 #include "gf_test.h"
 
 #define EPS DBL_EPSILON

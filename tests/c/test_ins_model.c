@@ -17,8 +17,8 @@
 #include <math.h>
 #include <string.h>
 
-#include "gf_ins_gnss.h"
-#include "gf_ins_model.h"
+#include "est/gf_ins_gnss.h"
+#include "est/gf_ins_model.h"
 #include "gf_ref.h"
 #include "gf_test.h"
 

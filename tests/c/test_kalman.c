@@ -19,8 +19,8 @@
 #include <math.h>
 #include <string.h>
 
-#include "gf_kalman.h"
-#include "gf_linalg.h"
+#include "base/gf_linalg.h"
+#include "est/gf_kalman.h"
 #include "gf_ref.h"
 #include "gf_test.h"
 

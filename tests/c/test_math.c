@@ -1,5 +1,5 @@
 /* test_math.c — the vector/matrix/quaternion library against closed-form rotations. */
-#include "gf_math.h"
+#include "base/gf_math.h"
 #include "gf_test.h"
 
 #define PI 3.14159265358979323846

@@ -5,7 +5,7 @@
 #include <math.h>
 #include <string.h>
 
-#include "gf_noise.h"
+#include "sim/gf_noise.h"
 #include "gf_test.h"
 
 enum { N = 200000 };

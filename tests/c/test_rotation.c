@@ -1,4 +1,4 @@
-/* test_rotation.c — the rotating IMU (gf_rotation) against independent truth:
+/* test_rotation.c — the rotating IMU (gf_rot) against independent truth:
  *   - the seed 001 path table (the published directions of x_m, y_m, z_m after each of
  *     the 18 turns, typed in here from the patent's table 1 / steps 0-18);
  *   - the rate of m relative to b against a central difference of the attitude;
@@ -15,7 +15,7 @@
 #include <string.h>
 
 #include "gf_ref.h"
-#include "gf_rotation.h"
+#include "sim/gf_rot.h"
 #include "gf_test.h"
 
 #define DEG (REF_PI / 180.0)

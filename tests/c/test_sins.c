@@ -33,8 +33,8 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "gf_earth.h"
-#include "gf_sins.h"
+#include "nav/gf_earth.h"
+#include "nav/gf_sins.h"
 #include "gf_ref.h"
 #include "gf_test.h"
 

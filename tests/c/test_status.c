@@ -4,7 +4,7 @@
  * status (a corrupted or future code) instead of NULL. */
 #include <string.h>
 
-#include "gf_status.h"
+#include "base/gf_status.h"
 #include "gf_test.h"
 
 int main(void)

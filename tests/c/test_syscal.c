@@ -2,7 +2,7 @@
  * truth:
  *   - the parameter -> error-model mapping against the seed's angle definitions written
  *     here as rotations of the m axes (first order: the difference is the angle squared);
- *   - records from the rotating-IMU simulator (gf_rotation, the forward model) with
+ *   - records from the rotating-IMU simulator (gf_rot, the forward model) with
  *     known errors (gf_imu_apply): exact data with no errors leave the estimates at zero;
  *     biases, a lever arm and the accelerometer delay (37 states) are recovered within
  *     3 sigma, the sigmas well below the prior (the path observes them);
@@ -16,10 +16,10 @@
 #include <math.h>
 #include <string.h>
 
-#include "gf_imu_error.h"
+#include "est/gf_syscal.h"
 #include "gf_ref.h"
-#include "gf_rotation.h"
-#include "gf_syscal.h"
+#include "nav/gf_imu_error.h"
+#include "sim/gf_rot.h"
 #include "gf_test.h"
 
 #define DEG (REF_PI / 180.0)

@@ -6,7 +6,7 @@
 
 #include "gf_ref.h"
 #include "gf_test.h"
-#include "gf_vehicle.h"
+#include "sim/gf_vehicle.h"
 
 static gf_vehicle_profile base_profile(void)
 {

@@ -6,9 +6,9 @@
 
 #include <string.h>
 
-#include "gf_math.h"
+#include "base/gf_math.h"
 #include "gf_test.h"
-#include "gf_vehicle.h"
+#include "sim/gf_vehicle.h"
 
 static void turn_drive(gf_vehicle_sample *truth, int n, double h_s)
 {

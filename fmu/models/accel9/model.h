@@ -4,7 +4,7 @@
 
 #include <stdint.h>
 
-#include "gf_accel_array.h"
+#include "gyrofree/gf9.h"
 
 typedef struct ModelData {
     /* parameters */

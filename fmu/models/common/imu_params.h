@@ -6,7 +6,7 @@
 
 #include <string.h>
 
-#include "gf_imu_error.h"
+#include "nav/gf_imu_error.h"
 
 typedef struct FmuImuParams {
     double gyro_bias_rad_s[3], gyro_scale[3], gyro_misalign_rad[9];

@@ -7,7 +7,12 @@
 #include <string.h>
 
 #include "fmu_model.h"
-#include "gf_math.h"
+#include "base/gf_math.h"
+#include "gyrofree/gf9.h"
+#include "gyrofree/gf_array.h"
+#include "gyrofree/gf_gfins.h"
+#include "gyrofree/gf_gfnav.h"
+#include "gyrofree/gf_layout.h"
 #include "model.h"
 #include "skip_steps.h"
 

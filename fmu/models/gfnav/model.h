@@ -5,7 +5,7 @@
 
 #include <stdint.h>
 
-#include "gf_gfins.h"
+#include "gyrofree/gf_gfnav.h"
 
 typedef struct ModelData {
     /* parameters */

@@ -22,8 +22,8 @@
 #include <string.h>
 
 #include "fmu_model.h"
-#include "gf_earth.h"
-#include "gf_math.h"
+#include "base/gf_math.h"
+#include "nav/gf_earth.h"
 #include "model.h"
 #include "skip_steps.h"
 

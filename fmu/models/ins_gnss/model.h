@@ -5,7 +5,7 @@
 
 #include <stdint.h>
 
-#include "gf_ins_gnss.h"
+#include "est/gf_ins_gnss.h"
 
 /* kinds of the per-kind monitoring outputs: GF_INS_MEAS_GNSS_POS .. GF_INS_MEAS_ZARU */
 #define INS_FMU_KINDS 7

@@ -10,7 +10,7 @@
 #include <string.h>
 
 #include "fmu_model.h"
-#include "gf_math.h"
+#include "base/gf_math.h"
 #include "model.h"
 #include "skip_steps.h"
 

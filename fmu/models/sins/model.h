@@ -4,10 +4,10 @@
 
 #include <stdint.h>
 
-#include "gf_biquad.h"
-#include "gf_imu_error.h"
-#include "gf_rotation.h"
-#include "gf_sins.h"
+#include "nav/gf_biquad.h"
+#include "nav/gf_imu_error.h"
+#include "nav/gf_sins.h"
+#include "sim/gf_rot.h"
 #include "imu_params.h"
 
 typedef struct ModelData {

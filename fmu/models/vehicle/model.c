@@ -1,5 +1,5 @@
 /* model.c — the vehicle as an FMU model: FMI-agnostic, calls gf_vehicle (truth),
- * gf_rotation (rotation = 1: the IMU on the two-axis mechanism), gf_imu_error (IMU
+ * gf_rot (rotation = 1: the IMU on the two-axis mechanism), gf_imu_error (IMU
  * errors), gf_array_forward (accelerometer array) and gf_aiding_sim (GNSS receiver,
  * barometer, odometer).
  *
@@ -8,13 +8,15 @@
  * keeps no time drift beyond the master's own) and the outputs describe t + h, the
  * increments covering (t, t + h]. Any step size is handled. An aiding epoch (valid at
  * t_v, due at t_v + latency) is delivered in the first step whose end reaches the due
- * time; its values depend on the parameters and the seed only (gf_aiding_sim.h). */
+ * time; its values depend on the parameters and the seed only (gf_aiding.h). */
 #include <math.h>
 #include <string.h>
 
 #include "fmu_model.h"
-#include "gf_gfins.h"
-#include "gf_math.h"
+#include "base/gf_math.h"
+#include "gyrofree/gf9.h"
+#include "gyrofree/gf_array.h"
+#include "gyrofree/gf_layout.h"
 #include "model.h"
 
 /* Sensor outputs of a truth sample (IMU with errors and noise if asked; array), computed

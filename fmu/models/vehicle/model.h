@@ -4,12 +4,12 @@
 
 #include <stdint.h>
 
-#include "gf_accel_array.h"
-#include "gf_aiding_sim.h"
-#include "gf_imu_error.h"
-#include "gf_noise.h"
-#include "gf_rotation.h"
-#include "gf_vehicle.h"
+#include "gyrofree/gf_array.h"
+#include "nav/gf_imu_error.h"
+#include "sim/gf_aiding.h"
+#include "sim/gf_noise.h"
+#include "sim/gf_rot.h"
+#include "sim/gf_vehicle.h"
 #include "imu_params.h"
 
 #define VEHICLE_ARRAY_MAX 12
@@ -26,8 +26,8 @@ typedef struct ModelData {
     int32_t noise, noise_seed;
     gf_imu_noise noise_params;            /* SI, the conventions of gfins_fmi.ImuNoise */
     double array_noise_m_s2;
-    gf_aiding_params aiding;              /* GNSS, barometer, odometer (gf_aiding_sim.h) */
-    int32_t rotation, rot_n, rot_repeat;  /* the rotating IMU (gf_rotation.h) */
+    gf_aiding_params aiding;              /* GNSS, barometer, odometer (gf_aiding.h) */
+    int32_t rotation, rot_n, rot_repeat;  /* the rotating IMU (gf_rot.h) */
     int32_t rot_base_axis[GF_ROT_MAX_SEGMENTS], rot_imu_axis[GF_ROT_MAX_SEGMENTS];
     double rot_base_angle_rad[GF_ROT_MAX_SEGMENTS], rot_imu_angle_rad[GF_ROT_MAX_SEGMENTS];
     double rot_move_s[GF_ROT_MAX_SEGMENTS], rot_ramp_s[GF_ROT_MAX_SEGMENTS];

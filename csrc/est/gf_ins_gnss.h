@@ -1,0 +1,540 @@
+/* gf_ins_gnss.h — integrated navigation: an error-state Kalman filter (EKF or UKF) that
+ * corrects the strapdown mechanization (gf_sins) with GNSS position and velocity,
+ * barometric height, odometer speed, non-holonomic constraints and zero-velocity /
+ * zero-angular-rate updates at standstill, on the one Kalman engine (gf_kalman).
+ *
+ * States (seed 004 eq. 17, its order; ENU navigation frame, body right-front-up):
+ *   0-2   dv     velocity error v_computed - v_true (E, N, U), m/s
+ *   3-5   dp     position error (dL rad, dlambda rad, dh m), computed - true
+ *   6-8   phi    attitude error, C_b^n(computed) = (I - [phi x]) C_b^n(true), rad (E, N, U)
+ *   9-11  dbg    gyro bias not yet compensated, b_true - b_estimated, rad/s (body)
+ *   12-14 dba    accelerometer bias not yet compensated, m/s^2 (body)
+ * optional blocks, appended in this order when enabled (indices in gf_ins_filter.idx_*):
+ *   dsg (3) gyro scale-factor error, dsa (3) accelerometer scale-factor error
+ *           (dimensionless: measured = (1 + s) true + b), 15 + 6 = 21 states (issue 11);
+ *   dbb (1) barometer bias b_true - b_estimated, m;  dko (1) odometer scale error;
+ *   dmo (2) odometer boresight error (pitch, heading of the odometer axes in the body
+ *           frame, true - estimated, rad; the nominal angles are cfg.odo_mount_rad +
+ *           the sensors[] correction, fed back like the other sensor estimates).
+ * Sensor errors are first-order Gauss-Markov processes (seed 004: "first-order Markov
+ * drifts"), x' = -x / tau + w, E[w w] = 2 sigma^2 / tau; tau = 0 makes a random constant.
+ *
+ * Continuous error model x' = F x + G w (Titterton & Weston, Strapdown Inertial
+ * Navigation Technology, 2nd ed., ch. 12.3, with the transport-rate and gravity
+ * couplings of the moving vehicle; gfins_fmi.error_models.ins_error_matrices is the
+ * definition, tests/test_estimation.py compares this C code with it):
+ *   phi' = -w_in x phi + d(w_in) - C_b^n dw_ib          dw_ib = dbg + diag(w_ib) dsg
+ *   dv'  = f^n x phi + C_b^n df + v x (2 d(w_ie) + d(w_en)) - (2 w_ie + w_en) x dv + dg
+ *                                                        df = dba + diag(f^b) dsa
+ *   dL'  = dv_N / (R_M + h) - v_N dh / (R_M + h)^2
+ *   dlambda' = dv_E / ((R_N + h) cos L) + v_E tan L dL / ((R_N + h) cos L)
+ *              - v_E dh / ((R_N + h)^2 cos L)
+ *   dh'  = dv_U,      dg = [0, 0, 2 g dh / (sqrt(R_M R_N) + h)]
+ * (derivatives of the radii and of gravity with latitude are neglected: relative size
+ * e^2 ~ 0.7% of terms that are themselves small). The navigation blocks (phi, dv, dp)
+ * come from gf_ins_model (gf_ins_nav_blocks_sparse), shared with the calibration
+ * filter; the sensor-error columns are this filter's. Noise w: accelerometer white noise
+ * (velocity random walk) into dv through C_b^n, gyro white noise (angle random walk)
+ * into phi through -C_b^n, one driving noise per sensor-error state.
+ *
+ * Discretisation over the propagation interval T (a number of IMU samples, or every
+ * sample): Phi = I + F T + (F T)^2 / 2 (second-order series, F at the end of the
+ * interval with the mean specific force and rate of the interval), process noise by the
+ * trapezoidal rule P <- Phi (P + Qc T/2) Phi^T + Qc T/2, Qc = G diag(q) G^T; the
+ * propagation skips the zeros of Phi - I: the model code marks the entries of F it fills
+ * (F's structure, fixed by the configuration), A = Phi - I is formed over them and handed
+ * with its structure to gf_kalman_predict_masked.
+ *
+ * UKF: the same states; sigma points of the error state (seed 004 eq. 25-28) are turned
+ * into full navigation hypotheses (v = v_nom - dv, p = p_nom - dp, q = q(phi) q_nom,
+ * sensor errors = estimate + state), each is moved over the propagation interval by the
+ * mechanization (gf_sins_step) with the interval's summed, compensated increments, and
+ * differenced against the nominal moved the same way (errors of this coarse step cancel
+ * to first order); measurements are predicted from each hypothesis with the full
+ * nonlinear models below. Additive process and measurement noise (seed 004 augments
+ * the state with them, eq. 18 and 24; for additive noise this is the same transform with
+ * alpha scaled by sqrt(N_augmented / N) up to the centre point's covariance weight).
+ *
+ * Closed loop: after every update (and, for the UKF, after every time update) the
+ * estimated errors are fed back into the mechanization and the sensor-error estimates,
+ * and the error state is reset to zero.
+ *
+ * Measurements (docs/estimation.md; z_err = prediction from the nominal - measurement):
+ *   GNSS position: antenna at lever arm l_gnss (body), p_ant = p + C_b^n l (ENU metres).
+ *   GNSS velocity: v_ant = v + C_b^n (w_eb^b x l),  w_eb^b = w_ib^b - C_n^b w_ie^n.
+ *   barometer: h + b_baro.  odometer: (1 + k) [C_b^m (C_n^b v + w_eb^b x l_odo)]_y
+ *   (forward), C_m^b = Rz(-heading_m) Rx(pitch_m) the odometer's mounting (boresight,
+ *   odo_mount_rad + the estimated correction; identity by default).  non-holonomic:
+ *   [C_b^m (C_n^b v + w_eb^b x l_odo)]_x,z = 0.  With odo_mount_state the rows of both
+ *   take d/dpitch_m and d/dheading_m of C_b^m (exact derivatives of its entries, see
+ *   gf_ins_meas.c).  ZUPT: v = 0.
+ *   ZARU: w_ib^b - C_n^b w_ie^n = 0 (mean over the standstill detector's window).
+ *   speed (tachometer, seed 003 section 1.2.2, its eq. 7-8 linearised; the scan lost the
+ *   equations, so derived here): y = (1 + k) sqrt(v_E^2 + v_N^2), k the odometer scale
+ *   state (one speed-scale state: a vehicle has an odometer or a tachometer), so
+ *   dy = (1 + k) (v_E dv_E + v_N dv_N) / |v_h| - |v_h| dk. The seed's 2-D model: the
+ *   AUV's depth comes from its depth sensor (a height measurement: GF_INS_MEAS_BARO with
+ *   z = -depth + datum), the tachometer gives the horizontal speed through the water
+ *   (no current, no lever-arm term: w x l is ~1e-3 of the speed on an AUV). At or below
+ *   speed_min_m_s of INS horizontal speed the direction v_h / |v_h| is undefined or
+ *   poorly known and the update is refused (logged GF_INS_REJECTED_LOW_SPEED).
+ * The models are one table of the kinds (gf_ins_meas.c: per kind its rows, prediction
+ * and Jacobian, one section each); gf_ins_meas_kind_info enumerates it and
+ * gf_ins_meas_model evaluates one kind at the filter's state. The linearised models H
+ * leave out one small term: the Earth rate in w_eb^b turns with the attitude and the
+ * latitude, which moves the GNSS velocity, odometer and NHC predictions by at most
+ * |w_ie| |l| (7.3e-5 m/s per rad for l = 1 m) and ZARU's by |w_ie| per rad of latitude;
+ * their H has no such entries (tests/c/test_ins_meas.c bounds the difference).
+ * Measurements carry their time of validity; the IMU interval that contains it is
+ * split there (increments in proportion to time, rates interpolated linearly), the
+ * covariance is propagated to that instant and the update is made there. A measurement
+ * that arrives late (valid before the current sample, by up to max_latency_s, within the
+ * last GF_INS_HISTORY samples) is predicted from the nominal state of its time of
+ * validity (kept, interpolated between samples) and corrects the current state, the
+ * error state being taken as constant over the delay (its change over a delay of
+ * 0.1-0.5 s is second order for the slowly varying INS errors).
+ * Innovation gating: NIS r^T S^-1 r above the chi-square quantile of the configured
+ * probability for m degrees of freedom rejects the measurement (logged).
+ *
+ * Reverse-time filtering (seed 003 section 2, its eq. 20-36: the reverse navigation
+ * algorithm; the scan lost the equations, so derived here). With tau = -t the
+ * mechanization is the forward one with (w_ib, f, v, w_ie) -> (-w_ib, f, -v, -w_ie)
+ * (gf_sins.h). gf_ins_reverse() turns the filter around: the nominal through
+ * gf_sins_reverse (v and the Earth-rate sign negated; error model and measurement
+ * models take the Earth rate with that sign), and the error state x_r = D x,
+ * P_r = D P D with D = diag(-1 on dv and dbg, +1 elsewhere). Why: dv_r = v_r,computed -
+ * v_r,true = -dv; the gyro increments are negated, so the bias the reverse filter sees
+ * is -b (dbg_r = -dbg, its estimate negated too); attitude, position, accelerometer
+ * bias (f unchanged), scale factors ((1 + s)(-w) - b keeps s) and barometer/odometer
+ * errors (scale and boresight angles: the odometer axes do not turn with time) are
+ * unchanged. Check on F: with x_r = D x, dx_r/dtau = -D F D x_r, and the
+ * forward formula of F evaluated on the reversed nominal (-v, -w_ie, -w_en, -w_ib, same
+ * f, C, position) gives exactly -D F D block by block (e.g. phi-phi: -[w_in x] changes
+ * sign, phi-dv: dw_en/dv keeps it, dv-phi: [f^n x] keeps it, dv-dv: -(2 w_ie + w_en) x
+ * changes it), except the Gauss-Markov decays -1/tau, which keep their sign: a
+ * stationary first-order Markov process has the same statistics in reversed time, so
+ * that is the right backward model (random constants, tau = 0: exact). Reversing twice
+ * is the identity on x, P and the nominal. Measurements in reverse are handed in as
+ * recorded (true time): GNSS velocity and odometer speed are negated inside, the
+ * tachometer speed magnitude and positions/heights are unchanged. Delayed measurements
+ * (max_latency_s) are used forward only; in reverse they are stale.
+ */
+#ifndef GF_INS_GNSS_H
+#define GF_INS_GNSS_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "base/gf_status.h"
+#include "est/gf_kalman.h"
+#include "nav/gf_sins.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* CDEF BEGIN */
+#define GF_INS_EKF 0
+#define GF_INS_UKF 1
+
+#define GF_INS_IDX_VEL 0
+#define GF_INS_IDX_POS 3
+#define GF_INS_IDX_ATT 6
+#define GF_INS_IDX_BG 9
+#define GF_INS_IDX_BA 12
+#define GF_INS_BASE_STATES 15
+#define GF_INS_MAX_STATES 25
+
+/* Sensor-error estimates, in this order in every array of them ("sensors"):
+ * gyro bias (3, rad/s), accelerometer bias (3, m/s^2), gyro scale (3), accelerometer
+ * scale (3), barometer bias (m), odometer scale, odometer boresight correction (pitch,
+ * heading, rad: added to cfg.odo_mount_rad). */
+#define GF_INS_N_SENSORS 16
+
+/* Measurement types */
+#define GF_INS_MEAS_GNSS_POS 1     /* z: antenna lat rad, lon rad, h m; std: E, N, U m */
+#define GF_INS_MEAS_GNSS_VEL 2     /* z: antenna v_E, v_N, v_U m/s; std: m/s */
+#define GF_INS_MEAS_BARO 3         /* z[0]: barometric height m; std[0] m */
+#define GF_INS_MEAS_ODO 4          /* z[0]: forward speed m/s; std[0] m/s */
+#define GF_INS_MEAS_NHC 5          /* internal: lateral and vertical body velocity 0 */
+#define GF_INS_MEAS_ZUPT 6         /* internal: velocity 0 at standstill */
+#define GF_INS_MEAS_ZARU 7         /* internal: angular rate w.r.t. the Earth 0 at standstill */
+#define GF_INS_MEAS_SPEED 8        /* z[0]: horizontal speed magnitude m/s (tachometer, seed
+                                      003); std[0] m/s */
+#define GF_INS_N_MEAS_KINDS 9      /* measurement type codes are 1 .. GF_INS_N_MEAS_KINDS - 1 */
+
+/* Outcome of one update */
+#define GF_INS_ACCEPTED 0
+#define GF_INS_REJECTED_GATE 1     /* NIS above the gate */
+#define GF_INS_REJECTED_SINGULAR 2 /* innovation covariance not positive definite */
+#define GF_INS_REJECTED_STALE 3    /* time of validity at or before the filter's time */
+#define GF_INS_FORCED 4            /* applied above the gate: the previous gate_reset_count
+                                      of its kind were all rejected (a gate that rejects
+                                      everything after a divergence would never recover) */
+#define GF_INS_REJECTED_LOW_SPEED 5 /* speed update refused: INS horizontal speed below
+                                      speed_min_m_s (direction of v_h undefined) */
+
+typedef struct gf_ins_noise {
+    double gyro_arw_rad_sqrt_s;     /* gyro white noise (angle random walk), rad/sqrt(s) */
+    double accel_vrw_m_s_sqrt_s;    /* accelerometer white noise (velocity r.w.), m/s/sqrt(s) */
+    double gyro_bias_std_rad_s;     /* Gauss-Markov steady-state std */
+    double gyro_bias_tau_s;         /* correlation time, s; 0 = random constant */
+    double accel_bias_std_m_s2;
+    double accel_bias_tau_s;
+    double gyro_scale_std;          /* dimensionless */
+    double gyro_scale_tau_s;
+    double accel_scale_std;
+    double accel_scale_tau_s;
+    double baro_bias_std_m;
+    double baro_bias_tau_s;
+    double odo_scale_std;
+    double odo_scale_tau_s;
+    double odo_mount_std_rad;       /* odometer boresight (pitch and heading) */
+    double odo_mount_tau_s;
+} gf_ins_noise;
+
+typedef struct gf_ins_config {
+    int32_t input;                  /* GF_SINS_INPUT_INCREMENTS or GF_SINS_INPUT_RATES */
+    int32_t coning;                 /* 1: coning/sculling corrections in the mechanization */
+    int32_t filter;                 /* GF_INS_EKF or GF_INS_UKF */
+    int32_t scale_states;           /* 1: gyro and accelerometer scale factors (21 states) */
+    int32_t baro_state;             /* 1: barometer bias state */
+    int32_t odo_state;              /* 1: odometer scale-factor state */
+    int32_t odo_mount_state;        /* 1: odometer boresight states (pitch, heading) */
+    double prop_interval_s;         /* covariance propagation interval, s; 0: every sample */
+    double max_imu_gap_s;           /* a longer IMU interval is an error (GF_ERR_BAD_TIME) */
+    double max_rate_rad_s;          /* absurd-sample limits of the mechanization */
+    double max_specific_force_m_s2;
+    double ukf_alpha, ukf_beta, ukf_kappa;   /* seed 004: alpha small, beta 2, kappa 0 */
+    gf_ins_noise noise;
+    double gnss_lever_m[3];         /* IMU -> GNSS antenna, body axes, m */
+    double odo_lever_m[3];          /* IMU -> odometer wheel contact point, body axes, m */
+    double gate_prob;               /* NIS gate probability in (0, 1); 0: no gate */
+    int32_t gate_reset_count;       /* > 0: after this many consecutive gate rejections of
+                                       one kind the next is applied (GF_INS_FORCED); 0: never */
+    int32_t nhc;                    /* 1: non-holonomic constraint updates */
+    double nhc_std_m_s;
+    double nhc_interval_s;          /* at most one NHC update per interval */
+    int32_t zupt;                   /* 1: zero-velocity updates at detected standstill */
+    double zupt_std_m_s;
+    double zaru_std_rad_s;          /* > 0: also zero-angular-rate updates */
+    double zupt_interval_s;
+    double still_window_s;          /* standstill detector averaging time, s */
+    double still_accel_std_m_s2;    /* standstill: std of |f| over the window below this */
+    double still_gyro_rad_s;        /* ... and mean |w| over the window below this */
+    double max_latency_s;           /* > 0: measurements valid up to this long before the
+                                       current sample are used (delayed update, see above);
+                                       older ones, and all past ones with 0, are stale */
+    double speed_min_m_s;           /* GF_INS_MEAS_SPEED refused at or below this INS
+                                       horizontal speed, m/s (>= 0; default 0.5) */
+    double odo_mount_rad[2];        /* odometer boresight: pitch (nose-up +) and heading
+                                       (clockwise +) of its measuring axes in the body
+                                       frame, rad, |.| < pi/2; 0, 0: body axes. The angles
+                                       used are these + the sensors[] boresight correction
+                                       (estimated with odo_mount_state) */
+    int32_t subsamples;             /* 1..4 IMU samples per navigation update in gf_ins_run
+                                       (increments only; see gf_ins_run); 0 or 1: one */
+} gf_ins_config;
+
+typedef struct gf_ins_meas {
+    int32_t type;                   /* GF_INS_MEAS_GNSS_POS .. GF_INS_MEAS_ODO, GF_INS_MEAS_SPEED */
+    double t_s;                     /* time of validity */
+    double z[3];
+    double std[3];                  /* > 0 */
+} gf_ins_meas;
+
+/* One update, as logged. */
+typedef struct gf_ins_innovation {
+    double t_s;
+    int32_t type;                   /* GF_INS_MEAS_* */
+    int32_t status;                 /* GF_INS_ACCEPTED or GF_INS_REJECTED_* */
+    int32_t m;                      /* rows used */
+    double nis;                     /* r^T S^-1 r (NaN when not computed) */
+    double r[3];                    /* z_err = predicted - measured (m, m/s, rad/s) */
+    double s_std[3];                /* sqrt of the diagonal of S */
+} gf_ins_innovation;
+
+typedef struct gf_ins_log {
+    size_t capacity, count;
+    uint64_t n_dropped;             /* updates not logged because the log was full */
+    gf_ins_innovation *entries;
+} gf_ins_log;
+
+/* What the smoother needs, one row per covariance epoch (propagation or measurement
+ * instant). n = number of states; P as packed upper triangles (row by row, n(n+1)/2). */
+typedef struct gf_ins_epochs {
+    size_t capacity, count;
+    double *t_s;                    /* capacity */
+    double *nav;                    /* capacity x 10: q_bn (4), v ENU (3), lat, lon, h */
+    double *sensors;                /* capacity x GF_INS_N_SENSORS */
+    double *dx;                     /* capacity x n: correction fed back at this epoch */
+    double *P_prior;                /* capacity x n(n+1)/2: before this epoch's updates */
+    double *P_post;                 /* capacity x n(n+1)/2: after them */
+    double *Phi;                    /* capacity x n*n: transition from the previous epoch */
+} gf_ins_epochs;
+
+/* Per-IMU-sample outputs (rows = samples; any pointer may be NULL except t_s, q_bn,
+ * v_n_m_s, pos), or one row per navigation update when gf_ins_run groups samples
+ * (cfg.subsamples > 1); n_rows says how many rows a call wrote. */
+typedef struct gf_ins_output {
+    double *t_s;                    /* n */
+    double *q_bn;                   /* n x 4 */
+    double *v_n_m_s;                /* n x 3 */
+    double *pos;                    /* n x 3: lat rad, lon rad, h m */
+    double *std;                    /* n x 9: velocity E N U m/s, position E N U m, attitude E N U rad */
+    double *sensors;                /* n x GF_INS_N_SENSORS */
+    int8_t *standstill;             /* n: detector output */
+    size_t n_rows;                  /* written by gf_ins_run / gf_ins_run_backward */
+} gf_ins_output;
+
+/* The nominal state after one IMU sample, kept for delayed measurements. */
+#define GF_INS_HISTORY 128
+typedef struct gf_ins_history {
+    double t_s;
+    double q_bn[4];
+    double v_n_m_s[3];
+    double lat_rad, lon_rad, h_m;
+    double w_ib_b_rad_s[3];
+} gf_ins_history;
+
+typedef struct gf_ins_filter {
+    gf_ins_config cfg;
+    int32_t n_states;
+    int32_t idx_sg, idx_sa, idx_baro, idx_odo;   /* first index of each optional block; -1 absent */
+    int32_t idx_mount;              /* odometer boresight block (2); -1 absent */
+    gf_sins_state nav;              /* nominal navigation state (the corrected mechanization) */
+    double sensors[GF_INS_N_SENSORS];/* estimated sensor errors, fed back */
+    gf_kalman kf;                   /* error state (0 between updates) and covariance */
+    gf_ukf_weights ukf_w;
+    double t_s;                     /* time of the nominal state */
+    int32_t have_sample;            /* 1 after the first IMU sample */
+    double prev_gyro_raw[3], prev_accel_raw[3];  /* last raw sample (rates: for splitting) */
+    double w_ib_b_rad_s[3];         /* latest compensated angular rate */
+    double f_b_m_s2[3];             /* latest compensated specific force */
+    double acc_T_s;                 /* accumulation since the last propagation */
+    double acc_dtheta_rad[3], acc_dv_m_s[3];
+    gf_sins_state nav0;             /* UKF: nominal at the start of the accumulation */
+    double sensors0[GF_INS_N_SENSORS];
+    double std9[9];                 /* output standard deviations (see gf_ins_output), kept
+                                       current after every propagation and update */
+    double inv_scale[6];            /* 1 / (1 + scale estimate): gyro x, y, z, accel x, y, z */
+    double still_f[3], still_fn, still_fn2, still_w[3], still_wn, still_time_s;
+    int32_t standstill;
+    double last_nhc_t_s, last_zupt_t_s;
+    double last_regular_t_s;        /* time of the last propagation on the regular grid */
+    gf_ins_history hist[GF_INS_HISTORY];  /* ring of the last samples (max_latency_s > 0) */
+    int32_t hist_head, hist_count;
+    uint64_t n_imu, n_updates, n_rejected;
+    int32_t gate_run[GF_INS_N_MEAS_KINDS]; /* consecutive gate rejections per measurement type */
+} gf_ins_filter;
+
+/* Defaults: increments with coning, EKF, 15 states, propagation every 0.1 s, IMU gap
+ * limit 0.5 s, UKF alpha 1e-3... see gf_ins_config.c; noise all zero (set it). */
+gf_status gf_ins_config_default(gf_ins_config *cfg);
+
+/* Number of states of a configuration (15 .. 25). Errors: GF_ERR_BAD_PARAMETER. */
+gf_status gf_ins_state_count(const gf_ins_config *cfg, int32_t *n_states);
+
+/* Starts the filter at t0_s with the nominal attitude q_bn, ENU velocity, position, the
+ * sensor-error estimates sensors0 (GF_INS_N_SENSORS; NULL = 0) and the error covariance
+ * P0 (n x n, symmetric positive definite). Errors: GF_ERR_BAD_PARAMETER (configuration,
+ * with *bad naming the field: see gf_ins_config.c), GF_ERR_NONFINITE_INPUT,
+ * GF_ERR_SINGULAR_GEOMETRY (P0 not positive definite). */
+gf_status gf_ins_init(gf_ins_filter *f, const gf_ins_config *cfg, double t0_s,
+                      const double *q_bn, const double *v_n_m_s, double lat_rad,
+                      double lon_rad, double h_m, const double *sensors0, const double *P0,
+                      int32_t *bad);
+
+/* Checks a whole filter handed in by a caller (an FMU state restored from bytes): the
+ * configuration, the state layout and every index (idx_*, kf.n, history ring), flags,
+ * the nominal states (gf_sins_state_check) and finite estimates with a positive
+ * covariance diagonal. gf_ins_step checks the sizes and indices (integer compares)
+ * itself every step. Errors: GF_ERR_BAD_SIZE, GF_ERR_BAD_PARAMETER,
+ * GF_ERR_NONFINITE_INPUT. */
+gf_status gf_ins_filter_check(const gf_ins_filter *f);
+
+/* Records the current state as the first epoch of *epochs (call once before a run
+ * whose epochs feed the smoother). */
+gf_status gf_ins_epochs_begin(gf_ins_filter *f, gf_ins_epochs *epochs);
+
+/* One IMU sample whose interval ends at t_s (increments over (t_prev, t_s], or rates at
+ * t_s), with the measurements valid inside that interval (sorted by time; t_prev <
+ * t_m <= t_s; one at t_prev itself, the filter's time, is applied before the sample;
+ * earlier ones are delayed or stale). epochs and log may be NULL. Errors: GF_ERR_BAD_TIME (t_s not after the
+ * filter's time, interval above max_imu_gap_s, measurement outside the interval or not
+ * sorted), GF_ERR_NONFINITE_INPUT, GF_ERR_BAD_PARAMETER (bad measurement type or std),
+ * GF_ERR_OUT_OF_RANGE (absurd sample), GF_ERR_DIVERGED (navigation or covariance left
+ * its domain), GF_ERR_BAD_SIZE (epochs full). On error the filter is unchanged except
+ * after GF_ERR_DIVERGED and GF_ERR_BAD_SIZE raised after the mechanization, where it holds
+ * the state reached (see gf_ins_run). */
+gf_status gf_ins_step(gf_ins_filter *f, double t_s, const double *gyro, const double *accel,
+                      size_t n_meas, const gf_ins_meas *meas, gf_ins_epochs *epochs,
+                      gf_ins_log *log);
+
+/* n IMU samples (t_s n, gyro and accel n x 3) with n_meas measurements sorted by time
+ * (processing order: time decreasing after gf_ins_reverse). A measurement valid at the
+ * filter's time is applied there, before the first sample; earlier ones are delayed
+ * updates (max_latency_s) or logged as stale; those after t_s[n-1] are
+ * left for the next call). Row k of *out is the state after sample k.
+ * *n_done = samples processed, *meas_done = measurements consumed; on an error the rows
+ * before *n_done are valid and the filter holds the state after the last good sample.
+ * Grouped samples (cfg.subsamples = m > 1, increments, forward in time, no ZUPT, no
+ * max_latency_s): samples k .. k+m-1 make one navigation update (gf_sins_step_group's
+ * m-sample coning and sculling) when the filter's sample count is a multiple of m at k,
+ * no measurement is valid before the end of sample k+m-1, no propagation instant of the
+ * regular grid falls on samples k .. k+m-2 (so choose prop_interval_s a multiple of m
+ * samples), the intervals are equal within 1 % and every sample passes the checks;
+ * otherwise the samples are processed one by one as above. The outputs then have one row
+ * per navigation update (a group's end or a single sample), out->n_rows of them; a
+ * record cut into calls at multiples of m gives the same bits as one call. */
+gf_status gf_ins_run(gf_ins_filter *f, size_t n, const double *t_s, const double *gyro,
+                     const double *accel, size_t n_meas, const gf_ins_meas *meas,
+                     gf_ins_output *out, gf_ins_epochs *epochs, gf_ins_log *log,
+                     size_t *n_done, size_t *meas_done);
+
+/* Turns the filter around in time (see "Reverse-time filtering" above): the covariance
+ * is first propagated to the filter's time, then the nominal is reversed
+ * (gf_sins_reverse), x and P flipped (D x, D P D), the gyro-bias estimate negated; the
+ * NHC/ZUPT timers and the delayed-measurement history restart. Afterwards gf_ins_step
+ * and gf_ins_run take samples with time decreasing (the processing order), the gyro as
+ * recorded (negated inside), measurements as recorded and sorted by decreasing time;
+ * outputs report true-time velocity and gyro bias. Calling it twice is the identity on
+ * the nominal, x and P. Errors: GF_ERR_BAD_PARAMETER (layout), GF_ERR_DIVERGED. */
+gf_status gf_ins_reverse(gf_ins_filter *f);
+
+/* A reversed filter (gf_ins_reverse) walked backward over a record stored in recorded
+ * order: t_s (n, increasing), gyro, accel (n x 3) as gf_ins_run takes them, the
+ * filter's time = t_s[n-1]. Increments: sample k takes the state from t_s[k] to t_s[k-1]
+ * (t_start_s for k = 0, the time at which the record's first interval starts); rates:
+ * the samples at t_s[n-1] .. t_s[0] (t_start_s unused). Measurements sorted by increasing
+ * time, as recorded; those after the filter's time are left (not consumed), those
+ * before the end of the walk are left for a later call. Row k of *out (may be NULL) is
+ * the state after processing sample k (true-time velocity and gyro bias).
+ * *n_done = samples processed (from the last), *meas_done = measurements consumed.
+ * Errors: GF_ERR_BAD_PARAMETER (filter not reversed), GF_ERR_BAD_TIME (filter's time not
+ * t_s[n-1], times not increasing), the errors of gf_ins_step. */
+gf_status gf_ins_run_backward(gf_ins_filter *f, size_t n, const double *t_s, const double *gyro,
+                              const double *accel, double t_start_s, size_t n_meas,
+                              const gf_ins_meas *meas, gf_ins_output *out, gf_ins_log *log,
+                              size_t *n_done, size_t *meas_done);
+
+/* The state at the end of one pass of gf_ins_forward_backward. */
+typedef struct gf_ins_pass {
+    int32_t direction;              /* +1 forward, -1 backward */
+    double t_s;                     /* time reached (end of the record, or its start) */
+    double q_bn[4];
+    double v_n_m_s[3];              /* true-time velocity, ENU */
+    double std9[9];                 /* as gf_ins_output.std */
+    double sensors[GF_INS_N_SENSORS];  /* true-time convention */
+    uint64_t n_updates, n_rejected; /* in this pass */
+} gf_ins_pass;
+
+/* Forward-backward processing of a stored alignment period (seed 003 section 2): the
+ * filter (forward; its time t_start is where the record's first interval starts: before
+ * t_s[0] for increments, at or before t_s[0] for rates) runs forward over the record,
+ * then n_fb times: reversed, backward to the start, reversed, forward to the end,
+ * carrying x and P across each reversal. The record (recorded order, as
+ * gf_ins_run_backward) and its measurements (increasing time, inside the record's span)
+ * are read in place, one call for all the passes (memory: the caller's arrays only).
+ * passes (1 + 2 n_fb, may be NULL) receive the state at the end of each pass; log (may
+ * be NULL) every update of every pass. On return the filter is forward at t_s[n-1],
+ * ready to navigate on. *n_passes_done = passes completed. Errors: GF_ERR_BAD_PARAMETER
+ * (n_fb outside 0 .. 10000, filter reversed), GF_ERR_BAD_SIZE (n < 2), the errors of
+ * gf_ins_run. */
+gf_status gf_ins_forward_backward(gf_ins_filter *f, size_t n, const double *t_s,
+                                  const double *gyro, const double *accel, size_t n_meas,
+                                  const gf_ins_meas *meas, int32_t n_fb, gf_ins_pass *passes,
+                                  gf_ins_log *log, int32_t *n_passes_done);
+
+/* Coarse alignment at rest for any orientation (TRIAD on gravity and the Earth rate; the
+ * same as gfins_fmi.estimation.alignment.attitude_from_gravity_and_earth_rate): from the
+ * mean specific force f_b (m/s^2) and the mean angular rate w_b (rad/s) over a window at
+ * rest, in body axes, up = f / |f|, east = (w x f) / |w x f|, north = up x east, and
+ * C_b^n has the rows east, north, up (in body axes); q_bn its quaternion. The heading
+ * error is ~ east gyro bias / (Omega cos L): the gyros must see the Earth rate. Errors:
+ * GF_ERR_NONFINITE_INPUT, GF_ERR_SINGULAR_GEOMETRY (|f| not in (5, 15) m/s^2 — not at
+ * rest on the Earth —, or w x f below 1e-3 |w| |f|: a pole, or no Earth rate seen). */
+gf_status gf_ins_coarse_align(const double *f_b_m_s2, const double *w_b_rad_s, double *q_bn);
+
+/* Levelling at rest without a heading (for gyros that cannot see the Earth rate): the
+ * attitude whose roll and pitch put the mean specific force f_b (m/s^2, body axes) on
+ * the local vertical and whose heading is 0: up = f / |f|, north = the body's forward
+ * axis y projected on the horizontal plane, east = north x up; C_b^n has the rows east,
+ * north, up (in body axes), q_bn its quaternion. The heading is then found otherwise
+ * (gf_ins_rotate_heading). Errors: GF_ERR_NONFINITE_INPUT, GF_ERR_SINGULAR_GEOMETRY (|f|
+ * not in (5, 15) m/s^2 — not at rest on the Earth —, or the forward axis within 0.06 deg
+ * of the vertical: no heading to define). */
+gf_status gf_ins_level_align(const double *f_b_m_s2, double *q_bn);
+
+/* Rotates a navigation attitude q_bn and velocity v_n (ENU, m/s; NULL: none) about the
+ * local vertical so that the heading (clockwise from north) grows by dpsi_rad and roll
+ * and pitch stay: C_b^n <- R_up(-dpsi) C_b^n, v_n <- R_up(-dpsi) v_n (R_up(a): rotation
+ * by a counterclockwise seen from above). In place. Errors: GF_ERR_NULL_POINTER,
+ * GF_ERR_NONFINITE_INPUT (nothing written). */
+gf_status gf_ins_rotate_heading(double *q_bn, double *v_n_m_s, double dpsi_rad);
+
+/* The continuous error model at the filter's nominal state with specific force f_b and
+ * rate w_ib_b (body): F (n x n), G (n x (n - 3)) and the noise intensities q (n - 3):
+ * noise inputs = accelerometer white noise (3), gyro white noise (3), one per sensor
+ * state. */
+gf_status gf_ins_error_model(const gf_ins_filter *f, const double *f_b_m_s2,
+                             const double *w_ib_b_rad_s, double *F, double *G, double *q);
+
+/* Rauch-Tung-Striebel smoothing of a forward run's epochs (backward pass, all epochs
+ * in one call): xs (count x n) receives the smoothed error of each epoch's posterior
+ * nominal (subtract it, gf_ins_apply_error), Ps (count x n(n+1)/2, may alias
+ * epochs->P_post) the smoothed covariance. */
+gf_status gf_ins_smooth(size_t n_states, const gf_ins_epochs *epochs, double *xs, double *Ps);
+
+/* Applies smoothed errors to the forward solution's rows (t_s n; q_bn n x 4, v n x 3,
+ * pos n x 3 and sensors n x GF_INS_N_SENSORS (may be NULL), all in place): a row at an
+ * epoch's time takes that epoch's xs; a row between epochs j and j+1 the linear
+ * interpolation between xs_j (about the posterior nominal of j) and xs_j+1 + dx_j+1
+ * (about the prior nominal of j+1, which the rows in between continue). */
+gf_status gf_ins_smooth_apply(const gf_ins_filter *f, size_t n_epochs, const double *epoch_t,
+                              const double *xs, const double *dx, size_t n, const double *t_s,
+                              double *q_bn, double *v_n_m_s, double *pos, double *sensors);
+
+/* Applies an error-state vector to a navigation state (10: q_bn, v, lat, lon, h) and
+ * sensor estimates (may be NULL), the same correction as the filter's feedback. */
+gf_status gf_ins_apply_error(const gf_ins_filter *f, const double *dx, double *nav,
+                             double *sensors);
+
+/* Chi-square quantile for m degrees of freedom (1..12) at probability p in (0, 1): Newton
+ * iterations on the closed-form distribution function from the Wilson-Hilferty start
+ * (converged to ~1e-13 relative). */
+gf_status gf_chi2_quantile(int32_t m, double p, double *q);
+
+/* The measurement kinds (the table of gf_ins_meas.c): for a code GF_INS_MEAS_*, its rows
+ * (m: rows of z, H and R) and its name (as in the innovation logs: "gnss_pos", ...);
+ * rows and name may be NULL. Error: GF_ERR_BAD_PARAMETER for a code that is no kind
+ * (kinds are 1 .. GF_INS_N_MEAS_KINDS - 1 today; enumerate with this call). */
+gf_status gf_ins_meas_kind_info(int32_t kind, int32_t *rows, const char **name);
+
+/* The model of one measurement kind at the filter's current state, as its updates use it
+ * (the nominal's local frame for positions, the latest compensated rate w_ib_b_rad_s,
+ * ZARU the standstill detector's mean rate; after gf_ins_reverse the reversed nominal):
+ *   z_pred (rows, may be NULL): the kind's prediction from the nominal state corrected by
+ *     the error-state vector dx (n_states; NULL = 0) as the feedback corrects it
+ *     (gf_ins_apply_error), in the units the update compares with the measurement (GNSS
+ *     position: east, north, up metres about the nominal's position; the others as
+ *     measured, in the filter's direction of time);
+ *   H (rows x n_states, may be NULL): the Jacobian at the nominal that the EKF uses,
+ *     z_pred(0) - z_pred(dx) = H dx to first order (z_err = predicted - measured, the
+ *     states' signs as in the table above), with the small terms H leaves out (see
+ *     "Measurements");
+ *   *rows (may be NULL): the kind's rows.
+ * ms (may be NULL): a measurement of that kind, checked as gf_ins_step checks it and
+ * handed to the model (no kind's model reads it today). Errors: GF_ERR_NULL_POINTER,
+ * GF_ERR_BAD_PARAMETER (no such kind, a filter whose layout is out of range, ms of
+ * another kind or invalid), GF_ERR_NONFINITE_INPUT (dx), GF_ERR_SINGULAR_GEOMETRY (the
+ * kind refuses this nominal: a speed at or below speed_min_m_s). */
+gf_status gf_ins_meas_model(const gf_ins_filter *f, int32_t kind, const gf_ins_meas *ms,
+                            const double *dx, double *z_pred, double *H, int32_t *rows);
+/* CDEF END */
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* GF_INS_GNSS_H */

@@ -1,7 +1,7 @@
 """Rotation modulation (issue 12 item 2): an 8 h run of a 0.01 deg/h-class IMU on a
 static base (a moored ship), navigated in the IMU frame with the height held, from the
 true initial state, with the IMU fixed and turned by the indexing and continuous schemes
-of gfins_fmi.rotation. Three error sets:
+of gfins_fmi.sim.rotation. Three error sets:
 
   A. constant biases only (gyro 0.01 deg/h, accelerometer 10 ug per axis): what
      rotation removes; the residual is compared with the linear error model (python-
@@ -24,9 +24,9 @@ import time
 
 import numpy as np
 
-import gfins_fmi.rotation as rot
-from gfins_fmi.imu_errors import ImuErrors
-from gfins_fmi.vehicle import Segment, VehicleProfile
+from gfins_fmi.sim import rotation as rot
+from gfins_fmi.nav.imu_errors import ImuErrors
+from gfins_fmi.sim.vehicle import Segment, VehicleProfile
 
 LAT, H = np.radians(40.0), 50.0
 R_E = 6371e3
@@ -63,8 +63,8 @@ def linear_prediction(rec, errors: ImuErrors, step_s: float = 1.0):
     """North and east errors of the linear model driven by the modulated biases."""
     import control
 
-    from gfins_fmi.error_models import sins_error_model
-    from gfins_fmi.imu_errors import DEG_H, UG
+    from gfins_fmi.analysis.strapdown_errors import sins_error_model
+    from gfins_fmi.nav.imu_errors import DEG_H, UG
     sys = sins_error_model(LAT, [1.0, 0.0, 0.0, 0.0], H)     # body = n: inputs in n axes
     m = int(round(step_s / rec.dt_s))
     k = np.arange(m - 1, rec.t_s.size, m)          # t_s[k] = step, 2 step, ...

@@ -22,9 +22,9 @@ import types
 
 import numpy as np
 
-from gfins_fmi import cosim
+from gfins_fmi import fmi as cosim
 from gfins_fmi.estimation.evaluation import navigation_errors, plot_errors
-from gfins_fmi.vehicle import VehicleProfile
+from gfins_fmi.sim.vehicle import VehicleProfile
 
 
 def main() -> None:

@@ -24,8 +24,9 @@ import time
 import numpy as np
 
 import gfins_fmi as gf
-from gfins_fmi import cosim
-from gfins_fmi.vehicle import VehicleProfile
+from gfins_fmi import fmi as cosim
+from gfins_fmi.fmi import reference
+from gfins_fmi.sim.vehicle import VehicleProfile
 
 # seed 001's IMU class (0.01 deg/h gyros, 10 ug-class accelerometers), as in
 # examples/imu_error_navigation.py
@@ -70,7 +71,7 @@ def main() -> None:
             m.initialize()
             r = m.run(progress=False)
         wall = time.perf_counter() - t0
-        e = cosim.navigation_errors(r)
+        e = reference.navigation_errors(r)
         results[name] = e
         # the recorded sensor data through the navigator called by cffi: bit-identical?
         same = max(cosim.differences_from_direct(system, r, imu_errors=ERRORS).values()) == 0.0

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import gfins_fmi as gf
-from gfins_fmi import calibration as cal
+from gfins_fmi.calibration import laboratory as cal
 
 DATASHEET = dict(gyro_bias_deg_h=10.0, gyro_scale_ppm=1000.0, gyro_misalignment_arcsec=100.0,
                  accel_bias_ug=1000.0, accel_scale_ppm=1000.0, accel_misalignment_arcsec=100.0,

@@ -1,8 +1,8 @@
-"""System-level calibration (gfins_fmi.estimation.calibration36 over C gf_syscal).
+"""System-level calibration (gfins_fmi.calibration.system over C gf_syscal).
 
 Truth: the forward model is gf_rotation's exact increments (checked against closed
 forms in tests/c/test_rotation.c) through the IMU error model gf_imu_error (checked in
-tests/c/test_imu_error.c) with seed 001's angles as gfins_fmi.imu_errors defines them;
+tests/c/test_imu_error.c) with seed 001's angles as gfins_fmi.nav.imu_errors defines them;
 the filter is never its own reference. The Monte Carlo of the acceptance criteria (50
 random error sets on the seed's path) is bench/study_syscal.py; here single seeded runs
 on short paths, each with the tolerance it needs stated.
@@ -12,15 +12,17 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import gfins_fmi.rotation as rot
-from gfins_fmi.estimation import calibration36 as c36
-from gfins_fmi.imu_errors import (ARCSEC, ImuErrors, ImuNoise, seed001_accel_misalignment,
-                                  seed001_gyro_misalignment)
+from gfins_fmi.sim import rotation as rot
+from gfins_fmi.calibration import system as c36
+from gfins_fmi.calibration import segmentation, syscal_filter
+from gfins_fmi.nav import imu_errors
+from gfins_fmi.nav.imu_errors import (ARCSEC, ImuErrors, ImuNoise, seed001_accel_misalignment,
+                                      seed001_gyro_misalignment)
 from gfins_fmi.io.records import ImuRecord
 
 LAT, H = np.radians(40.0), 50.0
 NOISE = ImuNoise(gyro_arw_deg_sqrt_h=0.002, accel_vrw_ug_sqrt_hz=10.0)
-CFG = c36.SyscalConfig(gyro_arw_deg_sqrt_h=0.002, accel_vrw_ug_sqrt_hz=10.0, vel_std_m_s=1e-5)
+CFG = syscal_filter.SyscalConfig(gyro_arw_deg_sqrt_h=0.002, accel_vrw_ug_sqrt_hz=10.0, vel_std_m_s=1e-5)
 
 
 def _short_path(axes=("m", "i", "m", "i", "m", "i"), angles=(90, 90, 180, 180, 90, 90), dwell=40.0):
@@ -32,20 +34,20 @@ def _short_path(axes=("m", "i", "m", "i", "m", "i"), angles=(90, 90, 180, 180, 9
 def test_parameter_mapping_matches_the_seed_angle_functions():
     rng = np.random.default_rng(5)
     p = c36.random_params(rng)
-    e = c36.params_to_imu_errors(p)
+    e = syscal_filter.params_to_imu_errors(p)
     g = p[3:6] / ARCSEC
     a = p[12:18] / ARCSEC
     np.testing.assert_allclose(e.gyro_misalignment_arcsec, seed001_gyro_misalignment(*g), atol=1e-9)
     np.testing.assert_allclose(e.accel_misalignment_arcsec, seed001_accel_misalignment(*a), atol=1e-9)
-    np.testing.assert_allclose(c36.imu_errors_to_params(e), p, rtol=1e-12, atol=1e-20)
+    np.testing.assert_allclose(syscal_filter.imu_errors_to_params(e), p, rtol=1e-12, atol=1e-20)
     with pytest.raises(ValueError, match="lower-triangular"):
-        c36.imu_errors_to_params(ImuErrors(gyro_misalignment_arcsec=[[0, 5, 0], [0, 0, 0], [0, 0, 0]]))
+        syscal_filter.imu_errors_to_params(ImuErrors(gyro_misalignment_arcsec=[[0, 5, 0], [0, 0, 0], [0, 0, 0]]))
 
 
 def test_segmentation_finds_the_positions_and_turns():
     s = rot.seed001_path(repeats=1, align_s=60.0, dwell_s=20.0)
     tr = rot.simulate_static(s, s.duration_s, 0.01, LAT, H)
-    segs = c36.segment_record(tr.t_s, tr.dtheta_rad)
+    segs = segmentation.segment_record(tr.t_s, tr.dtheta_rad)
     turns = [x for x in segs if x.kind == "turn"]
     static = [x for x in segs if x.kind == "static"]
     assert len(turns) == 18 and len(static) == 19
@@ -63,8 +65,8 @@ def test_short_path_recovers_biases_and_lever_arms_within_3_sigma():
     consistent filter; the seed is fixed), their sigmas a small fraction of the prior."""
     rng = np.random.default_rng(21)
     p = np.zeros(27)
-    p[6:9] = rng.normal(0, 0.01, 3) * c36.DEG_H
-    p[18:21] = rng.normal(0, 1000, 3) * c36.UG
+    p[6:9] = rng.normal(0, 0.01, 3) * imu_errors.DEG_H
+    p[18:21] = rng.normal(0, 1000, 3) * imu_errors.UG
     p[24:27] = rng.normal(0, 3, 3) * 0.01
     rec, _ = c36.simulate_record(_short_path(), p, LAT, H, noise=NOISE, seed=4)
     rep = c36.calibrate(rec, LAT, H, config=CFG)
@@ -97,7 +99,7 @@ def test_estimate_delay_37_states():
     p = np.zeros(28)
     p[27] = 2e-3
     rec, _ = c36.simulate_record(s, p, LAT, H, noise=NOISE, seed=8)
-    cfg = c36.SyscalConfig(gyro_arw_deg_sqrt_h=0.002, accel_vrw_ug_sqrt_hz=10.0, vel_std_m_s=1e-5,
+    cfg = syscal_filter.SyscalConfig(gyro_arw_deg_sqrt_h=0.002, accel_vrw_ug_sqrt_hz=10.0, vel_std_m_s=1e-5,
                            estimate_delay=True)
     rep = c36.calibrate(rec, LAT, H, config=cfg)
     assert rep.std[27] < 5e-5
@@ -112,25 +114,25 @@ def test_bad_records_are_refused_with_what_to_change():
     s = _short_path(dwell=10.0)
     rec, tr = c36.simulate_record(s, np.zeros(27), LAT, H)
     t, th, dv = rec.t_s, np.asarray(rec.gyro), np.asarray(rec.accel)
-    with pytest.raises(c36.CalibrationInputError, match="specific force in m/s\\^2"):
+    with pytest.raises(syscal_filter.CalibrationInputError, match="specific force in m/s\\^2"):
         c36.calibrate(_rec(t, th, dv / 0.01), LAT, H)
-    with pytest.raises(c36.CalibrationInputError, match="degrees"):
+    with pytest.raises(syscal_filter.CalibrationInputError, match="degrees"):
         c36.calibrate(_rec(t, np.degrees(th), dv), LAT, H)
-    with pytest.raises(c36.CalibrationInputError, match="89 deg"):
+    with pytest.raises(syscal_filter.CalibrationInputError, match="89 deg"):
         c36.calibrate(rec, np.radians(89.5), H)
-    with pytest.raises(c36.CalibrationInputError, match="ft/s"):
+    with pytest.raises(syscal_filter.CalibrationInputError, match="ft/s"):
         c36.calibrate(_rec(t, th, dv / 0.3048), LAT, H)
     # continuously turning: no rest
     cont = rot.continuous_scheme(inner_rate_deg_s=6.0, middle_rate_deg_s=3.0, half_cycle_s=120.0)
     tr2 = rot.simulate_static(cont, 200.0, 0.01, LAT, H)
-    with pytest.raises(c36.CalibrationInputError, match="no static interval"):
+    with pytest.raises(syscal_filter.CalibrationInputError, match="no static interval"):
         c36.calibrate(tr2.imu_record(), LAT, H)
     # a turn of 90 deg within 0.1 s at 10 Hz: 45 deg per sample
     fast = rot.RotationSchedule((rot.rest(60.0), rot.middle(90.0, 30.0, rate_deg_s=450.0, ramp_s=0.0)))
     tr3 = rot.simulate_static(fast, fast.duration_s, 0.1, LAT, H)
-    with pytest.raises(c36.CalibrationInputError, match="faster than the sample rate"):
+    with pytest.raises(syscal_filter.CalibrationInputError, match="faster than the sample rate"):
         c36.calibrate(tr3.imu_record(), LAT, H)
-    with pytest.raises(c36.CalibrationInputError, match="first static interval lasts"):
+    with pytest.raises(syscal_filter.CalibrationInputError, match="first static interval lasts"):
         c36.calibrate(rec, LAT, H, min_align_s=500.0)
 
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import gfins_fmi as gf
-from gfins_fmi.analysis import accel9_noise_gains
+from gfins_fmi.analysis.noise_gains import accel9_noise_gains
 from conftest import W0, numpy_outputs, paper_layout, smooth_motion
 
 
@@ -93,7 +93,7 @@ def test_noise_gains_match_monte_carlo():
 def test_navigate_csv_and_bad_sample(tmp_path):
     """gfins navigate on a CSV of increments reproduces Strapdown.run; a NaN row stops it
     with status 1 and the rows before it written."""
-    from gfins_fmi import trajectory as tj
+    from gfins_fmi.sim import trajectory as tj
     tr = tj.sample(tj.Circle(), 30.0, 0.01)
     src, dst = tmp_path / "rec.csv", tmp_path / "sol.csv"
     rec = np.c_[tr.t_s[1:], tr.dtheta_rad, tr.dv_m_s]
@@ -120,7 +120,7 @@ def test_navigate_csv_and_bad_sample(tmp_path):
 
 def test_gfnav_csv(tmp_path):
     """gfins gfnav on a CSV of qin9 outputs reproduces GyroFreeNavigator.run."""
-    from gfins_fmi import trajectory as tj
+    from gfins_fmi.sim import trajectory as tj
     tr = tj.sample(tj.Circle(), 20.0, 0.01)
     g = gf.layout("qin9", 0.1)
     A = tr.array_outputs(g)

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import gfins_fmi as gf
-from gfins_fmi import trajectory as tj
+from gfins_fmi.sim import trajectory as tj
 from gfins_fmi.cli import main
 from conftest import W0, navigate_init_args, numpy_outputs, paper_layout, smooth_motion
 

@@ -12,9 +12,10 @@ import numpy as np
 import pytest
 
 import gfins_fmi as gf
-from gfins_fmi import ImuErrors, cosim
-from gfins_fmi.fmu import FmuRunError, _Log, _Slave, fmu_path, validate
-from gfins_fmi.vehicle import Segment, VehicleProfile, simulate_vehicle
+from gfins_fmi import ImuErrors
+from gfins_fmi import fmi as cosim
+from gfins_fmi.fmi import FmuRunError, FmuLog, FmuSlave, fmu_path, validate
+from gfins_fmi.sim.vehicle import GnssReceiver, Segment, VehicleProfile, simulate_vehicle
 
 # a short run that still turns: 2 s at rest, start to 15 m/s in 3 s, a 180 deg turn
 PROFILE = VehicleProfile.seed001(align_s=2.0, accel_s=3.0, turn_times_s=(6.0,), turn_s=6.0)
@@ -72,7 +73,7 @@ def test_vehicle_fmu_variable_steps_reach_the_same_state(version):
     quadrature pieces <= 0.25 s): 1e-9 m; increments are additive. The two clocks sum
     different steps, so they differ by ~1e-13 s: 1e-11 m/s at 8 m/s^2."""
     def run(steps):
-        s = _Slave(fmu_path("vehicle", version), version, _Log(), False)
+        s = FmuSlave(fmu_path("vehicle", version), version, FmuLog(), False)
         try:
             s.initialize(0.0, 20.0, PROFILE.as_parameters())
             t, dth = 0.0, np.zeros(3)
@@ -95,7 +96,7 @@ def test_vehicle_fmu_variable_steps_reach_the_same_state(version):
 
 @pytest.mark.parametrize("version", [2, 3])
 def test_vehicle_fmu_follows_commands(version):
-    s = _Slave(fmu_path("vehicle", version), version, _Log(), False)
+    s = FmuSlave(fmu_path("vehicle", version), version, FmuLog(), False)
     try:
         s.initialize(0.0, 10.0, {"drive": 1, "command_time": 2.0, "n_segments": 0})
         s.set("speed_cmd", 8.0)
@@ -122,8 +123,8 @@ def test_vehicle_fmu_refuses_bad_parameters_with_a_reason(version):
                          ({"seg_dspeed": [-20.0] + [0.0] * 31, "n_segments": 1,
                            "seg_duration": [1.0] + [0.0] * 31}, "segment 1"),
                          ({"imu_errors": 1, "gyro_scale": [0.6, 0, 0]}, "gyro_scale")]:
-        log = _Log()
-        s = _Slave(fmu_path("vehicle", version), version, log, False)
+        log = FmuLog()
+        s = FmuSlave(fmu_path("vehicle", version), version, log, False)
         try:
             with pytest.raises(Exception):
                 s.initialize(0.0, 10.0, params)
@@ -134,8 +135,8 @@ def test_vehicle_fmu_refuses_bad_parameters_with_a_reason(version):
 
 @pytest.mark.parametrize("version", [2, 3])
 def test_vehicle_fmu_under_a_master_sequence_stop_time_variability(version):
-    log = _Log()
-    s = _Slave(fmu_path("vehicle", version), version, log, False)
+    log = FmuLog()
+    s = FmuSlave(fmu_path("vehicle", version), version, log, False)
     try:
         with pytest.raises(Exception):     # doStep before initialization
             s.slave.doStep(currentCommunicationPoint=0.0, communicationStepSize=0.1)
@@ -183,7 +184,7 @@ def test_integrated_navigator_takes_every_gnss_epoch_through_the_master(version)
     interval holds them: 5 Hz, 13.7 ms off the samples, 5 s -> 25 epochs, each a position
     and a velocity update, none stale or rejected; the recorded Int32 outputs are the
     counts. (tests/test_osp.py compares the same system with libcosim bit for bit.)"""
-    rx = gf.vehicle.GnssReceiver(rate_hz=5.0, offset_s=0.0137, lever_arm_m=(0.3, 1.1, 1.6))
+    rx = GnssReceiver(rate_hz=5.0, offset_s=0.0137, lever_arm_m=(0.3, 1.1, 1.6))
     system = cosim.vehicle_integrated_navigation(PROFILE, stop_s=5.0, gnss=rx)
     with cosim.CoSimulation(system, fmi_version=version) as m:
         m.initialize()
@@ -349,7 +350,7 @@ def test_master_keeps_the_rows_before_a_failing_step():
 
 # ---- noise in the vehicle FMU -----------------------------------------------------------
 def _vehicle_outputs(params, n=6000, version=2, h=0.01, names=("gyro_rate", "specific_force", "dtheta", "A")):
-    s = _Slave(fmu_path("vehicle", version), version, _Log(), False)
+    s = FmuSlave(fmu_path("vehicle", version), version, FmuLog(), False)
     try:
         s.initialize(0.0, n * h, {**PROFILE.as_parameters(), **params})
         out = {k: [s.get(k)] for k in names}
@@ -426,8 +427,8 @@ def test_vehicle_fmu_refuses_bad_noise_and_aiding_parameters():
                            "gnss_outage_end": [2.0] + [0.0] * 7}, "GNSS outage 1"),
                          ({"baro": 1, "baro_std": float("nan")}, "baro_std"),
                          ({"odo": 3}, "odo must be 0 or 1")]:
-        log = _Log()
-        s = _Slave(fmu_path("vehicle", 2), 2, log, False)
+        log = FmuLog()
+        s = FmuSlave(fmu_path("vehicle", 2), 2, log, False)
         try:
             with pytest.raises(Exception):
                 s.initialize(0.0, 1.0, params)

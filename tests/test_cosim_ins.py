@@ -17,12 +17,13 @@ import numpy as np
 import pytest
 from fmpy import read_model_description
 
-from gfins_fmi import cosim
+from gfins_fmi import fmi as cosim
 from gfins_fmi.estimation import FilterConfig, IntegratedNavigator
-from gfins_fmi.estimation.scenarios import TACTICAL
-from gfins_fmi.fmu import FmuRunError, fmu_path, ins_gnss_fmu_parameters, validate
-from gfins_fmi.trajectory import attitude_error_rad, radii
-from gfins_fmi.vehicle import Barometer, GnssReceiver, Odometer, VehicleProfile, simulate_vehicle
+from gfins_fmi.sim.scenarios import TACTICAL
+from gfins_fmi.fmi import FmuRunError, fmu_path, ins_gnss_fmu_parameters, validate
+from gfins_fmi.nav.earth import attitude_error_rad, radii
+from gfins_fmi.sim.vehicle import (Barometer, GnssReceiver, Odometer, VehicleProfile,
+                                   simulate_vehicle)
 
 # 10 s at rest, a start to 15 m/s in 10 s, a 180 deg turn from 40 s to 55 s, then cruise
 PROFILE = VehicleProfile.seed001(align_s=10.0, accel_s=10.0, turn_times_s=(30.0,), turn_s=15.0)

@@ -7,10 +7,12 @@ import numpy as np
 import pytest
 
 import gfins_fmi as gf
-from gfins_fmi import error_models as em
-from gfins_fmi import error_report
-from gfins_fmi import montecarlo as mc
-from gfins_fmi import trajectory as tj
+from gfins_fmi.analysis import gyrofree_errors as em
+from gfins_fmi.analysis import error_report
+from gfins_fmi.analysis import montecarlo as mc
+from gfins_fmi.analysis import covariance, strapdown_errors
+from gfins_fmi.calibration import laboratory
+from gfins_fmi.nav import earth
 from conftest import ROOT, attitude_error_rad
 
 
@@ -34,13 +36,13 @@ def test_schuler_and_foucault_from_the_model():
     """The horizontal loop's eigenvalues: +-i (w_s +- W sinL), w_s = sqrt(g/R) (Schuler,
     84.4 min) split by the Foucault term; within 0.5% of 84.4 min."""
     lat = np.radians(30.0)
-    sys = em.sins_error_model(lat, tj.euler_to_quat(0.3, 0.0, 0.0), 100.0)
+    sys = strapdown_errors.sins_error_model(lat, earth.euler_to_quat(0.3, 0.0, 0.0), 100.0)
     freqs = np.abs(np.linalg.eigvals(np.asarray(sys.A)).imag)
     schuler_pair = freqs[freqs > 5e-4]          # w_s +- W sinL (the Earth-rate modes are ~7e-5)
     assert schuler_pair.size == 4
     w_schuler = schuler_pair.mean()
-    RM, RN, _, _ = tj.radii(lat)
-    w_s = np.sqrt(tj.gravity(lat, 100.0) / np.sqrt(RM * RN))
+    RM, RN, _, _ = earth.radii(lat)
+    w_s = np.sqrt(earth.gravity(lat, 100.0) / np.sqrt(RM * RN))
     period_min = 2 * np.pi / w_schuler / 60
     print(f"Schuler period from A: {period_min:.3f} min")
     assert period_min == pytest.approx(84.4, rel=0.005)
@@ -49,7 +51,7 @@ def test_schuler_and_foucault_from_the_model():
 
 @pytest.fixture(scope="module")
 def stationary_mc():
-    """The README's comparison of the ``sins`` scenario of gfins_fmi.error_report (as
+    """The README's comparison of the ``sins`` scenario of gfins_fmi.analysis.error_report (as
     ``gfins analyze`` runs it: seed 0, the report's seven times): 1 h at rest at 10 Hz,
     random-constant biases + white noise, height held."""
     return error_report.compare("sins", runs=RUNS, seed=0)
@@ -83,7 +85,7 @@ def test_monte_carlo_results_do_not_depend_on_the_executor():
 
 @pytest.fixture(scope="module", params=["cube6", "qin9", "12"])
 def gyrofree_mc(request):
-    """1000 runs of a gyro-free scenario of gfins_fmi.error_report: 20 s at rest at 100
+    """1000 runs of a gyro-free scenario of gfins_fmi.analysis.error_report: 20 s at rest at 100
     Hz (rate strategy "integrate", flat frame, g = 9.8), every accelerometer with a
     random-constant bias (1e-5 m/s^2) and white noise (1e-4 m/s^2 per sample); seed and
     times of ``gfins analyze`` (the README's comparison)."""
@@ -110,9 +112,9 @@ def test_gyrofree_bias_growth_exponents_at_rest(name):
     6-accelerometer scheme). Log-log slopes between 100 and 200 s: the f-bias term
     (~ t^2) in position is 12 P_f / (g P_wdot t^2) ~ 1e-4 of the t^4 term there, so
     the slope is 4 to 1e-3."""
-    from gfins_fmi.gyrofree import layout
+    from gfins_fmi.gyrofree.geometry import layout
     sys = em.gyrofree_error_model(layout(name, 0.1))
-    s = em.propagate(sys, [100.0, 200.0], 1e-5, 0.0, dt_s=1.0).std
+    s = covariance.propagate(sys, [100.0, 200.0], 1e-5, 0.0, dt_s=1.0).std
     slope = np.log2(s[1] / s[0])               # outputs: phi (3), dv (3), dp (3)
     assert slope[0:3] == pytest.approx([2, 2, 2], abs=1e-9)
     assert slope[6:8] == pytest.approx([4, 4], abs=1e-3)
@@ -120,7 +122,7 @@ def test_gyrofree_bias_growth_exponents_at_rest(name):
 
 @pytest.fixture(scope="module", params=["qin9-sqrt", "12-sqrt", "qin9-fused", "12-fused"])
 def rotating_mc(request):
-    """1000 runs of a rotating gyro-free scenario of gfins_fmi.error_report: constant
+    """1000 runs of a rotating gyro-free scenario of gfins_fmi.analysis.error_report: constant
     body rate (1, -0.8, 0.6) rad/s about a point fixed in the frame, rate strategy
     "sqrt" or "fused" (EKF), same sensor errors as at rest; seed and times of ``gfins
     analyze``."""
@@ -149,16 +151,16 @@ def test_sqrt_strategy_bias_growth_exponents(name):
     rotation axis; the perpendicular part oscillates, bounded) and position as t^3.
     Slopes of the norms of the 1-sigma between 100 and 200 s: within 0.01 of 1 and 3
     (the bounded oscillating parts perturb the slope by ~1e-3)."""
-    from gfins_fmi.gyrofree import layout
-    sys = em.gyrofree_error_model(layout(name, 0.1), tj.euler_to_quat(0.1, -0.05, 0.7), 9.8,
+    from gfins_fmi.gyrofree.geometry import layout
+    sys = em.gyrofree_error_model(layout(name, 0.1), earth.euler_to_quat(0.1, -0.05, 0.7), 9.8,
                                   "sqrt", error_report.ROTATION_RAD_S, 0.01)
-    s = em.propagate(sys, [100.0, 200.0], 1e-5, 0.0, dt_s=0.05).std
+    s = covariance.propagate(sys, [100.0, 200.0], 1e-5, 0.0, dt_s=0.05).std
     assert np.log2(np.linalg.norm(s[1, :3]) / np.linalg.norm(s[0, :3])) == pytest.approx(1, abs=0.01)
     assert np.log2(np.linalg.norm(s[1, 6:8]) / np.linalg.norm(s[0, 6:8])) == pytest.approx(3, abs=0.01)
 
 
 def test_gyrofree_model_rejects_what_it_cannot_model():
-    from gfins_fmi.gyrofree import layout
+    from gfins_fmi.gyrofree.geometry import layout
     with pytest.raises(ValueError, match="gravity_m_s2"):
         em.gyrofree_error_model(layout("qin9", 0.1), gravity_m_s2=-1.0)
     with pytest.raises(ValueError, match="away from zero"):      # near a zero crossing
@@ -170,7 +172,7 @@ def test_gyrofree_model_rejects_what_it_cannot_model():
     with pytest.raises(ValueError, match="strategy must be"):
         em.gyrofree_error_model(layout("qin9", 0.1), strategy="eigen")
     with pytest.raises(ValueError, match="t_s must be increasing"):
-        em.propagate(em.gyrofree_error_model(layout("qin9", 0.1)), [2.0, 1.0], 1e-5, 0.0)
+        covariance.propagate(em.gyrofree_error_model(layout("qin9", 0.1)), [2.0, 1.0], 1e-5, 0.0)
 
 
 def test_stationary_observability_matches_the_classic_result():
@@ -185,12 +187,12 @@ def test_stationary_observability_matches_the_classic_result():
     With velocity only, the position errors add two more (longitude never enters the
     dynamics; latitude acts like a north/up gyro bias through the Earth rate)."""
     lat = np.radians(30.0)
-    sys = em.with_bias_states(em.sins_error_model(lat, tj.euler_to_quat(0.0, 0.0, 0.0), 0.0))
+    sys = covariance.with_bias_states(strapdown_errors.sins_error_model(lat, earth.euler_to_quat(0.0, 0.0, 0.0), 0.0))
     names = list(sys.state_labels)
     t = np.arange(0.0, 600.0, 1.0)
-    vel_pos = em.observability(sys.A, np.eye(13)[[3, 4, 5, 6]], t, names)
+    vel_pos = covariance.observability(sys.A, np.eye(13)[[3, 4, 5, 6]], t, names)
     assert vel_pos.rank == 9
-    W, g = em._OMEGA_IE, tj.gravity(lat, 0.0)
+    W, g = laboratory._OMEGA_IE, earth.gravity(lat, 0.0)
     sL, cL = np.sin(lat), np.cos(lat)
     classic = [{"df_z": 1.0},
                {"phi_N": 1.0, "dw_x": W * sL, "df_x": g},
@@ -206,7 +208,7 @@ def test_stationary_observability_matches_the_classic_result():
         # values are ~1e-15 of the largest: the span is exact to ~1e-8
         assert np.linalg.norm(U @ coef - v) <= 1e-6 * np.linalg.norm(v), d
     print("\n".join(vel_pos.describe()))
-    assert em.observability(sys.A, np.eye(13)[[3, 4]], t, names).rank == 7
+    assert covariance.observability(sys.A, np.eye(13)[[3, 4]], t, names).rank == 7
 
 
 def test_a_heading_change_makes_the_biases_observable():
@@ -219,10 +221,10 @@ def test_a_heading_change_makes_the_biases_observable():
     lat = np.radians(30.0)
 
     def model(yaw):
-        return em.with_bias_states(em.sins_error_model(lat, tj.euler_to_quat(yaw, 0.0, 0.0), 0.0))
+        return covariance.with_bias_states(strapdown_errors.sins_error_model(lat, earth.euler_to_quat(yaw, 0.0, 0.0), 0.0))
     names = list(model(0.0).state_labels)
     A0, A1 = np.asarray(model(0.0).A), np.asarray(model(np.pi / 2).A)
-    obs = em.observability(lambda t: A0 if t < 300.0 else A1, np.eye(13)[[3, 4, 5, 6]],
+    obs = covariance.observability(lambda t: A0 if t < 300.0 else A1, np.eye(13)[[3, 4, 5, 6]],
                            np.arange(0.0, 600.0, 1.0), names)
     assert obs.rank == 12
     assert obs.describe() == ["+1 df_z"]
@@ -235,18 +237,18 @@ def test_frequency_response_resonates_at_the_foucault_split_schuler_pair():
     largest local maxima on a grid of 1e-4 w_s lie within 0.2% of them (the exact
     modes are sqrt(w_s^2 + (W sinL)^2) -+ W sinL, 0.04% from the approximation)."""
     lat = np.radians(30.0)
-    sys = em.sins_error_model(lat, tj.euler_to_quat(0.0, 0.0, 0.0), 0.0)
-    RM, RN, _, _ = tj.radii(lat)
-    w_s = np.sqrt(tj.gravity(lat, 0.0) / np.sqrt(RM * RN))
-    w_f = em._OMEGA_IE * np.sin(lat)
+    sys = strapdown_errors.sins_error_model(lat, earth.euler_to_quat(0.0, 0.0, 0.0), 0.0)
+    RM, RN, _, _ = earth.radii(lat)
+    w_s = np.sqrt(earth.gravity(lat, 0.0) / np.sqrt(RM * RN))
+    w_f = laboratory._OMEGA_IE * np.sin(lat)
     w = w_s * np.linspace(0.5, 1.5, 10001)
-    mag = np.abs(em.frequency_response(sys, w, inputs=["df_x"], outputs=["phi_N"]).magnitude).ravel()
+    mag = np.abs(covariance.frequency_response(sys, w, inputs=["df_x"], outputs=["phi_N"]).magnitude).ravel()
     local = np.flatnonzero((mag[1:-1] > mag[:-2]) & (mag[1:-1] > mag[2:])) + 1
     peaks = np.sort(w[local[np.argsort(mag[local])[-2:]]])
     print("peaks / w_s:", peaks / w_s)
     assert peaks == pytest.approx([w_s - w_f, w_s + w_f], rel=0.002)
     with pytest.raises(ValueError, match="no channel"):
-        em.frequency_response(sys, w, inputs=["gyro"])
+        covariance.frequency_response(sys, w, inputs=["gyro"])
 
 
 def test_analyze_command_writes_the_report(tmp_path):
@@ -270,16 +272,17 @@ def test_time_varying_model_reproduces_a_biased_run_of_the_c_core():
     linearisation's second-order terms (~|phi| = 1.4e-4) and the mechanization's
     second-order time step; bound 1e-3."""
     import control
-    from gfins_fmi.accel_array import forward_model
-    from gfins_fmi.gyrofree import GyroFreeNavigator, layout
+    from gfins_fmi.gyrofree.array import forward_model
+    from gfins_fmi.gyrofree.navigator import GyroFreeNavigator
+    from gfins_fmi.gyrofree.geometry import layout
     dt, g, n = 0.01, 9.8, 1001
     w = np.array(error_report.ROTATION_RAD_S)
-    q0 = tj.euler_to_quat(0.1, -0.05, 0.7)
+    q0 = earth.euler_to_quat(0.1, -0.05, 0.7)
     t = np.arange(n) * dt
     # truth: C(t) = C0 exp([w x] t) by Rodrigues, written out here
     th, ax = np.linalg.norm(w), w / np.linalg.norm(w)
     K = np.array([[0, -ax[2], ax[1]], [ax[2], 0, -ax[0]], [-ax[1], ax[0], 0]])
-    C = np.array([tj.quat_to_dcm(q0) @ (np.eye(3) + np.sin(th * tk) * K + (1 - np.cos(th * tk)) * K @ K)
+    C = np.array([earth.quat_to_dcm(q0) @ (np.eye(3) + np.sin(th * tk) * K + (1 - np.cos(th * tk)) * K @ K)
                   for tk in t])
     fb = np.einsum("kji,j->ki", C, np.array([0.0, 0.0, g]))
     geo = layout("qin9", 0.1)

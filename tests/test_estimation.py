@@ -14,8 +14,10 @@ from scipy.linalg import expm
 from scipy.stats import chi2
 
 import gfins_fmi as gf
+from gfins_fmi.nav import earth
 from gfins_fmi._lib import ffi, lib, ptr
-from gfins_fmi.error_models import ins_error_matrices, ins_state_names, sins_error_model
+from gfins_fmi.estimation.error_model import ins_error_matrices, ins_state_names
+from gfins_fmi.analysis.strapdown_errors import sins_error_model
 from gfins_fmi.estimation import FilterConfig, FilterError, InitialState, IntegratedNavigator
 
 DEG = np.pi / 180
@@ -118,8 +120,8 @@ def test_definition_matches_numerical_linearisation(state):
     lat, h, v, euler, fb, wb = state
     v = np.array(v, float)
     fb, wb = np.array(fb, float), np.array(wb, float)
-    C = gf.sins.euler_to_quat(np.array(euler))
-    Ct = np.array(gf.trajectory.quat_to_dcm(C))
+    C = gf.euler_to_quat(np.array(euler))
+    Ct = np.array(earth.quat_to_dcm(C))
     F, _ = ins_error_matrices(lat, h, v, C, fb, wb)
     Cd0, vd0, pd0 = nav_rates(Ct, v, lat, h, fb, wb)
 
@@ -317,7 +319,7 @@ class Rec:
 
 def drive(duration_s=120.0, fine=0.001, step=10, seed_profile=0):
     """Exact truth at `fine` and IMU increments summed over `step` fine intervals."""
-    from gfins_fmi.vehicle import Segment, VehicleProfile, simulate_vehicle
+    from gfins_fmi.sim.vehicle import Segment, VehicleProfile, simulate_vehicle
     prof = VehicleProfile(lat0_rad=0.52, speed0_m_s=8.0, segments=[
         Segment(10), Segment(15, dspeed_m_s=4, dheading_rad=np.pi / 2), Segment(20),
         Segment(10, dheading_rad=-np.pi), Segment(25, dspeed_m_s=-3), Segment(12, dheading_rad=1.0)])
@@ -332,7 +334,7 @@ def drive(duration_s=120.0, fine=0.001, step=10, seed_profile=0):
 def antenna(tr, k, lever):
     """Antenna position (lat, lon, h) and velocity (ENU) of the truth rows k, numpy."""
     lat, h = tr.lat_rad[k], tr.h_m[k]
-    C = np.array(gf.trajectory.quat_to_dcm(tr.q_bn[k]))
+    C = np.array(earth.quat_to_dcm(tr.q_bn[k]))
     cl = C @ lever
     RM, RN = radii(lat)
     pos = np.c_[lat + cl[:, 1] / (RM + h), tr.lon_rad[k] + cl[:, 0] / ((RN + h) * np.cos(lat)), h + cl[:, 2]]
@@ -507,7 +509,7 @@ def test_lever_arm_ignored_is_seen(exact_drive):
                 attitude_std_rad=1e-4).run(imu, gnss_record(tr, k, lever))
     r = sol.innovations_of("gnss_pos")["r"]
     # first epoch: predicted (IMU) - measured (antenna) = -C l, to the mechanization's mm
-    C = np.array(gf.trajectory.quat_to_dcm(tr.q_bn[k[0]]))
+    C = np.array(earth.quat_to_dcm(tr.q_bn[k[0]]))
     np.testing.assert_allclose(r[0], -C @ lever, atol=2e-3)
 
 
@@ -519,7 +521,7 @@ def test_odometer_and_nhc_exact(exact_drive):
     # wheel point beside it (x) and below it (z) has no lateral velocity either
     lever = np.array([-0.7, 0.0, -0.4])
     k = np.arange(105, len(tr.t_s), 100)               # 10 Hz, 5 ms after IMU samples
-    C = np.array(gf.trajectory.quat_to_dcm(tr.q_bn[k]))
+    C = np.array(earth.quat_to_dcm(tr.q_bn[k]))
     w_ie = np.c_[np.zeros(len(k)), OMEGA * np.cos(tr.lat_rad[k]), OMEGA * np.sin(tr.lat_rad[k])]
     w_eb = tr.gyro_rad_s[k] - np.einsum("kji,kj->ki", C, w_ie)
     u = np.einsum("kji,kj->ki", C, tr.v_n_m_s[k]) + np.cross(w_eb, lever)
@@ -584,8 +586,8 @@ def test_stale_measurement_is_logged(exact_drive):
 def _step_all(nav, imu, meas_at):
     """Drive the filter sample by sample (as an FMU does): meas_at(k) -> measurements
     handed in with sample k."""
-    from gfins_fmi.estimation.ins_gnss import _INNOV_DTYPE
-    log_arr = np.zeros(4096, _INNOV_DTYPE)
+    from gfins_fmi.estimation.measurements import INNOVATION_DTYPE
+    log_arr = np.zeros(4096, INNOVATION_DTYPE)
     log = ffi.new("gf_ins_log *")
     log.capacity = len(log_arr)
     log.entries = ffi.cast("gf_ins_innovation *", ffi.from_buffer(log_arr))
@@ -603,10 +605,10 @@ def test_delayed_measurements(exact_drive, latency_s):
     """GNSS valid 3 ms after a sample but handed in 0.2 s later: with max_latency_s the
     update uses the nominal of its time of validity (residuals at truncation level, as
     without delay); without it the epochs are stale."""
-    from gfins_fmi.estimation.ins_gnss import _gather_measurements
+    from gfins_fmi.estimation.measurements import gather_measurements
     tr, imu = exact_drive
     k = np.arange(1003, 60000, 1000)
-    meas = _gather_measurements(gnss_record(tr, k), None, None, True)
+    meas = gather_measurements(gnss_record(tr, k), None, None, True)
     deliver = meas["t_s"] + 0.2                       # delivered 0.2 s late
     which = np.searchsorted(imu.t_s, deliver - 1e-9)  # the first sample at or after delivery
     nav = start(tr, quiet_config(max_latency_s=latency_s), position_std_m=0.05,

@@ -13,12 +13,13 @@ import pytest
 
 from gfins_fmi._lib import lib
 from gfins_fmi.estimation import FilterConfig, InitialState, IntegratedNavigator
-from gfins_fmi.estimation.alignment import AlignmentError, align_in_motion
+from gfins_fmi.estimation.alignment import AlignmentError
+from gfins_fmi.estimation.fine_alignment import align_in_motion
 from gfins_fmi.estimation.evaluation import attitude_difference_rad
-from gfins_fmi.imu_errors import ImuNoise
+from gfins_fmi.nav.imu_errors import ImuNoise
 from gfins_fmi.io.records import BaroRecord, ImuRecord, OdometerRecord
-from gfins_fmi.sins import NavState, euler_to_quat, quat_to_euler
-from gfins_fmi.vehicle import Segment, VehicleProfile, simulate_vehicle
+from gfins_fmi.nav.strapdown import NavState, euler_to_quat, quat_to_euler
+from gfins_fmi.sim.vehicle import Segment, VehicleProfile, simulate_vehicle
 
 DEG = np.pi / 180
 DT = 0.02
@@ -244,8 +245,8 @@ def test_fmu_alignment_phase():
     bound 1e-9 rad for the 1e-13 relative error of dtheta/dt), and from there the FMU is
     the batch filter started with that attitude (1e-12: the two starts normalise the same
     quaternion once more or once less). A turning vehicle in the phase is refused."""
-    from gfins_fmi import trajectory as tj
-    from gfins_fmi.fmu import FmuRunError, run_ins_gnss_fmu
+    from gfins_fmi.sim import trajectory as tj
+    from gfins_fmi.fmi import FmuRunError, run_ins_gnss_fmu
     tr = tj.sample(tj.Stationary(heading=37 * DEG, pitch=1.5 * DEG, roll=-2 * DEG, lat=30 * DEG), 12.0, 0.01)
     imu = ImuRecord(t_s=tr.t_s[1:], gyro=tr.dtheta_rad, accel=tr.dv_m_s, kind="increments")
     nav0 = NavState(np.array([1.0, 0, 0, 0]), np.zeros(3), tr.lat_rad[0], tr.lon_rad[0], tr.h_m[0], tr.t_s[0])
@@ -273,7 +274,7 @@ def test_fmu_alignment_phase():
 
 from dataclasses import dataclass  # noqa: E402
 
-import gfins_fmi.trajectory as tj  # noqa: E402
+from gfins_fmi.sim import trajectory as tj  # noqa: E402
 from gfins_fmi.estimation.alignment import coarse_align, coarse_align_inertial  # noqa: E402
 
 DEG = np.pi / 180.0

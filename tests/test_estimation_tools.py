@@ -13,13 +13,14 @@ import numpy as np
 import pytest
 
 import gfins_fmi as gf
+from gfins_fmi.nav import earth
 from gfins_fmi.estimation import FilterConfig, InitialState, IntegratedNavigator, integrate
 from gfins_fmi.estimation.alignment import AlignmentError, coarse_align, heading_from_gnss
 from gfins_fmi.estimation.evaluation import (chi2_band, navigation_errors, nees, predict_outage_std,
                                              state_errors)
-from gfins_fmi.estimation.scenarios import TACTICAL, simulate_drive, town_drive
+from gfins_fmi.sim.scenarios import TACTICAL, simulate_drive, town_drive
 from gfins_fmi.io import GnssRecord, ImuRecord
-from gfins_fmi.vehicle import GnssReceiver, simulate_vehicle
+from gfins_fmi.sim.vehicle import GnssReceiver, simulate_vehicle
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 DEG = np.pi / 180
@@ -27,7 +28,7 @@ OMEGA = 7.292115e-5
 
 
 def _static_record(heading, pitch, roll, lat, seconds=60.0, dt=0.01, gyro_bias=(0, 0, 0), accel_bias=(0, 0, 0)):
-    from gfins_fmi import trajectory as tj
+    from gfins_fmi.sim import trajectory as tj
     tr = tj.sample(tj.Stationary(heading=heading, pitch=pitch, roll=roll, lat=lat), seconds, dt)
     rates = ImuRecord(t_s=tr.t_s, gyro=tr.gyro_rad_s + np.asarray(gyro_bias), accel=tr.accel_m_s2 + np.asarray(accel_bias),
                       kind="rates")
@@ -63,7 +64,7 @@ def test_levelling_and_gyrocompass_first_order_errors():
 
 
 def test_alignment_refuses_motion_and_reports_poor_gyros():
-    from gfins_fmi import trajectory as tj
+    from gfins_fmi.sim import trajectory as tj
     tr = tj.sample(tj.Circle(), 20.0, 0.01)
     imu = ImuRecord(t_s=tr.t_s, gyro=tr.gyro_rad_s, accel=tr.accel_m_s2, kind="rates")
     with pytest.raises(AlignmentError, match="motion during the static alignment"):
@@ -270,7 +271,7 @@ def test_barometer_and_odometer_states(drive):
     the filter's bias and scale states find them within 3 sigma; during a GNSS outage the
     barometer holds the height and the odometer the speed (the heading error, which no
     odometer sees, still turns the travel into cross-track drift)."""
-    from gfins_fmi.vehicle import Barometer, Odometer
+    from gfins_fmi.sim.vehicle import Barometer, Odometer
     prof, T, rx, truth = drive
     # a wheel contact point beside and below the IMU: the truth vehicle's IMU point moves
     # along its heading, so a point ahead or behind it would slip sideways in turns
@@ -328,13 +329,12 @@ def test_imu_mount_in_the_simulation(drive):
     axes. Truth in closed form: the vehicle rolls along its forward axis (its IMU point
     moves along its heading), whose direction in IMU axes is (sin h cos p, cos h cos p,
     sin p); the navigation-frame rate and velocity are those of the unrotated run."""
-    from gfins_fmi import trajectory as tj
     prof, T, rx, truth = drive
     p, h = np.radians(1.0), np.radians(-1.5)
     d0 = simulate_drive(prof, T, 0.01, imu=TACTICAL, seed=1, truth=truth)
     d = simulate_drive(prof, T, 0.01, imu=TACTICAL, seed=1, truth=truth, imu_mount_rad=(p, h))
-    C = tj.quat_to_dcm(d.truth.q_bn)                                  # C_b^n of the IMU
-    C0 = tj.quat_to_dcm(d0.truth.q_bn)
+    C = earth.quat_to_dcm(d.truth.q_bn)                                  # C_b^n of the IMU
+    C0 = earth.quat_to_dcm(d0.truth.q_bn)
     vb = np.einsum("kji,kj->ki", C, d.truth.v_n_m_s)
     moving = np.linalg.norm(vb, axis=1) > 1.0
     axis = np.array([np.sin(h) * np.cos(p), np.cos(h) * np.cos(p), np.sin(p)])
@@ -364,15 +364,14 @@ def test_odometer_mount_states(drive):
     filter finds both angles within 3 sigma; its drift in the 60 s GNSS outage is smaller
     than that of the same filter with the boresight fixed at zero, whose NHC residuals carry
     the bias (lateral ~ speed x sin 1.5 deg)."""
-    from gfins_fmi import trajectory as tj
-    from gfins_fmi.vehicle import Odometer
+    from gfins_fmi.sim.vehicle import Odometer
     prof, T, rx, truth = drive
     mount = np.radians([1.0, -1.5])
     lever_m = np.array([-0.8, 0.0, -0.5])            # wheel point, vehicle axes (see above)
     d = simulate_drive(prof, T, 0.01, imu=TACTICAL, gnss=rx, seed=11, imu_mount_rad=mount,
                        odometer=Odometer(rate_hz=10.0, lever_arm_m=tuple(lever_m), scale_error=0.02,
                                          std_m_s=0.05))
-    lever_b = tj.quat_to_dcm(tj.euler_to_quat(mount[1], mount[0], 0.0)) @ lever_m   # IMU axes
+    lever_b = earth.quat_to_dcm(earth.euler_to_quat(mount[1], mount[0], 0.0)) @ lever_m   # IMU axes
     out = (d.imu.t_s >= 200) & (d.imu.t_s < 260)
     res = {}
     for on in (False, True):
@@ -383,7 +382,7 @@ def test_odometer_mount_states(drive):
         sol = nav.run(d.imu, d.gnss, None, d.odometer)
         res[on] = (sol, nav.covariance, navigation_errors(sol, d.truth))
     sol, P, err = res[True]
-    from gfins_fmi.estimation.ins_gnss import state_names
+    from gfins_fmi.estimation import state_names
     assert sol.config.n_states == 18 and state_names(sol.config)[16:] == ("odo_pitch", "odo_heading")
     est, std = sol.sensors[-1, 14:16], np.sqrt(np.diag(P)[16:18])
     # measured: 0.9975 +- 0.0048 deg, -1.5003 +- 0.0081 deg

@@ -189,8 +189,8 @@ def test_fmu_call_sequence_and_stop_time(record, version):
 
 # ---- the strapdown navigator FMU ----------------------------------------------------
 
-from gfins_fmi import trajectory as tj  # noqa: E402
-from gfins_fmi.fmu import run_fmu, run_sins_fmu  # noqa: E402
+from gfins_fmi.sim import trajectory as tj
+from gfins_fmi.fmi import run_fmu, run_sins_fmu  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -274,7 +274,7 @@ def test_sins_fmu_error_partial_is_a_solution(circle):
 
 # ---- gyro-free navigator FMUs (one per layout) ---------------------------------------
 
-from gfins_fmi.fmu import MODELS, run_gfnav_fmu  # noqa: E402
+from gfins_fmi.fmi import MODELS, run_gfnav_fmu  # noqa: E402
 
 
 @pytest.mark.parametrize("model", sorted(MODELS))
@@ -321,7 +321,7 @@ def test_gfnav_fmu_errors(circle, version):
 def test_sins_fmu_compensation_and_lowpass_equal_the_batch_pipeline(circle, version, mode):
     """imu_comp + lowpass in the FMU = ImuErrors.compensate -> BiquadFilter -> Strapdown
     (increments are compensated as mean rates over the step, exactly as the FMU does)."""
-    from gfins_fmi import signal_conditioning
+    from gfins_fmi.nav import signal_conditioning
     tr = circle
     x0 = gf.NavState.from_trajectory(tr, 0)
     e = gf.ImuErrors.random(np.random.default_rng(4), gyro_bias_deg_h=10, gyro_scale_ppm=1000,

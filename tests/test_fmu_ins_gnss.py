@@ -17,10 +17,12 @@ from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
 import gfins_fmi as gf
+from gfins_fmi.nav import earth
 from gfins_fmi._lib import lib
 from gfins_fmi.estimation import FilterConfig, InitialState, IntegratedNavigator
-from gfins_fmi.fmu import (FmuRunError, _InsGnssDriver, _INS_CONFIG_FIELDS,
-                           ins_gnss_fmu_parameters, run_ins_gnss_fmu)
+from gfins_fmi.fmi import (FmuRunError, InsGnssDriver, ins_gnss_fmu_parameters,
+                           run_ins_gnss_fmu)
+from gfins_fmi.fmi.ins_gnss import INS_CONFIG_FIELDS
 from test_estimation import Rec, drive, gnss_record, quiet_config
 
 LEVER = np.array([0.4, 1.2, 1.6])
@@ -36,7 +38,7 @@ def rec():
     kb = np.arange(1057, len(tr.t_s), 100)
     baro = Rec(t_s=tr.t_s[kb].copy(), h_m=tr.h_m[kb] + 2.0, std_m=np.full(len(kb), 0.5))
     ko = np.arange(1021, len(tr.t_s), 100)
-    C = np.array(gf.trajectory.quat_to_dcm(tr.q_bn[ko]))
+    C = np.array(earth.quat_to_dcm(tr.q_bn[ko]))
     u = np.einsum("kji,kj->ki", C, tr.v_n_m_s[ko])[:, 1]       # forward speed, body y
     odo = Rec(t_s=tr.t_s[ko].copy(), speed_m_s=1.002 * u, std_m_s=np.full(len(ko), 0.02))
     return tr, imu, gnss, baro, odo
@@ -107,7 +109,7 @@ def test_fmu_defaults_are_the_batch_defaults():
     for name, value in params.items():
         # the spec writes the SI noise with repr(): equal to the last bit
         assert np.array_equal(np.asarray(start[name], float), np.asarray(value, float)), name
-    assert set(_INS_CONFIG_FIELDS) <= set(start)
+    assert set(INS_CONFIG_FIELDS) <= set(start)
 
 
 def _reference(cfg, imu, gnss, baro, odo, initial):
@@ -163,8 +165,8 @@ def test_fmu_state_restore_reproduces_the_run(rec, version, serialize):
     init = _initial(rec[0])
     kw = dict(config=cfg, initial=init, fmi_version=version)
     mid = 1200
-    a = _InsGnssDriver(imu, gnss, baro, odo, **kw)
-    b = _InsGnssDriver(imu, gnss, baro, odo, **kw)
+    a = InsGnssDriver(imu, gnss, baro, odo, **kw)
+    b = InsGnssDriver(imu, gnss, baro, odo, **kw)
     try:
         a.initialize()
         a.run(0, mid)
@@ -256,7 +258,7 @@ def test_unused_optional_std_is_not_checked(rec):
 
 def _driver(rec, case="ekf", version=2, **kw):
     cfg, imu, gnss, baro, odo = _case(rec, case)
-    return _InsGnssDriver(imu, gnss, baro, odo, config=cfg, initial=_initial(rec[0]),
+    return InsGnssDriver(imu, gnss, baro, odo, config=cfg, initial=_initial(rec[0]),
                           fmi_version=version, **kw), cfg, imu, gnss
 
 
@@ -431,8 +433,8 @@ def travel():
     a constant rotation, so the increments turn with it exactly (dtheta' = Rz^T dtheta);
     the IMU's true attitude is q_bn (x) q_z(MISALIGN) and the lever arm in its axes
     Rz^T TRAVEL_LEVER."""
-    from gfins_fmi.estimation.scenarios import CONSUMER, simulate_drive
-    from gfins_fmi.vehicle import GnssReceiver, Segment, VehicleProfile
+    from gfins_fmi.sim.scenarios import CONSUMER, simulate_drive
+    from gfins_fmi.sim.vehicle import GnssReceiver, Segment, VehicleProfile
     prof = VehicleProfile(heading0_rad=np.radians(70.0), segments=[
         Segment(15.0), Segment(10.0, dspeed_m_s=10.0), Segment(15.0),
         Segment(10.0, dheading_rad=np.pi / 2), Segment(20.0),
@@ -467,7 +469,7 @@ def _travel_run(travel, version, aligned, mid=None):
         params = {}
     init = InitialState(nav, position_std_m=1.0, velocity_std_m_s=0.1,
                         attitude_std_rad=(0.01, 0.01, 0.05))
-    drv = _InsGnssDriver(imu, g, None, None, config=cfg, initial=init, fmi_version=version,
+    drv = InsGnssDriver(imu, g, None, None, config=cfg, initial=init, fmi_version=version,
                          parameters=params)
     try:
         drv.initialize()
@@ -497,7 +499,7 @@ def _travel_run(travel, version, aligned, mid=None):
 
 
 def _heading_error(q, q_true):
-    from gfins_fmi.sins import quat_to_euler
+    from gfins_fmi.nav.strapdown import quat_to_euler
     dpsi = quat_to_euler(q)[:, 0] - quat_to_euler(q_true)[:, 0]
     return (dpsi + np.pi) % (2 * np.pi) - np.pi
 
@@ -571,7 +573,7 @@ def test_alignment_from_gnss_travel_ukf_and_rates(travel, filt, kind):
     nav = gf.NavState(np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3), float(g.lat_rad[0]),
                       float(g.lon_rad[0]), float(g.h_m[0]), t0)
     init = InitialState(nav, position_std_m=1.0, velocity_std_m_s=0.1, attitude_std_rad=(0.01, 0.01, 0.05))
-    drv = _InsGnssDriver(imu, g, None, None, config=cfg, initial=init, fmi_version=2,
+    drv = InsGnssDriver(imu, g, None, None, config=cfg, initial=init, fmi_version=2,
                          parameters={"align_time": 10.0, "align_heading": 1})
     try:
         drv.initialize()
@@ -608,7 +610,7 @@ def test_alignment_from_gnss_travel_never_fast(travel):
     nav = gf.NavState(np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3), float(g.lat_rad[0]),
                       float(g.lon_rad[0]), float(g.h_m[0]), float(d.initial.t_s))
     init = InitialState(nav)
-    drv = _InsGnssDriver(imu, g, None, None, config=cfg, initial=init, fmi_version=3,
+    drv = InsGnssDriver(imu, g, None, None, config=cfg, initial=init, fmi_version=3,
                          parameters={"align_time": 10.0, "align_heading": 1, "align_min_speed": 50.0})
     try:
         drv.initialize()

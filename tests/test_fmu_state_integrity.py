@@ -29,7 +29,7 @@ import zlib
 import numpy as np
 import pytest
 
-from gfins_fmi.fmu import _Log, _Slave, fmu_path
+from gfins_fmi.fmi import FmuLog, FmuSlave, fmu_path
 
 H_S = 0.01
 N_STEPS = 5
@@ -97,8 +97,8 @@ def _cases(blob: bytes, seed: int) -> list[tuple[str, bytes]]:
 def _run_model(model: str, version: int, conn) -> None:
     """Child process: runs every case of one FMU and sends one result dict per case."""
     params, inputs = SETUPS[model]
-    log = _Log()
-    s = _Slave(fmu_path(model, version), version, log, logging_on=False)
+    log = FmuLog()
+    s = FmuSlave(fmu_path(model, version), version, log, logging_on=False)
     try:
         s.initialize(0.0, 1.0, params)
         t = 0.0

@@ -49,7 +49,7 @@ def test_9_10_imu_error_bounds():
 
 
 def test_11_biquad_overflow_is_reported():
-    from gfins_fmi.signal_conditioning import BiquadFilter
+    from gfins_fmi.nav.signal_conditioning import BiquadFilter
     flt = BiquadFilter([[1.0, 2.0, 1.0, 1.0, -0.5, 0.1]])
     with pytest.raises(gf.SampleError, match="overflows the filter") as ei:
         flt.filter(np.array([1.0, 1e308, 1.0]))

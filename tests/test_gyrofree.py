@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import gfins_fmi as gf
-from gfins_fmi import reproduce as R
+from gfins_fmi.experiments import qin as R
 from conftest import EPS, S2, attitude_error_rad, numpy_outputs, paper_layout
 
 L = 0.1

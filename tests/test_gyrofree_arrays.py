@@ -16,7 +16,8 @@ from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
 import gfins_fmi as gf
-from gfins_fmi.gyrofree import UnstableRateLoopWarning, solver_maps
+from gfins_fmi.gyrofree.rate_solver import UnstableRateLoopWarning
+from gfins_fmi.gyrofree.geometry import solver_maps
 from conftest import EPS, attitude_error_rad, numpy_outputs
 
 L = 0.1

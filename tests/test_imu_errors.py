@@ -7,7 +7,7 @@ import pytest
 
 import gfins_fmi as gf
 
-# Units of the datasheet, from their definitions (not from gfins_fmi.imu_errors, the
+# Units of the datasheet, from their definitions (not from gfins_fmi.nav.imu_errors, the
 # module under test): 1 arcsec = pi/648000 rad, 1 deg/h = pi/648000 rad/s, standard
 # gravity 9.80665 m/s^2 (CGPM 1901), 1 ug = 1e-6 of it, 1 ppm = 1e-6.
 ARCSEC = np.pi / 648000.0
@@ -147,7 +147,7 @@ def test_seed001_misalignment_angles_are_small_rotations():
     """Row i of I + N is sensor axis i in m axes: compare with the axes actually turned by
     the rotations the seed describes (independent rotation matrices), to second order in
     the angles (1e-4 rad -> 1e-8)."""
-    from gfins_fmi.imu_errors import seed001_accel_misalignment, seed001_gyro_misalignment
+    from gfins_fmi.nav.imu_errors import seed001_accel_misalignment, seed001_gyro_misalignment
     g = np.array([1.0, -2.0, 1.5]) * 1e-4          # gamma_yz, gamma_zy, gamma_zx
     N = seed001_gyro_misalignment(*g)
     e = np.eye(3)
@@ -172,12 +172,12 @@ def test_band_limited_imu_noise():
 
 
 def test_unit_constants_equal_their_definitions():
-    """The datasheet units of gfins_fmi.imu_errors against their definitions, typed in
+    """The datasheet units of gfins_fmi.nav.imu_errors against their definitions, typed in
     here (the reference of the other tests of this file must not come from the module
     under test: with ARCSEC set to an arcminute every test above still passed).
     1 arcsec = pi / 648000 rad = 4.8481368110953599e-06 rad; 1 deg/h = the same number in
     rad/s; g0 = 9.80665 m/s^2 (CGPM 1901); 1 ug = 1e-6 g0; 1 ppm = 1e-6."""
-    from gfins_fmi import imu_errors as ie
+    from gfins_fmi.nav import imu_errors as ie
     assert ie.ARCSEC == pytest.approx(4.8481368110953599e-06, rel=1e-15)
     assert ie.DEG_H == pytest.approx(4.8481368110953599e-06, rel=1e-15)
     assert ie.G0 == 9.80665

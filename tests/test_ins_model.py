@@ -1,5 +1,5 @@
 """The shared navigation blocks of the INS error model (C gf_ins_model) against the
-definition, gfins_fmi.error_models.ins_error_matrices (written in numpy from Titterton &
+definition, gfins_fmi.estimation.error_model.ins_error_matrices (written in numpy from Titterton &
 Weston ch. 12.3), at random moving states. Tolerance: 1e-12 relative to the largest
 entry of each block (the two evaluate the same closed forms in different orders)."""
 from __future__ import annotations
@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from gfins_fmi._lib import ffi, lib, ptr
-from gfins_fmi.error_models import ins_error_matrices
+from gfins_fmi.estimation.error_model import ins_error_matrices
 
 
 def test_nav_blocks_equal_the_definition():

@@ -18,7 +18,9 @@ except ImportError as exc:
     pytest.skip(f"dask.distributed is not importable ({exc}); pip install 'gfins_fmi[dask]' "
                 "(the test extra installs it)", allow_module_level=True)
 
-from gfins_fmi import error_report, montecarlo as mc, reproduce as R  # noqa: E402
+from gfins_fmi.analysis import error_report
+from gfins_fmi.analysis import montecarlo as mc
+from gfins_fmi.experiments import qin as R
 from gfins_fmi.cli import main  # noqa: E402
 
 

@@ -15,8 +15,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gfins_fmi import cosim, osp
-from gfins_fmi.vehicle import GnssReceiver, VehicleProfile
+from gfins_fmi import fmi as cosim
+from gfins_fmi.fmi import osp
+from gfins_fmi.sim.vehicle import GnssReceiver, VehicleProfile
 
 REASON = osp.available()
 pytestmark = pytest.mark.skipif(REASON is not None, reason=REASON or "")

@@ -10,7 +10,7 @@ repeatable; a failure prints the falsifying example):
 * FMU equals batch: a short record through the SINS FMU equals Strapdown.run;
 * apply -> compensate: ImuErrors.compensate inverts ImuErrors.apply.
 
-Truth: the motions are closed-form (gfins_fmi.trajectory, conftest.smooth_motion with the
+Truth: the motions are closed-form (gfins_fmi.sim.trajectory, conftest.smooth_motion with the
 numpy forward model); the identities need no reference values.
 """
 from __future__ import annotations
@@ -23,7 +23,7 @@ from hypothesis import HealthCheck, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
 import gfins_fmi as gf  # noqa: E402
-from gfins_fmi import trajectory as tj  # noqa: E402
+from gfins_fmi.sim import trajectory as tj
 from conftest import attitude_error_rad, horizontal_error_m, numpy_outputs, paper_layout, smooth_motion  # noqa: E402
 
 # derandomize: the same cases every run (randomised tests fix their seeds)
@@ -107,7 +107,7 @@ def test_accel9_in_pieces_equals_whole(n, l_m, data):
 def short_drive():
     """20 s of a vehicle (truth at 1 kHz, increments at 100 Hz) with GNSS at 1 Hz."""
     from gfins_fmi.io import GnssRecord, ImuRecord
-    from gfins_fmi.vehicle import Segment, VehicleProfile, simulate_vehicle
+    from gfins_fmi.sim.vehicle import Segment, VehicleProfile, simulate_vehicle
     prof = VehicleProfile(lat0_rad=0.52, speed0_m_s=8.0, segments=[
         Segment(5), Segment(8, dspeed_m_s=3, dheading_rad=np.pi / 2), Segment(7)])
     tr = simulate_vehicle(prof, 20.0, 0.001)
@@ -154,7 +154,7 @@ def test_integrated_navigator_in_pieces_equals_whole(short_drive, cut_fraction, 
 @settings(max_examples=3, deadline=None, derandomize=True)   # FMUs are slow to instantiate
 @given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 60))
 def test_sins_fmu_equals_batch(seed, n):
-    from gfins_fmi.fmu import run_sins_fmu
+    from gfins_fmi.fmi import run_sins_fmu
     rng = np.random.default_rng(seed)
     dth = rng.normal(0, 1e-3, (n, 3))
     dv = rng.normal(0, 1e-2, (n, 3)) + [0, 0, 0.098]

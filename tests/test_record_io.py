@@ -28,7 +28,7 @@ import numpy as np
 import pytest
 
 import gfins_fmi as gf
-from gfins_fmi import trajectory as tj
+from gfins_fmi.sim import trajectory as tj
 from gfins_fmi.cli import main
 from gfins_fmi.io import FileFormatError
 from gfins_fmi.io import tables

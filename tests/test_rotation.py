@@ -1,4 +1,4 @@
-"""The rotating IMU (gfins_fmi.rotation over C gf_rotation): seed 001's path table, the
+"""The rotating IMU (gfins_fmi.sim.rotation over C gf_rotation): seed 001's path table, the
 modulation property of the indexing schemes, the simulated outputs at rest and the
 checks of bad schedules. Independent truth: the patent's published table, rotation
 matrices written here, the closed-form specific force at rest. (The C test
@@ -9,7 +9,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import gfins_fmi.rotation as rot
+from gfins_fmi.nav import earth
+from gfins_fmi.sim import rotation as rot
 
 
 def _rx(a):
@@ -158,8 +159,8 @@ def test_vehicle_fmu_carries_the_rotating_imu(version):
     on the same vehicle: the master's communication points accumulate t + h, the direct
     run computes t0 + k h, so the phase boundaries fall a few ulp apart: 1e-12 relative
     to the increment (measured 1.5e-12 relative on dtheta at 30 deg/s, 7e-15 rad)."""
-    from gfins_fmi.fmu import run_fmu
-    from gfins_fmi.vehicle import VehicleProfile
+    from gfins_fmi.fmi import run_fmu
+    from gfins_fmi.sim.vehicle import VehicleProfile
     prof = VehicleProfile.seed001(align_s=10.0, turn_times_s=(25.0,), turn_s=10.0)
     sched = rot.indexing_scheme(16, dwell_s=2.0, rate_deg_s=30.0)
     n, dt = 3000, 0.01
@@ -170,7 +171,7 @@ def test_vehicle_fmu_carries_the_rotating_imu(version):
     np.testing.assert_allclose(r["dv"], ref.dv_m_s, rtol=0, atol=1e-12 * 0.1)   # dv ~ g dt
     np.testing.assert_allclose(r["gimbal"], ref.gimbal_rad, rtol=0, atol=1e-13)
     # C_m^n of the cffi record = vehicle q_bn (x) q_mb of the FMU
-    qmn = np.array([rot._qmul(a, b) for a, b in zip(r["q"], r["q_mb"])])
+    qmn = np.array([earth.quat_multiply(a, b) for a, b in zip(r["q"], r["q_mb"])])
     assert np.allclose(np.abs(np.sum(qmn * ref.q_mn, axis=1)), 1.0, atol=1e-12)
     with pytest.raises(ValueError, match="zero position"):
         rot.RotationSchedule((rot.rest(1.0),), q_mb0=(0.0, 1.0, 0.0, 0.0)).fmu_parameters()
@@ -184,10 +185,10 @@ def test_sins_fmu_navigates_the_rotating_imu_with_compensation(version):
     FMU compensates increments as mean rates, as ImuErrors.compensate_increments does:
     same operations, so 1e-12 relative covers the compiler's freedom between the two
     builds (measured: 0)."""
-    from gfins_fmi.fmu import run_sins_fmu
-    from gfins_fmi.imu_errors import ImuErrors
-    from gfins_fmi.sins import SinsConfig
-    from gfins_fmi.vehicle import VehicleProfile
+    from gfins_fmi.fmi import run_sins_fmu
+    from gfins_fmi.nav.imu_errors import ImuErrors
+    from gfins_fmi.nav.strapdown import SinsConfig
+    from gfins_fmi.sim.vehicle import VehicleProfile
     prof = VehicleProfile.seed001(align_s=5.0, turn_times_s=(22.0,), turn_s=8.0)
     sched = rot.indexing_scheme(8, dwell_s=2.0, rate_deg_s=30.0)
     rec = rot.simulate_on_vehicle(sched, prof, 40.0, 0.01)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.signal import sosfilt
 
-from gfins_fmi import signal_conditioning as sc
+from gfins_fmi.nav import signal_conditioning as sc
 
 
 def test_c_cascade_matches_scipy_streamed_in_random_chunks(rng):

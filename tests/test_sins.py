@@ -1,5 +1,5 @@
 """Strapdown mechanization (C core gf_sins through the Python API) against closed-form
-motions of gfins_fmi.trajectory, whose sensor outputs are exact (analytic rates, Gauss-
+motions of gfins_fmi.sim.trajectory, whose sensor outputs are exact (analytic rates, Gauss-
 Legendre increments) and whose Earth model is written independently of the core."""
 from __future__ import annotations
 
@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 import gfins_fmi as gf
-from gfins_fmi import trajectory as tj
+from gfins_fmi.sim import trajectory as tj
+from gfins_fmi.nav import earth
 from gfins_fmi._lib import ffi, lib
 from conftest import attitude_error_rad, horizontal_error_m, numpy_outputs
 
@@ -39,10 +40,10 @@ def test_earth_model_matches_independent_and_published_values():
     assert lib.gf_earth_batch(5, ffi.from_buffer("double[]", lat), ffi.from_buffer("double[]", h),
                               ffi.from_buffer("double[]", RM), ffi.from_buffer("double[]", RN),
                               ffi.from_buffer("double[]", g), done) == lib.GF_OK
-    rm, rn, _, _ = tj.radii(lat)
+    rm, rn, _, _ = earth.radii(lat)
     np.testing.assert_allclose(RM, rm, rtol=4e-16)
     np.testing.assert_allclose(RN, rn, rtol=4e-16)
-    np.testing.assert_allclose(g, tj.gravity(lat, h), rtol=4e-16)
+    np.testing.assert_allclose(g, earth.gravity(lat, h), rtol=4e-16)
     # published WGS-84 values (NIMA TR8350.2): normal gravity on the ellipsoid at the
     # equator and the pole; R_N at the equator is a, R_M there is a (1 - e^2)
     def grav(lat, h):
@@ -60,19 +61,19 @@ def test_earth_model_matches_independent_and_published_values():
 def test_euler_conventions_of_seed_002():
     # heading 90 deg (clockwise from north): the body's front axis points east
     q = gf.euler_to_quat([90 * DEG, 0, 0])
-    C = tj.quat_to_dcm(q)
+    C = earth.quat_to_dcm(q)
     np.testing.assert_allclose(C @ [0, 1, 0], [1, 0, 0], atol=1e-15)
     # pitch +10 deg: nose up; roll +10 deg: right wing down
-    C = tj.quat_to_dcm(gf.euler_to_quat([0, 10 * DEG, 0]))
+    C = earth.quat_to_dcm(gf.euler_to_quat([0, 10 * DEG, 0]))
     assert (C @ [0, 1, 0])[2] == pytest.approx(np.sin(10 * DEG), abs=1e-15)
-    C = tj.quat_to_dcm(gf.euler_to_quat([0, 0, 10 * DEG]))
+    C = earth.quat_to_dcm(gf.euler_to_quat([0, 0, 10 * DEG]))
     assert (C @ [1, 0, 0])[2] == pytest.approx(-np.sin(10 * DEG), abs=1e-15)
     # round trip over the documented ranges; heading wraps into [0, 2 pi)
     rng = np.random.default_rng(5)
     e = np.c_[rng.uniform(0, 2 * np.pi, 500), rng.uniform(-1.5, 1.5, 500), rng.uniform(-3.1, 3.1, 500)]
     q = np.array([gf.euler_to_quat(x) for x in e])
     np.testing.assert_allclose(gf.quat_to_euler(q), e, atol=2e-13)
-    np.testing.assert_allclose(tj.euler_to_quat(e[:, 0], e[:, 1], e[:, 2]), q, atol=1e-15)
+    np.testing.assert_allclose(earth.euler_to_quat(e[:, 0], e[:, 1], e[:, 2]), q, atol=1e-15)
 
 
 def test_generator_body_rate_is_the_attitude_derivative():
@@ -82,11 +83,11 @@ def test_generator_body_rate_is_the_attitude_derivative():
     t = np.linspace(0, 100, 37)
     h = 1e-30
     (psi, th, ga), _ = m.euler(t + 1j * h)
-    qc = tj.euler_to_quat(psi, th, ga)                  # complex quaternion
+    qc = earth.euler_to_quat(psi, th, ga)                  # complex quaternion
     dq = qc.imag / h
     q, w = m.attitude(t)
     conj = q * np.array([1, -1, -1, -1])
-    w_ref = 2 * tj._qmul(conj, dq)[:, 1:]
+    w_ref = 2 * earth.quat_multiply(conj, dq)[:, 1:]
     np.testing.assert_allclose(w, w_ref, atol=1e-16)
 
 
@@ -164,8 +165,8 @@ def test_schuler_period():
     i = np.flatnonzero(np.sign(e[:-1]) != np.sign(e[1:]))
     tz = t[i] - e[i] * (t[i + 1] - t[i]) / (e[i + 1] - e[i])     # interpolated zero crossings
     period_min = 2 * np.mean(np.diff(tz)) / 60
-    RM, RN, _, _ = tj.radii(tr.lat_rad[0])
-    local_min = 2 * np.pi * np.sqrt(np.sqrt(RM * RN) / tj.gravity(tr.lat_rad[0], tr.h_m[0])) / 60
+    RM, RN, _, _ = earth.radii(tr.lat_rad[0])
+    local_min = 2 * np.pi * np.sqrt(np.sqrt(RM * RN) / earth.gravity(tr.lat_rad[0], tr.h_m[0])) / 60
     print(f"Schuler period: {period_min:.3f} min measured, {local_min:.3f} min local theory")
     assert len(tz) >= 5
     assert period_min == pytest.approx(84.4, rel=0.005)
@@ -516,6 +517,6 @@ def test_held_height_defaults_to_the_initial_state():
     sol, _ = gf.GyroFreeNavigator(g, x0, "sqrt", tr.gyro_rad_s[0],
                                   sins=gf.SinsConfig(vertical="hold")).run(tr.array_outputs(g), 0.01)
     assert np.all(sol.h_m == x0.h_m)
-    from gfins_fmi.fmu import run_sins_fmu
+    from gfins_fmi.fmi import run_sins_fmu
     fmu = run_sins_fmu(tr.dtheta_rad[:20], tr.dv_m_s[:20], 0.01, x0, config=gf.SinsConfig(vertical="hold"))
     assert np.all(fmu.h_m == x0.h_m)

@@ -1,7 +1,7 @@
 """N-subsample strapdown updates (SinsConfig(subsamples=N), N = 1..4; gf_sins.h).
 
 Truth from closed-form motions written here (classic coning and sculling in a fixed
-frame, after the derivations in docs/sins.md) and from gfins_fmi.trajectory (whose
+frame, after the derivations in docs/sins.md) and from gfins_fmi.sim.trajectory (whose
 increments are Gauss-Legendre quadratures of closed-form rates). The theory of the
 coning and sculling residuals, e_N(lambda) below, is an independent derivation (sums of
 the closed-form cross products of the increments; docs/sins.md), not a call of the core.
@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import gfins_fmi as gf
-from gfins_fmi import trajectory as tj
+from gfins_fmi.sim import trajectory as tj
 from conftest import attitude_error_rad, horizontal_error_m, navigate_init_args
 
 # the published sets (Savage's 2/3; the optimised 3- and 4-sample sets; N = 1: the
@@ -263,7 +263,7 @@ def test_cli_navigate_subsamples(tmp_path, capsys, fmt):
 def test_one_update_per_sample_navigators_refuse_subsamples():
     """The SINS FMU (one sample per communication step) and the gyro-free navigator (one
     update per array sample) have no subsample groups: asked for them, they say so."""
-    from gfins_fmi.fmu import run_gfnav_fmu, run_sins_fmu
+    from gfins_fmi.fmi import run_gfnav_fmu, run_sins_fmu
     tr = tj.sample(tj.Circle(), 0.1, 0.01)
     x0 = gf.NavState.from_trajectory(tr, 0)
     with pytest.raises(ValueError, match="the SINS FMU takes one sample per communication step"):

@@ -17,7 +17,7 @@ import pytest
 
 import gfins_fmi as gf
 from gfins_fmi import _lib
-from gfins_fmi import trajectory as tj
+from gfins_fmi.sim import trajectory as tj
 
 PACKAGE = pathlib.Path(gf.__file__).resolve().parent
 
@@ -54,12 +54,12 @@ def _gfnav_flat(x0, tr):
 
 
 def _sins_fmu(x0, tr):
-    from gfins_fmi.fmu import run_sins_fmu
+    from gfins_fmi.fmi import run_sins_fmu
     run_sins_fmu(tr.dtheta_rad, tr.dv_m_s, 0.01, x0)
 
 
 def _gfnav_fmu(x0, tr):
-    from gfins_fmi.fmu import run_gfnav_fmu
+    from gfins_fmi.fmi import run_gfnav_fmu
     run_gfnav_fmu("qin9", tr.array_outputs(gf.layout("qin9", 0.1)), 0.01, x0, strategy="sqrt",
                   omega_init_rad_s=tr.gyro_rad_s[0])
 
@@ -306,8 +306,10 @@ def test_misspelled_keywords_are_refused():
 def test_commands_python_entry_points_check_their_parameters_first(tmp_path):
     """The functions behind ``gfins demo / reproduce / cosim`` refuse bad parameters
     before doing any work (before: tracebacks after part of the run, NaN tables)."""
-    from gfins_fmi import cosim, demo, reproduce
-    from gfins_fmi.vehicle import VehicleProfile
+    from gfins_fmi import fmi as cosim
+    from gfins_fmi.experiments import demo
+    from gfins_fmi.experiments import qin as reproduce
+    from gfins_fmi.sim.vehicle import VehicleProfile
     out = tmp_path / "out"
     for kwargs, match in ((dict(duration_s=0.0), "duration_s must be finite and > 0 s"),
                           (dict(dt_s=-0.01), "dt_s must be finite and > 0 s"),

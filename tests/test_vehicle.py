@@ -1,11 +1,12 @@
-"""The vehicle truth source (C gf_vehicle via gfins_fmi.vehicle) against the Python
+"""The vehicle truth source (C gf_vehicle via gfins_fmi.sim.vehicle) against the Python
 trajectory generator, an independent implementation (closed forms, complex-step
 derivatives, its own WGS-84): seed 001's vehicle run and seed 000's circle."""
 import numpy as np
 import pytest
 
-from gfins_fmi.trajectory import Circle, VehicleRun, attitude_error_rad, sample
-from gfins_fmi.vehicle import Segment, VehicleProfile, simulate_vehicle
+from gfins_fmi.sim.trajectory import Circle, VehicleRun, sample
+from gfins_fmi.nav.earth import attitude_error_rad
+from gfins_fmi.sim.vehicle import Segment, VehicleProfile, simulate_vehicle
 
 
 def _compare(rec, traj, gyro_dot):
@@ -44,7 +45,7 @@ def test_circle_equals_trajectory_generator():
 
 
 def test_array_outputs_match_trajectory():
-    from gfins_fmi.gyrofree import layout
+    from gfins_fmi.gyrofree.geometry import layout
     motion = VehicleRun(align_s=1.0, accel_s=3.0, turn_times_s=(5.0,), turn_s=4.0)
     prof = VehicleProfile.seed001(align_s=1.0, accel_s=3.0, turn_times_s=(5.0,), turn_s=4.0)
     rec = simulate_vehicle(prof, 12.0, 0.01)

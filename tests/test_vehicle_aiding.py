@@ -1,6 +1,6 @@
-"""Aiding sensors on the vehicle (C gf_aiding_sim through gfins_fmi.vehicle and the
+"""Aiding sensors on the vehicle (C gf_aiding_sim through gfins_fmi.sim.vehicle and the
 vehicle FMU): GNSS antenna position and velocity and odometer speed against numpy
-derivations on the independent trajectory generator (gfins_fmi.trajectory: its own
+derivations on the independent trajectory generator (gfins_fmi.sim.trajectory: its own
 WGS-84, closed forms), the antenna velocity against finite differences of the antenna
 position, noise statistics against their definitions (chi-square bounds, fixed seeds),
 outage and latency semantics, and the FMU (FMI 2.0 and 3.0) against the batch, bit for
@@ -13,10 +13,11 @@ import numpy as np
 import pytest
 from scipy.stats import chi2
 
-from gfins_fmi.fmu import _Log, _Slave, fmu_path
-from gfins_fmi.trajectory import WGS84, VehicleRun, quat_to_dcm, radii
-from gfins_fmi.vehicle import (Barometer, GnssReceiver, Odometer, VehicleProfile,
-                               simulate_vehicle)
+from gfins_fmi.fmi import FmuLog, FmuSlave, fmu_path
+from gfins_fmi.nav.earth import WGS84, quat_to_dcm, radii
+from gfins_fmi.sim.trajectory import VehicleRun
+from gfins_fmi.sim.vehicle import (Barometer, GnssReceiver, Odometer, VehicleProfile,
+                                   simulate_vehicle)
 
 # 2 s at rest, a start to 15 m/s in 3 s, a 180 deg turn in 6 s: lever-arm velocities up
 # to 1 rad/s x 1.5 m; the same motion as the trajectory generator's VehicleRun
@@ -267,7 +268,7 @@ GNSS_OUT = ["gnss_time_s", "gnss_lat_rad", "gnss_lon_rad", "gnss_h_m", "gnss_vel
 def _run_fmu(version, params, stop_s, h=0.01, extra=(), drive=None):
     names = ["gnss_valid", "baro_valid", "odo_valid", *GNSS_OUT, "baro_time_s", "baro_h_m",
              "baro_std_m", "odo_time_s", "odo_speed_m_s", "odo_std_m_s", *extra]
-    s = _Slave(fmu_path("vehicle", version), version, _Log(), False)
+    s = FmuSlave(fmu_path("vehicle", version), version, FmuLog(), False)
     try:
         s.initialize(0.0, stop_s, params)
         rows = [[s.get(n) for n in names]]

@@ -1,20 +1,9 @@
-"""Error-propagation models as python-control systems, and their covariance.
-
-The strapdown model (``sins_error_model``) is the classic linearised error dynamics of
-an ENU mechanization at rest with the height held (Titterton & Weston ch. 12; Savage
-ch. 12), in the convention C_b^n(computed) = (I - [phi x]) C_b^n(true):
-
-    phi'  = -w_ie x phi + d(w_in) - C_b^n dw          (attitude, rad)
-    dv'   = f^n x phi - 2 w_ie x dv + C_b^n df        (horizontal velocity, m/s)
-    dL'   = dv_N / R_M,  dlon' = dv_E / (R_N cos L)   (position, rad)
-    d(w_in) = [-dv_N/R_M, dv_E/R_N - W sinL dL, dv_E tanL/R_N + W cosL dL]
-
-with states [phi_E, phi_N, phi_U, dv_E, dv_N, dL, dlon] and inputs the gyro errors dw
-(rad/s) and accelerometer errors df (m/s^2) in body axes. Its Schuler frequency
-sqrt(g/R), Earth-rate and Foucault couplings come out of A. ``covariance`` propagates
-constant sensor biases (random constants) and white noise (angle / velocity random
-walk) through it with the Van Loan discretisation (python-control's Gramians reject
-unstable or marginally stable systems, so finite horizons are computed here).
+"""Error models of gyro-free navigation for any array layout, at rest or rotating, for the
+``integrate``, ``sqrt`` and ``fused`` rate strategies (the ``eigen`` strategy is not
+modelled): the linearised error dynamics of the rate loop (the one linearisation of
+:mod:`gfins_fmi.gyrofree.stability`) feeding attitude, velocity and position errors, as
+python-control systems (time-invariant at rest, :class:`TimeVaryingModel` rotating), and
+the fused strategy's error standard deviations by a Kalman covariance recursion.
 """
 from __future__ import annotations
 
@@ -22,203 +11,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["SINS_STATES", "INS_STATES", "ins_state_names", "ins_error_matrices",
-           "ins_error_model", "GYROFREE_OUTPUTS", "TimeVaryingModel", "sins_error_model", "gyrofree_error_model",
-           "covariance", "propagate", "ErrorStd", "with_bias_states", "observability",
-           "Observability", "frequency_response", "gyrofree_fused_std"]
+from gfins_fmi.analysis.covariance import ErrorStd, TimeVaryingModel
+from gfins_fmi.gyrofree.geometry import fit_pinv, on_jacobian, rate_model, solver_maps
+from gfins_fmi.nav.earth import quat_to_dcm, rotation_matrix, skew
 
-SINS_STATES = ("phi_E", "phi_N", "phi_U", "dv_E", "dv_N", "dL", "dlon")
+__all__ = ["GYROFREE_OUTPUTS", "gyrofree_error_model", "gyrofree_fused_std"]
+
 GYROFREE_OUTPUTS = ("phi_x", "phi_y", "phi_z", "dv_x", "dv_y", "dv_z", "dp_x", "dp_y", "dp_z")
-_OMEGA_IE = 7.292115e-5
-
-
-INS_STATES = ("dv_E", "dv_N", "dv_U", "dL", "dlon", "dh", "phi_E", "phi_N", "phi_U",
-              "bg_x", "bg_y", "bg_z", "ba_x", "ba_y", "ba_z")
-"""Error states of the integrated navigation filter (seed 004 eq. 17, its order): velocity
-(m/s), latitude and longitude (rad), height (m), attitude (rad), gyro bias (rad/s) and
-accelerometer bias (m/s^2) not yet compensated; optional blocks follow (see
-:func:`ins_state_names`)."""
-
-
-def ins_state_names(scale_states: bool = False, baro_state: bool = False,
-                    odo_state: bool = False, odo_mount_state: bool = False) -> tuple:
-    """State names of a filter configuration (15 to 25 states, gf_ins_gnss.h order)."""
-    names = list(INS_STATES)
-    if scale_states:
-        names += ["sg_x", "sg_y", "sg_z", "sa_x", "sa_y", "sa_z"]
-    if baro_state:
-        names += ["b_baro"]
-    if odo_state:
-        names += ["k_odo"]
-    if odo_mount_state:
-        names += ["odo_pitch", "odo_heading"]
-    return tuple(names)
-
-
-def ins_error_matrices(lat_rad: float, h_m: float, v_enu_m_s, q_bn, f_b_m_s2, w_ib_b_rad_s,
-                       *, scale_states: bool = False, baro_state: bool = False,
-                       odo_state: bool = False, odo_mount_state: bool = False, tau_s=None):
-    """The continuous error model of the integrated-navigation filter, x' = F x + G w:
-    **the definition** that the C filter (csrc/gf_ins_gnss.c) implements; tests compare
-    the two at several states, and this one with a numerical linearisation of the
-    navigation equations.
-
-    Convention C_b^n(computed) = (I - [phi x]) C_b^n(true); position, velocity errors are
-    computed - true; sensor states are true - estimated. Titterton & Weston ch. 12.3
-    (moving vehicle: transport-rate and gravity couplings included, derivatives of the
-    radii and of gravity with latitude neglected):
-
-        phi'  = -w_in x phi + d(w_in) - C dw_ib,        dw_ib = b_g + diag(w_ib) s_g
-        dv'   = f^n x phi + C df + v x (2 d(w_ie) + d(w_en)) - (2 w_ie + w_en) x dv + dg
-                                                         df = b_a + diag(f^b) s_a
-        dL'   = dv_N / (R_M + h) - v_N dh / (R_M + h)^2
-        dlon' = (dv_E + v_E tan L dL - v_E dh / (R_N + h)) / ((R_N + h) cos L)
-        dh'   = dv_U,    dg_U = 2 g dh / (sqrt(R_M R_N) + h)
-        sensor states: first-order Gauss-Markov x' = -x / tau (tau 0 or inf: constant)
-
-    Parameters
-    ----------
-    lat_rad, h_m, v_enu_m_s, q_bn : the navigation state (rad, m, m/s, q_b^n)
-    f_b_m_s2, w_ib_b_rad_s : specific force and angular rate, body axes
-    scale_states, baro_state, odo_state : the optional blocks
-    tau_s : dict of correlation times (s) by block name ("bg", "ba", "sg", "sa", "baro",
-        "odo", "odo_mount"); missing or 0: random constant
-
-    Returns
-    -------
-    F : (n, n); G : (n, n - 3) with noise inputs [accelerometer white (3), gyro white (3),
-    one driving noise per sensor state], in that order.
-    """
-    from gfins_fmi.trajectory import WGS84, gravity, quat_to_dcm, radii
-    L, h = float(lat_rad), float(h_m)
-    if not abs(L) < np.pi / 2:
-        raise ValueError("lat_rad must be inside (-pi/2, pi/2)")
-    v = np.asarray(v_enu_m_s, float)
-    C = quat_to_dcm(np.asarray(q_bn, float))
-    fb, wb = np.asarray(f_b_m_s2, float), np.asarray(w_ib_b_rad_s, float)
-    RM, RN, _, _ = radii(L)
-    Rm, Rn, Re = RM + h, RN + h, np.sqrt(RM * RN) + h
-    g = float(gravity(L, h))
-    W = WGS84.omega_ie
-    vE, vN, _ = v
-    sL, cL, tL = np.sin(L), np.cos(L), np.tan(L)
-    w_ie = np.array([0.0, W * cL, W * sL])
-    w_en = np.array([-vN / Rm, vE / Rn, vE * tL / Rn])
-    # Jacobians of the Earth and transport rates: columns (dv_E, dv_N, dv_U) and (dL, dlon, dh)
-    Jie_p = np.zeros((3, 3))
-    Jie_p[:, 0] = [0.0, -W * sL, W * cL]
-    Jen_v = np.array([[0.0, -1.0 / Rm, 0.0], [1.0 / Rn, 0.0, 0.0], [tL / Rn, 0.0, 0.0]])
-    Jen_p = np.zeros((3, 3))
-    Jen_p[:, 0] = [0.0, 0.0, vE / (Rn * cL ** 2)]
-    Jen_p[:, 2] = [vN / Rm ** 2, -vE / Rn ** 2, -vE * tL / Rn ** 2]
-    names = ins_state_names(scale_states, baro_state, odo_state, odo_mount_state)
-    n = len(names)
-    ix = {k: names.index(k) for k in names}
-    V, P, A = slice(0, 3), slice(3, 6), slice(6, 9)
-    F = np.zeros((n, n))
-    # attitude
-    F[A, A] = -_skew(w_ie + w_en)
-    F[A, V] = Jen_v
-    F[A, P] = Jie_p + Jen_p
-    F[A, 9:12] = -C
-    # velocity
-    F[V, A] = _skew(C @ fb)
-    F[V, V] = -_skew(2 * w_ie + w_en) + _skew(v) @ Jen_v
-    F[V, P] = _skew(v) @ (2 * Jie_p + Jen_p)
-    F[2, 5] += 2 * g / Re
-    F[V, 12:15] = C
-    # position
-    F[3, 1] = 1.0 / Rm
-    F[3, 5] = -vN / Rm ** 2
-    F[4, 0] = 1.0 / (Rn * cL)
-    F[4, 3] = vE * tL / (Rn * cL)
-    F[4, 5] = -vE / (Rn ** 2 * cL)
-    F[5, 2] = 1.0
-    if scale_states:
-        F[A, ix["sg_x"]:ix["sg_x"] + 3] = -C @ np.diag(wb)
-        F[V, ix["sa_x"]:ix["sa_x"] + 3] = C @ np.diag(fb)
-    tau = dict(tau_s or {})
-    blocks = {"bg": range(9, 12), "ba": range(12, 15)}
-    if scale_states:
-        blocks["sg"] = range(ix["sg_x"], ix["sg_x"] + 3)
-        blocks["sa"] = range(ix["sa_x"], ix["sa_x"] + 3)
-    if baro_state:
-        blocks["baro"] = [ix["b_baro"]]
-    if odo_state:
-        blocks["odo"] = [ix["k_odo"]]
-    if odo_mount_state:
-        blocks["odo_mount"] = [ix["odo_pitch"], ix["odo_heading"]]
-    unknown = set(tau) - set(blocks)
-    if unknown:
-        raise ValueError(f"tau_s has no block {sorted(unknown)}; blocks: {sorted(blocks)}")
-    for k, idx in blocks.items():
-        t = float(tau.get(k, 0.0))
-        if t > 0 and np.isfinite(t):
-            for i in idx:
-                F[i, i] = -1.0 / t
-    G = np.zeros((n, n - 3))
-    G[V, 0:3] = C
-    G[A, 3:6] = -C
-    G[9:, 6:] = np.eye(n - 9)
-    return F, G
-
-
-def ins_error_model(lat_rad: float, h_m: float, v_enu_m_s, q_bn, f_b_m_s2, w_ib_b_rad_s,
-                    **kwargs):
-    """:func:`ins_error_matrices` as a ``control.StateSpace`` (outputs = states)."""
-    import control
-    F, G = ins_error_matrices(lat_rad, h_m, v_enu_m_s, q_bn, f_b_m_s2, w_ib_b_rad_s, **kwargs)
-    names = ins_state_names(kwargs.get("scale_states", False), kwargs.get("baro_state", False),
-                            kwargs.get("odo_state", False), kwargs.get("odo_mount_state", False))
-    n = len(names)
-    inputs = ["w_a_x", "w_a_y", "w_a_z", "w_g_x", "w_g_y", "w_g_z"] + [f"w_{k}" for k in names[9:]]
-    return control.ss(F, G, np.eye(n), np.zeros((n, n - 3)), inputs=inputs,
-                      outputs=list(names), states=list(names))
-
-
-def sins_error_model(lat_rad: float, q_bn, h_m: float = 0.0):
-    """The strapdown error model at rest as a ``control.StateSpace``: the integrated
-    filter's model (:func:`ins_error_matrices`) at zero velocity with the height held,
-    reduced to attitude, horizontal velocity and position.
-
-    Outputs: attitude errors (3, rad), horizontal velocity errors (2, m/s), north and
-    east position errors (2, m). Inputs: gyro errors (3, rad/s), accelerometer errors
-    (3, m/s^2), body axes, attitude ``q_bn``.
-    """
-    import control
-    from gfins_fmi.trajectory import gravity, quat_to_dcm, radii
-    L = float(lat_rad)
-    if not abs(L) < np.pi / 2:
-        raise ValueError("lat_rad must be inside (-pi/2, pi/2)")
-    C = quat_to_dcm(np.asarray(q_bn, float))
-    f_b = C.T @ np.array([0.0, 0.0, float(gravity(L, h_m))])     # at rest: f^n = -g^n
-    F, _ = ins_error_matrices(L, h_m, np.zeros(3), q_bn, f_b, np.zeros(3))
-    sel = [6, 7, 8, 0, 1, 3, 4]                 # phi (3), dv_E, dv_N, dL, dlon
-    A = F[np.ix_(sel, sel)]
-    B = F[np.ix_(sel, range(9, 15))]            # the bias columns: gyro, accelerometer errors
-    RM, RN, _, _ = radii(L)
-    Cout = np.zeros((7, 7))
-    Cout[0:5, 0:5] = np.eye(5)
-    Cout[5, 5] = RM + h_m
-    Cout[6, 6] = (RN + h_m) * np.cos(L)
-    return control.ss(A, B, Cout, np.zeros((7, 6)),
-                      inputs=["dw_x", "dw_y", "dw_z", "df_x", "df_y", "df_z"],
-                      outputs=["phi_E", "phi_N", "phi_U", "dv_E", "dv_N", "d_north", "d_east"],
-                      states=list(SINS_STATES))
-
-
-def _skew(v):
-    return np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
-
-
-def _rotation(rotvec):
-    """exp([v x]) by Rodrigues' formula."""
-    v = np.asarray(rotvec, float)
-    th = np.linalg.norm(v)
-    K = _skew(v)
-    if th < 1e-8:
-        return np.eye(3) + K + 0.5 * K @ K
-    return np.eye(3) + np.sin(th) / th * K + (1 - np.cos(th)) / th ** 2 * K @ K
 
 
 @dataclass
@@ -248,7 +47,6 @@ class _ArrayMaps:
 
 def _array_maps(geometry, gravity_m_s2, omega_b_rad_s, dt_s) -> _ArrayMaps:
     """The linear maps of an array's solver (from the C core) and checked parameters."""
-    from gfins_fmi.gyrofree import on_jacobian, solver_maps
     maps = solver_maps(geometry)
     g = float(gravity_m_s2)
     if not (np.isfinite(g) and g > 0):
@@ -260,26 +58,6 @@ def _array_maps(geometry, gravity_m_s2, omega_b_rad_s, dt_s) -> _ArrayMaps:
         raise ValueError("dt_s must be > 0 (s)")
     K = maps.K_pred @ on_jacobian(w)
     return _ArrayMaps(maps.pinv.shape[1], maps.pinv.shape[0], maps.pinv, K, maps.W_obs, maps, w, g)
-
-
-@dataclass
-class TimeVaryingModel:
-    """A linear time-varying error model x' = A(t) x + B(t) u, y = C x (the gyro-free
-    INS under rotation: the body-to-frame matrix turns the body-fixed rate and force
-    errors). ``propagate`` accepts it like a StateSpace; ``nlsys()`` gives the
-    python-control system for simulation (``control.input_output_response``)."""
-    A_of_t: object
-    B_of_t: object
-    C: np.ndarray
-    state_labels: list
-    input_labels: list
-    output_labels: list
-
-    def nlsys(self):
-        import control
-        return control.nlsys(lambda t, x, u, params: self.A_of_t(t) @ x + self.B_of_t(t) @ u,
-                             lambda t, x, u, params: self.C @ x, states=self.state_labels,
-                             inputs=self.input_labels, outputs=self.output_labels)
 
 
 def gyrofree_error_model(geometry, q_bn=(1.0, 0.0, 0.0, 0.0), gravity_m_s2: float = 9.8,
@@ -320,7 +98,6 @@ def gyrofree_error_model(geometry, q_bn=(1.0, 0.0, 0.0, 0.0), gravity_m_s2: floa
     (attitude rad, velocity m/s, position m); inputs ``b_0..b_{N-1}`` (m/s^2).
     """
     import control
-    from gfins_fmi.trajectory import quat_to_dcm
     lm = _array_maps(geometry, gravity_m_s2, omega_b_rad_s, dt_s)
     ns, n_est, P, K, S, w, g = lm.ns, lm.n_est, lm.P, lm.K, lm.S, lm.w, lm.g
     S_f, S_wd = S(range(3)), S(range(3, 6))
@@ -330,7 +107,6 @@ def gyrofree_error_model(geometry, q_bn=(1.0, 0.0, 0.0, 0.0), gravity_m_s2: floa
         A_rate, B_rate = -S_wd @ K, S_wd @ P
         G_f_x, G_f_b = -S_f @ K, S_f @ P                  # df = G_f_x dw + G_f_b b
     elif strategy == "sqrt":
-        from gfins_fmi.gyrofree import fit_pinv, on_jacobian, rate_model
         model = rate_model(lm.maps, "sqrt")
         if model == "none":
             raise ValueError("strategy 'sqrt' needs an array whose observed products determine "
@@ -354,10 +130,10 @@ def gyrofree_error_model(geometry, q_bn=(1.0, 0.0, 0.0, 0.0), gravity_m_s2: floa
     else:
         raise ValueError("strategy must be 'integrate' or 'sqrt' for the error model")
     C0 = quat_to_dcm(np.asarray(q_bn, float))
-    fxn = _skew(np.array([0.0, 0.0, g]))
+    fxn = skew(np.array([0.0, 0.0, g]))
 
     def A_of_t(t):
-        C = C0 @ _rotation(w * t)
+        C = C0 @ rotation_matrix(w * t)
         A = np.zeros((n_x, n_x))
         A[off + 3:off + 6, off:off + 3] = fxn
         A[off + 6:off + 9, off + 3:off + 6] = np.eye(3)
@@ -368,7 +144,7 @@ def gyrofree_error_model(geometry, q_bn=(1.0, 0.0, 0.0, 0.0), gravity_m_s2: floa
         return A
 
     def B_of_t(t):
-        C = C0 @ _rotation(w * t)
+        C = C0 @ rotation_matrix(w * t)
         B = np.zeros((n_x, ns))
         if strategy == "integrate":
             B[0:3] = B_rate
@@ -387,210 +163,6 @@ def gyrofree_error_model(geometry, q_bn=(1.0, 0.0, 0.0, 0.0), gravity_m_s2: floa
     return TimeVaryingModel(A_of_t, B_of_t, Cout, states, inputs, list(GYROFREE_OUTPUTS))
 
 
-@dataclass
-class ErrorStd:
-    """1-sigma of a model's outputs at the requested times: t_s (m,), std (m, n_out) in
-    the model's output order (rad, m/s, m)."""
-    t_s: np.ndarray
-    std: np.ndarray
-
-
-def covariance(sys, t_s, gyro_bias_std_rad_s=0.0, accel_bias_std_m_s2=0.0,
-               gyro_white_rad_s_sqrt_hz=0.0, accel_white_m_s2_sqrt_hz=0.0,
-               dt_s: float = 1.0) -> ErrorStd:
-    """``propagate`` for ``sins_error_model``: the same bias and white-noise level on
-    the three gyros and on the three accelerometers.
-
-    White noise is given as the (two-sided) density q with E[w(t) w(s)] = q^2 delta(t-s):
-    an angle random walk N (rad/sqrt(s)) is q = N for the gyro.
-    """
-    return propagate(sys, t_s, np.r_[np.full(3, float(gyro_bias_std_rad_s)),
-                                     np.full(3, float(accel_bias_std_m_s2))],
-                     np.r_[np.full(3, float(gyro_white_rad_s_sqrt_hz)),
-                           np.full(3, float(accel_white_m_s2_sqrt_hz))], dt_s)
-
-
-def propagate(sys, t_s, bias_std, white_density, dt_s: float = 1.0) -> ErrorStd:
-    """Covariance of a linear error model whose inputs are independent random-constant
-    biases (std ``bias_std``, one per input) plus white noise (density
-    ``white_density``, one per input: E[w(t) w(s)] = q^2 delta(t-s)), from zero initial
-    error, by Van Loan's discretisation over steps of dt_s. A sampled white noise of
-    std sigma at interval T has q = sigma sqrt(T).
-    """
-    from scipy.linalg import expm
-    varying = isinstance(sys, TimeVaryingModel)
-    A_of_t = sys.A_of_t if varying else (lambda t, A=np.asarray(sys.A): A)
-    B_of_t = sys.B_of_t if varying else (lambda t, B=np.asarray(sys.B): B)
-    C = np.asarray(sys.C)
-    n, m = A_of_t(0.0).shape[0], B_of_t(0.0).shape[1]
-    bias_std = np.broadcast_to(np.asarray(bias_std, float), (m,))
-    q = np.broadcast_to(np.asarray(white_density, float), (m,)) ** 2
-    if not (np.all(np.isfinite(bias_std)) and np.all(np.isfinite(q))):
-        raise ValueError("bias_std and white_density must be finite")
-    t_s = np.atleast_1d(np.asarray(t_s, float))
-    if np.any(np.diff(t_s) <= 0) or t_s[0] < 0:
-        raise ValueError("t_s must be increasing and >= 0")
-    if not dt_s > 0:
-        raise ValueError("dt_s must be > 0 (s)")
-    N = n + m
-
-    def van_loan(t):
-        """Phi and Qd of the step starting at t, with the model at its midpoint (a
-        time-varying model: second order in dt)."""
-        A, B = A_of_t(t + 0.5 * dt_s), B_of_t(t + 0.5 * dt_s)
-        # augmented state: [error (n), biases (m)], biases constant
-        Aa = np.zeros((N, N))
-        Aa[:n, :n], Aa[:n, n:] = A, B
-        Ga = np.zeros((N, m))
-        Ga[:n] = B
-        Mv = np.zeros((2 * N, 2 * N))
-        Mv[:N, :N] = -Aa
-        Mv[:N, N:] = Ga @ np.diag(q) @ Ga.T
-        Mv[N:, N:] = Aa.T
-        E = expm(Mv * dt_s)
-        Phi = E[N:, N:].T
-        return Phi, Phi @ E[:N, N:]
-
-    if not varying:
-        fixed = van_loan(0.0)
-    P = np.zeros((N, N))
-    P[n:, n:] = np.diag(bias_std ** 2)
-    Caug = np.zeros((C.shape[0], N))
-    Caug[:, :n] = C
-    out = np.empty((t_s.size, C.shape[0]))
-    t = 0.0
-    for k, tk in enumerate(t_s):
-        steps = int(round((tk - t) / dt_s))
-        for _ in range(steps):
-            Phi, Qd = van_loan(t) if varying else fixed
-            P = Phi @ P @ Phi.T + Qd
-            t += dt_s
-        out[k] = np.sqrt(np.maximum(np.diag(Caug @ P @ Caug.T), 0.0))
-    return ErrorStd(t_s, out)
-
-
-def with_bias_states(sys):
-    """The model with its inputs turned into random-constant states (appended after the
-    error states, named after the inputs): the form a Kalman filter or an
-    observability study uses. The original inputs remain, entering the error states
-    as before: they are now the white-noise parts of the sensor errors."""
-    import control
-    A, B, C = np.asarray(sys.A), np.asarray(sys.B), np.asarray(sys.C)
-    n, m = A.shape[0], B.shape[1]
-    Aa = np.zeros((n + m, n + m))
-    Aa[:n, :n], Aa[:n, n:] = A, B
-    Ba = np.zeros((n + m, m))
-    Ba[:n] = B
-    Ca = np.zeros((C.shape[0], n + m))
-    Ca[:, :n] = C
-    return control.ss(Aa, Ba, Ca, np.zeros((C.shape[0], m)), inputs=list(sys.input_labels),
-                      outputs=list(sys.output_labels),
-                      states=list(sys.state_labels) + list(sys.input_labels))
-
-
-@dataclass
-class Observability:
-    """Finite-horizon observability of the states of a model through some measurements.
-
-    Attributes
-    ----------
-    gramian : (n, n) W = sum_k Phi_k^T H^T H Phi_k dt over the horizon
-    singular_values : (n,) of W, descending
-    rank : int, numerical rank (relative tolerance ``tol``)
-    unobservable : (n, n - rank) unit vectors spanning the unobservable directions, in
-        the states' units
-    states : the model's state names
-    scale : (n,) the normalisation 1 / sqrt(W_ii) (0 for states never seen)
-    """
-    gramian: np.ndarray
-    singular_values: np.ndarray
-    rank: int
-    unobservable: np.ndarray
-    states: tuple
-    scale: np.ndarray
-
-    def describe(self, threshold: float = 0.05) -> list[str]:
-        """Each unobservable direction as a combination of states in their own units;
-        a state is listed when its part of the direction, measured unit-free (times
-        sqrt(W_ii)), exceeds ``threshold`` of the largest part."""
-        out = []
-        w = np.where(self.scale > 0, 1.0 / np.where(self.scale > 0, self.scale, 1.0), 1.0)
-        for v in self.unobservable.T:
-            weight = np.abs(v * w)
-            v = v / v[np.argmax(weight)]
-            out.append(" ".join(f"{c:+.3g} {name}" for c, name, wt in zip(v, self.states, weight)
-                                if wt > threshold * weight.max()))
-        return out
-
-
-def observability(A, H, t_s, states=None, tol: float = 1e-9) -> Observability:
-    """Observability Gramian over a finite horizon along a trajectory.
-
-    Parameters
-    ----------
-    A : (n, n) array, or callable t -> (n, n)
-        Error dynamics (constant, or evaluated along the trajectory: time-varying).
-    H : (p, n) array, or callable t -> (p, n)
-        Which combinations of states are measured (e.g. velocity of a zero-velocity
-        update or of GNSS).
-    t_s : (K,) increasing measurement times (s); the transition between them is
-        exp(A dt) with A at the interval's start.
-    states : names of the n states (default: ``x0..``).
-    tol : relative rank tolerance on the singular values of the Gramian normalised
-        by its diagonal (so the states' units do not matter).
-
-    python-control's Gramians are infinite-horizon and need a stable system; an INS
-    error model is marginally stable (Schuler, Earth rate) or unstable, hence this.
-    """
-    from scipy.linalg import expm, svd
-    t_s = np.atleast_1d(np.asarray(t_s, float))
-    if t_s.ndim != 1 or t_s.size < 1 or np.any(np.diff(t_s) <= 0):
-        raise ValueError("t_s must be a non-empty increasing sequence of times (s)")
-    At = A if callable(A) else (lambda t, A=np.asarray(A, float): A)
-    Ht = H if callable(H) else (lambda t, H=np.asarray(H, float): H)
-    n = np.asarray(At(t_s[0])).shape[0]
-    if np.asarray(At(t_s[0])).shape != (n, n) or np.asarray(Ht(t_s[0])).shape[-1] != n:
-        raise ValueError("A must be (n, n) and H (p, n)")
-    W = np.zeros((n, n))
-    Phi = np.eye(n)
-    dts = np.diff(t_s, append=t_s[-1] + (t_s[-1] - t_s[-2] if t_s.size > 1 else 1.0))
-    for k, t in enumerate(t_s):
-        Hk = np.atleast_2d(np.asarray(Ht(t), float))
-        M = Hk @ Phi
-        W += M.T @ M * dts[k]
-        Phi = expm(np.asarray(At(t), float) * dts[k]) @ Phi
-    # unit-free: scale each state by its own observability (states never seen stay 0),
-    # so rad, m/s and m/s^2 do not decide the rank between them
-    d = np.sqrt(np.diag(W))
-    scale = np.where(d > 0, 1.0 / np.where(d > 0, d, 1.0), 0.0)
-    _, sv, vt = svd(W * np.outer(scale, scale))
-    rank = int(np.sum(sv > tol * sv[0])) if sv[0] > 0 else 0
-    basis = vt[rank:].T * scale[:, None]       # back to the states' own units
-    never = np.flatnonzero(d == 0)              # states with no effect at all: there the
-    keep = np.linalg.norm(basis, axis=0) > 0    # scaled vectors vanish; use unit vectors
-    basis = np.column_stack([basis[:, keep]] + [np.eye(n)[:, j] for j in never])[:, :n - rank]
-    basis = basis / np.linalg.norm(basis, axis=0)
-    names = tuple(states) if states is not None else tuple(f"x{i}" for i in range(n))
-    return Observability(W, sv, rank, basis, names, scale)
-
-
-def frequency_response(sys, omega_rad_s, inputs=None, outputs=None):
-    """Gain and phase from sensor errors to navigation errors at the angular
-    frequencies ``omega_rad_s`` (rad/s): ``control.frequency_response`` of the selected
-    input/output channels (names from the model's labels). Returns the
-    ``control.FrequencyResponseData`` (``.magnitude``, ``.phase``, ``.plot()``)."""
-    import control
-    sub = sys
-    if inputs is not None or outputs is not None:
-        ins = list(sys.input_labels) if inputs is None else list(inputs)
-        outs = list(sys.output_labels) if outputs is None else list(outputs)
-        for name in ins + outs:
-            if name not in sys.input_labels + sys.output_labels:
-                raise ValueError(f"no channel {name!r}; inputs {sys.input_labels}, "
-                                 f"outputs {sys.output_labels}")
-        sub = sys[[sys.output_labels.index(o) for o in outs],
-                  [sys.input_labels.index(i) for i in ins]]
-    return control.frequency_response(sub, np.asarray(omega_rad_s, float))
 
 
 def gyrofree_fused_std(geometry, t_s, bias_std_m_s2: float, noise_std_m_s2: float,
@@ -616,8 +188,6 @@ def gyrofree_fused_std(geometry, t_s, bias_std_m_s2: float, noise_std_m_s2: floa
     -------
     ErrorStd with the outputs ``GYROFREE_OUTPUTS``.
     """
-    from gfins_fmi.trajectory import quat_to_dcm
-    from gfins_fmi.gyrofree import on_jacobian
     lm = _array_maps(geometry, gravity_m_s2, omega_b_rad_s, dt_s)
     m = lm.maps.n_obs
     if m == 0:
@@ -640,7 +210,7 @@ def gyrofree_fused_std(geometry, t_s, bias_std_m_s2: float, noise_std_m_s2: floa
     Hk[:, 0:3] = lm.maps.measurement_matrix() @ on_jacobian(w)
     Pf = np.diag([init_std_rad_s ** 2] * 3 + [init_bias_std_rad_s2 ** 2] * 3)
     C0 = quat_to_dcm(np.asarray(q_bn, float))
-    fxn = _skew(np.array([0.0, 0.0, g]))
+    fxn = skew(np.array([0.0, 0.0, g]))
     # error state z = [e_w, e_b, dwdot_prev, dwdot_prev2, phi, dv, dp, b (ns)]
     iw, ib, iwd, iwd2, iphi, iv, ip, ibias = 0, 3, 6, 9, 12, 15, 18, 21
     nz = 21 + ns
@@ -676,8 +246,8 @@ def gyrofree_fused_std(geometry, t_s, bias_std_m_s2: float, noise_std_m_s2: floa
         Zn[iwd2:iwd2 + 3] = wd1
         Zn[ibias:] = Z[ibias:]
         if not first:
-            C = C0 @ _rotation(w * t)
-            Cm = C0 @ _rotation(w * (t - 0.5 * dt))
+            C = C0 @ rotation_matrix(w * t)
+            Cm = C0 @ rotation_matrix(w * (t - 0.5 * dt))
             Zn[iphi:iphi + 3] = Z[iphi:iphi + 3] - Cm @ (0.5 * dt * (Z[iw:iw + 3] + e[0:3]))
             Zn[iv:iv + 3] = Z[iv:iv + 3] + dt * (fxn @ (0.5 * (Z[iphi:iphi + 3] + Zn[iphi:iphi + 3])) + C @ df)
             Zn[ip:ip + 3] = Z[ip:ip + 3] + 0.5 * dt * (Z[iv:iv + 3] + Zn[iv:iv + 3])

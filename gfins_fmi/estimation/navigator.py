@@ -1,50 +1,27 @@
 """Integrated navigation: the error-state INS/GNSS filter of the C core (``gf_ins_gnss``),
 EKF or UKF, with GNSS position and velocity, barometer, odometer, non-holonomic and
-zero-velocity aiding, and the Rauch–Tung–Striebel smoother.
+zero-velocity aiding, reverse-time filtering and forward-backward passes (seed 003).
 
 Equations, state layout and conventions: ``csrc/gf_ins_gnss.h`` and
 ``docs/estimation.md``. The error model's definition is
-:func:`gfins_fmi.error_models.ins_error_matrices`.
+:func:`gfins_fmi.estimation.error_model.ins_error_matrices`.
 
 A record goes to C in chunks (one call per chunk, default 2·10⁵ IMU samples) with all the
 measurements that fall in it; nothing is looped per sample in Python.
 """
 from __future__ import annotations
 
-import math
 import tempfile
-from dataclasses import dataclass, field, fields
-from typing import Optional
 
 import numpy as np
 
-from gfins_fmi._lib import GfinsError, check_status, ffi, lib, ptr, status_text
-from gfins_fmi.imu_errors import ImuNoise
-from gfins_fmi.sins import NavState, quat_to_euler
+from gfins_fmi._lib import check_status, ffi, lib, ptr, status_text
+from gfins_fmi.estimation.config import (N_SENSORS, SENSOR_NAMES, FilterConfig, FilterError,
+                                         InitialState, vector3)
+from gfins_fmi.estimation.measurements import INNOVATION_DTYPE, PASS_DTYPE, gather_measurements
+from gfins_fmi.estimation.solution import IntegratedSolution
 
-__all__ = ["FilterConfig", "InitialState", "IntegratedNavigator", "IntegratedSolution",
-           "SmoothedSolution", "FilterError", "MEAS_TYPES", "UPDATE_STATUS", "SENSOR_NAMES",
-           "integrate", "state_names"]
-
-UG = 9.80665e-6
-DEG = math.pi / 180.0
-DEG_H = DEG / 3600.0
-
-#: names of the measurement types in the innovation log (gf_ins_gnss.h GF_INS_MEAS_*)
-MEAS_TYPES = {int(lib.GF_INS_MEAS_GNSS_POS): "gnss_pos", int(lib.GF_INS_MEAS_GNSS_VEL): "gnss_vel",
-              int(lib.GF_INS_MEAS_BARO): "baro", int(lib.GF_INS_MEAS_ODO): "odometer",
-              int(lib.GF_INS_MEAS_NHC): "nhc", int(lib.GF_INS_MEAS_ZUPT): "zupt",
-              int(lib.GF_INS_MEAS_ZARU): "zaru", int(lib.GF_INS_MEAS_SPEED): "speed"}
-#: outcome of an update (GF_INS_ACCEPTED, GF_INS_REJECTED_*)
-UPDATE_STATUS = {int(lib.GF_INS_ACCEPTED): "accepted", int(lib.GF_INS_REJECTED_GATE): "gate",
-                 int(lib.GF_INS_REJECTED_SINGULAR): "singular",
-                 int(lib.GF_INS_REJECTED_STALE): "stale", int(lib.GF_INS_FORCED): "forced",
-                 int(lib.GF_INS_REJECTED_LOW_SPEED): "low_speed"}
-#: the sensor-error estimates, in the order of every ``sensors`` array
-SENSOR_NAMES = ("bg_x_rad_s", "bg_y_rad_s", "bg_z_rad_s", "ba_x_m_s2", "ba_y_m_s2", "ba_z_m_s2",
-                "sg_x", "sg_y", "sg_z", "sa_x", "sa_y", "sa_z", "baro_bias_m", "odo_scale",
-                "odo_pitch_rad", "odo_heading_rad")
-N_SENSORS = int(lib.GF_INS_N_SENSORS)
+__all__ = ["IntegratedNavigator", "integrate"]
 
 # gf_ins_init's *bad codes -> the FilterConfig field to change
 _BAD_FIELD = {1: "input", 2: "coning", 3: "filter", 4: "scale_factors/baro_bias/odometer_scale/odometer_mount",
@@ -54,456 +31,6 @@ _BAD_FIELD = {1: "input", 2: "coning", 3: "filter", 4: "scale_factors/baro_bias/
               32: "nhc_std_m_s/nhc_interval_s", 33: "zupt_std_m_s/zaru_std_rad_s/zupt_interval_s",
               34: "standstill_window_s/standstill_accel_std_m_s2/standstill_gyro_rad_s",
               35: "max_latency_s", 36: "speed_min_m_s", 37: "odometer_mount_rad (+ the initial correction in sensors)", 38: "subsamples"}
-
-
-class FilterError(GfinsError, ValueError):
-    """The filter stopped at IMU sample ``index`` (bad sample, IMU gap, divergence);
-    ``partial`` holds the solution of the samples before it."""
-
-    def __init__(self, message: str, status: int, index: int, partial=None):
-        super().__init__(message, status)
-        self.index = index
-        self.partial = partial
-
-
-def state_names(config: "FilterConfig") -> tuple:
-    """The error-state names of a configuration (see ``error_models.ins_state_names``)."""
-    from gfins_fmi.error_models import ins_state_names
-    return ins_state_names(config.scale_factors, config.baro_bias, config.odometer_scale,
-                           config.odometer_mount)
-
-
-def _vec3(name, value, unit):
-    arr = np.broadcast_to(np.asarray(value, dtype=float), (3,)).copy()
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name} must be finite ({unit}); got {value!r}")
-    return arr
-
-
-@dataclass
-class FilterConfig:
-    """Configuration of the integrated-navigation filter (units in the names).
-
-    Parameters
-    ----------
-    imu : ImuNoise
-        The IMU's random errors in datasheet units: angle/velocity random walk become the
-        white process noise, bias instability and correlation time the first-order
-        Gauss–Markov bias model (a rate random walk adds to its driving noise).
-    filter : {"ekf", "ukf"}
-    input : {"increments", "rates"}
-        What the IMU record holds (rad and m/s per interval, or rad/s and m/s² at the
-        sample times).
-    coning : two-sample coning/sculling corrections in the mechanization.
-    propagation_interval_s : covariance propagation interval (0: every IMU sample);
-        measurements propagate to their own instant in any case.
-    scale_factors : gyro and accelerometer scale-factor states (21 states), with
-        Gauss–Markov std/correlation time ``*_scale_std``/``*_scale_tau_s``
-        (dimensionless; tau 0 = random constant).
-    baro_bias, odometer_scale : bias state of the barometer (m) and scale-factor state of
-        the odometer, with their std/tau.
-    gnss_lever_arm_m, odometer_lever_arm_m : IMU -> antenna and IMU -> wheel contact point,
-        body axes (right, front, up), m.
-    odometer_mount_rad : (pitch, heading) of the odometer's measuring axes in the body
-        frame (boresight, fixed parameters; nose-up and clockwise positive, |.| < 90 deg):
-        the odometer and the non-holonomic constraints then act along those axes.
-    odometer_mount, odometer_mount_std_rad, odometer_mount_tau_s : estimate the odometer
-        boresight: two states (pitch, heading corrections to ``odometer_mount_rad``, rad,
-        Gauss-Markov std/tau, tau 0 = random constant), observed through the odometer and
-        NHC updates while the vehicle moves; the estimated correction is the output
-        ``sensors`` columns ``odo_pitch_rad``, ``odo_heading_rad`` (the angles used are
-        ``odometer_mount_rad`` + those).
-    gate_probability : NIS gate (chi-square probability; None: no gate).
-    gate_reset_count : after this many consecutive gate rejections of one measurement kind
-        the next one is applied anyway (logged as "forced"), so that a filter that has
-        drifted away recovers; 0: never.
-    nhc, nhc_std_m_s, nhc_interval_s : non-holonomic constraint (lateral and vertical
-        velocity of the odometer point = 0) for ground vehicles.
-    zupt, zupt_std_m_s, zaru_std_rad_s, zupt_interval_s : zero-velocity (and, with
-        zaru_std_rad_s > 0, zero-angular-rate) updates when the standstill detector
-        (``standstill_*``: window, std of |f|, mean |w|) says the IMU is still. The
-        detector cannot tell standstill from constant velocity on a perfectly smooth
-        path; the NIS gate rejects a wrong zero-velocity update.
-    ukf_alpha, ukf_beta, ukf_kappa : sigma-point parameters (seed 004: beta 2, kappa 0,
-        alpha small; 0.5 keeps the points within ~2 sigma).
-    max_imu_gap_s : a longer IMU interval stops the run with :class:`FilterError`.
-    max_latency_s : measurements handed in after their time of validity (the FMU, a
-        receiver with latency) are used up to this late (0: such measurements are stale);
-        see docs/estimation.md.
-    speed_min_m_s : tachometer speed updates (``speed=`` records, seed 003) are refused at
-        or below this INS horizontal speed (the direction of the velocity is undefined
-        there); logged as "low_speed".
-    subsamples : IMU samples per navigation update in :meth:`IntegratedNavigator.run`
-        (1..4; increments only): between measurement and propagation instants the
-        mechanization takes groups of this many samples with the matching multi-sample
-        coning and sculling corrections (``SinsConfig(subsamples=)``, docs/sins.md), the
-        usual way of processing a high-rate IMU; the solution then has one row per
-        navigation update (a group's end, or a sample processed alone next to a
-        measurement), not one per sample. Ignored with ZUPT or ``max_latency_s > 0``
-        (per-sample work) and by the FMU and the backward passes. 1: every sample.
-    """
-
-    imu: ImuNoise = field(default_factory=ImuNoise)
-    filter: str = "ekf"
-    input: str = "increments"
-    coning: bool = True
-    propagation_interval_s: float = 0.1
-    scale_factors: bool = False
-    gyro_scale_std: float = 1e-3
-    gyro_scale_tau_s: float = 0.0
-    accel_scale_std: float = 1e-3
-    accel_scale_tau_s: float = 0.0
-    baro_bias: bool = False
-    baro_bias_std_m: float = 1.0
-    baro_bias_tau_s: float = 3600.0
-    odometer_scale: bool = False
-    odometer_scale_std: float = 0.01
-    odometer_scale_tau_s: float = 0.0
-    gnss_lever_arm_m: tuple = (0.0, 0.0, 0.0)
-    odometer_lever_arm_m: tuple = (0.0, 0.0, 0.0)
-    odometer_mount_rad: tuple = (0.0, 0.0)
-    odometer_mount: bool = False
-    odometer_mount_std_rad: float = 0.035
-    odometer_mount_tau_s: float = 0.0
-    gate_probability: Optional[float] = 0.9999
-    gate_reset_count: int = 5
-    nhc: bool = False
-    nhc_std_m_s: float = 0.1
-    nhc_interval_s: float = 0.1
-    zupt: bool = False
-    zupt_std_m_s: float = 0.01
-    zaru_std_rad_s: float = 0.0
-    zupt_interval_s: float = 0.1
-    standstill_window_s: float = 0.5
-    standstill_accel_std_m_s2: float = 0.05
-    standstill_gyro_rad_s: float = 0.01
-    ukf_alpha: float = 0.5
-    ukf_beta: float = 2.0
-    ukf_kappa: float = 0.0
-    max_imu_gap_s: float = 0.5
-    max_latency_s: float = 0.0
-    max_rate_rad_s: float = 50.0
-    max_specific_force_m_s2: float = 1000.0
-    speed_min_m_s: float = 0.5
-    subsamples: int = 1
-
-    def __post_init__(self):
-        if not isinstance(self.imu, ImuNoise):
-            raise TypeError(f"imu must be an ImuNoise (datasheet units); got {type(self.imu).__name__}")
-        if self.filter not in ("ekf", "ukf"):
-            raise ValueError(f"filter must be 'ekf' or 'ukf'; got {self.filter!r}")
-        if self.input not in ("increments", "rates"):
-            raise ValueError(f"input must be 'increments' or 'rates'; got {self.input!r}")
-        if self.gate_probability is not None and not (0 < self.gate_probability < 1):
-            raise ValueError(f"gate_probability must be in (0, 1) or None; got {self.gate_probability!r}")
-        for f in fields(self):
-            v = getattr(self, f.name)
-            if isinstance(v, float) and not (np.isfinite(v) and v >= 0):
-                raise ValueError(f"{f.name} must be finite and >= 0; got {v!r}")
-        self.gnss_lever_arm_m = tuple(_vec3("gnss_lever_arm_m", self.gnss_lever_arm_m, "m"))
-        self.odometer_lever_arm_m = tuple(_vec3("odometer_lever_arm_m", self.odometer_lever_arm_m, "m"))
-        mount = np.asarray(self.odometer_mount_rad, dtype=float)
-        if mount.shape != (2,) or not np.all(np.abs(mount) < np.pi / 2):
-            raise ValueError(f"odometer_mount_rad must be (pitch, heading) in rad, each inside (-pi/2, pi/2); "
-                             f"got {self.odometer_mount_rad!r}")
-        self.odometer_mount_rad = tuple(float(x) for x in mount)
-        if isinstance(self.subsamples, bool) or not isinstance(self.subsamples, (int, np.integer)) \
-                or not 1 <= self.subsamples <= 4:
-            raise ValueError(f"subsamples must be an integer in 1..4; got {self.subsamples!r}")
-        if self.subsamples > 1 and self.input != "increments":
-            raise ValueError("subsamples > 1 needs input='increments' (the multi-sample coning "
-                             "and sculling corrections are formed from increments)")
-        self._c()   # the C checks, with messages naming the field
-
-    @property
-    def n_states(self) -> int:
-        return 15 + 6 * bool(self.scale_factors) + bool(self.baro_bias) + bool(self.odometer_scale) \
-            + 2 * bool(self.odometer_mount)
-
-    def noise_si(self) -> dict:
-        """The process noise in SI, as the C filter takes it (see :class:`ImuNoise` for
-        the datasheet conventions: a one-sided accelerometer noise density ASD has the
-        white-noise intensity ASD²/2)."""
-        m = self.imu
-        gyro_tau = m.gyro_correlation_time_s if m.gyro_bias_instability_deg_h > 0 else 0.0
-        accel_tau = m.accel_correlation_time_s if m.accel_bias_instability_ug > 0 else 0.0
-        gb = m.gyro_bias_instability_deg_h * DEG_H
-        ab = m.accel_bias_instability_ug * UG
-        # a rate random walk K adds K^2 to the bias' driving noise: express it as an
-        # equivalent Gauss-Markov std for the same tau (or a random walk if tau is 0)
-        K_g = m.gyro_rrw_deg_h_sqrt_h * DEG_H / 60.0
-        K_a = m.accel_rrw_ug_sqrt_s * UG
-        if K_g > 0:
-            gyro_tau = gyro_tau or 3600.0
-            gb = math.sqrt(gb * gb + K_g * K_g * gyro_tau / 2.0)
-        if K_a > 0:
-            accel_tau = accel_tau or 3600.0
-            ab = math.sqrt(ab * ab + K_a * K_a * accel_tau / 2.0)
-        return dict(gyro_arw_rad_sqrt_s=m.gyro_arw_deg_sqrt_h * DEG / 60.0,
-                    accel_vrw_m_s_sqrt_s=m.accel_vrw_ug_sqrt_hz * UG / math.sqrt(2.0),
-                    gyro_bias_std_rad_s=gb, gyro_bias_tau_s=gyro_tau,
-                    accel_bias_std_m_s2=ab, accel_bias_tau_s=accel_tau,
-                    gyro_scale_std=self.gyro_scale_std, gyro_scale_tau_s=self.gyro_scale_tau_s,
-                    accel_scale_std=self.accel_scale_std, accel_scale_tau_s=self.accel_scale_tau_s,
-                    baro_bias_std_m=self.baro_bias_std_m, baro_bias_tau_s=self.baro_bias_tau_s,
-                    odo_scale_std=self.odometer_scale_std, odo_scale_tau_s=self.odometer_scale_tau_s,
-                    odo_mount_std_rad=self.odometer_mount_std_rad,
-                    odo_mount_tau_s=self.odometer_mount_tau_s)
-
-    def _c(self):
-        cfg = ffi.new("gf_ins_config *")
-        check_status(lib.gf_ins_config_default(cfg), "gf_ins_config_default")
-        cfg.input = lib.GF_SINS_INPUT_INCREMENTS if self.input == "increments" else lib.GF_SINS_INPUT_RATES
-        cfg.coning = int(bool(self.coning))
-        cfg.filter = lib.GF_INS_UKF if self.filter == "ukf" else lib.GF_INS_EKF
-        cfg.scale_states = int(bool(self.scale_factors))
-        cfg.baro_state = int(bool(self.baro_bias))
-        cfg.odo_state = int(bool(self.odometer_scale))
-        cfg.odo_mount_state = int(bool(self.odometer_mount))
-        cfg.prop_interval_s = float(self.propagation_interval_s)
-        cfg.max_imu_gap_s = float(self.max_imu_gap_s)
-        cfg.max_rate_rad_s = float(self.max_rate_rad_s)
-        cfg.max_specific_force_m_s2 = float(self.max_specific_force_m_s2)
-        cfg.ukf_alpha, cfg.ukf_beta, cfg.ukf_kappa = self.ukf_alpha, self.ukf_beta, self.ukf_kappa
-        for k, v in self.noise_si().items():
-            setattr(cfg.noise, k, float(v))
-        cfg.gnss_lever_m = list(self.gnss_lever_arm_m)
-        cfg.odo_lever_m = list(self.odometer_lever_arm_m)
-        cfg.odo_mount_rad = list(self.odometer_mount_rad)
-        cfg.gate_prob = float(self.gate_probability or 0.0)
-        if isinstance(self.gate_reset_count, bool) or not isinstance(self.gate_reset_count, (int, np.integer)) \
-                or self.gate_reset_count < 0:
-            raise ValueError(f"gate_reset_count must be an integer >= 0; got {self.gate_reset_count!r}")
-        cfg.gate_reset_count = int(self.gate_reset_count)
-        cfg.nhc, cfg.nhc_std_m_s, cfg.nhc_interval_s = int(bool(self.nhc)), self.nhc_std_m_s, self.nhc_interval_s
-        cfg.zupt, cfg.zupt_std_m_s = int(bool(self.zupt)), self.zupt_std_m_s
-        cfg.zaru_std_rad_s, cfg.zupt_interval_s = self.zaru_std_rad_s, self.zupt_interval_s
-        cfg.still_window_s = self.standstill_window_s
-        cfg.still_accel_std_m_s2 = self.standstill_accel_std_m_s2
-        cfg.still_gyro_rad_s = self.standstill_gyro_rad_s
-        cfg.max_latency_s = float(self.max_latency_s)
-        cfg.speed_min_m_s = float(self.speed_min_m_s)
-        cfg.subsamples = int(self.subsamples)
-        n = ffi.new("int32_t *")
-        st = lib.gf_ins_state_count(cfg, n)
-        if st != lib.GF_OK:
-            raise ValueError("FilterConfig rejected by the C core: check the positive "
-                             "parameters (std, intervals, windows, ukf_alpha > 0)")
-        return cfg
-
-
-@dataclass
-class InitialState:
-    """The filter's start: the navigation state and the 1-sigma uncertainty of each error
-    block (scalars apply to all axes). Attitude std is (east, north, up) tilt/heading in
-    rad; position std (east, north, up) in m. Sensor stds default to the IMU model's
-    bias instability (set them to the turn-on bias uncertainty of your IMU).
-    """
-
-    nav: NavState
-    position_std_m: object = 1.0
-    velocity_std_m_s: object = 0.1
-    attitude_std_rad: object = (0.01, 0.01, 0.05)
-    gyro_bias_std_rad_s: Optional[object] = None
-    accel_bias_std_m_s2: Optional[object] = None
-    gyro_scale_std: Optional[float] = None
-    accel_scale_std: Optional[float] = None
-    baro_bias_std_m: Optional[float] = None
-    odometer_scale_std: Optional[float] = None
-    odometer_mount_std_rad: Optional[object] = None   # (pitch, heading) or one for both, rad
-    sensors: Optional[np.ndarray] = None      # initial estimates (SENSOR_NAMES order)
-
-    def covariance(self, config: FilterConfig) -> np.ndarray:
-        """P0 (n x n, diagonal) in the filter's states (position as dL, dlon rad, dh m)."""
-        noise = config.noise_si()
-        nav = self.nav
-        # the radii of the C core's Earth model (gf_earth), so that the FMU, which converts
-        # its position stds in C, starts from the same numbers to the last bit
-        e = ffi.new("gf_earth *")
-        if lib.gf_earth_update(e, float(nav.lat_rad), float(nav.h_m), ffi.NULL, 1.0) != lib.GF_OK:
-            raise ValueError(f"initial.nav: latitude {nav.lat_rad!r} rad or height {nav.h_m!r} m "
-                             "is outside the Earth model (|lat| < 90 deg, h > -a/2)")
-        pos = _vec3("position_std_m", self.position_std_m, "m")
-        d = [*_vec3("velocity_std_m_s", self.velocity_std_m_s, "m/s"),
-             pos[1] / (e.R_M_m + nav.h_m), pos[0] / ((e.R_N_m + nav.h_m) * e.cos_lat), pos[2],
-             *_vec3("attitude_std_rad", self.attitude_std_rad, "rad"),
-             *_vec3("gyro_bias_std_rad_s", self.gyro_bias_std_rad_s if self.gyro_bias_std_rad_s
-                    is not None else noise["gyro_bias_std_rad_s"], "rad/s"),
-             *_vec3("accel_bias_std_m_s2", self.accel_bias_std_m_s2 if self.accel_bias_std_m_s2
-                    is not None else noise["accel_bias_std_m_s2"], "m/s^2")]
-        if config.scale_factors:
-            d += [self.gyro_scale_std if self.gyro_scale_std is not None else config.gyro_scale_std] * 3
-            d += [self.accel_scale_std if self.accel_scale_std is not None else config.accel_scale_std] * 3
-        if config.baro_bias:
-            d.append(self.baro_bias_std_m if self.baro_bias_std_m is not None else config.baro_bias_std_m)
-        if config.odometer_scale:
-            d.append(self.odometer_scale_std if self.odometer_scale_std is not None
-                     else config.odometer_scale_std)
-        if config.odometer_mount:
-            m = self.odometer_mount_std_rad if self.odometer_mount_std_rad is not None \
-                else config.odometer_mount_std_rad
-            d += list(np.broadcast_to(np.asarray(m, dtype=float), (2,)))
-        d = np.asarray(d, float)
-        if not (np.all(np.isfinite(d)) and np.all(d > 0)):
-            names = state_names(config)
-            bad = [names[i] for i in np.flatnonzero(~(np.isfinite(d) & (d > 0)))]
-            raise ValueError(f"initial standard deviations must be finite and > 0; not so for "
-                             f"{bad} (an IMU model without bias instability needs explicit "
-                             "gyro_bias_std_rad_s / accel_bias_std_m_s2)")
-        return np.diag(d * d)
-
-
-def _struct_dtype(cname: str, spec) -> np.dtype:
-    """A numpy dtype laid out exactly as the C struct (offsets from cffi)."""
-    names, formats, offsets = [], [], []
-    for name, *fmt in spec:
-        names.append(name)
-        formats.append(tuple(fmt) if len(fmt) > 1 else fmt[0])
-        offsets.append(ffi.offsetof(cname, name))
-    return np.dtype({"names": names, "formats": formats, "offsets": offsets,
-                     "itemsize": ffi.sizeof(cname)})
-
-
-_MEAS_DTYPE = _struct_dtype("gf_ins_meas", [("type", "<i4"), ("t_s", "<f8"), ("z", "<f8", (3,)),
-                                            ("std", "<f8", (3,))])
-_PASS_DTYPE = _struct_dtype("gf_ins_pass", [("direction", "<i4"), ("t_s", "<f8"), ("q_bn", "<f8", (4,)),
-                                            ("v_n_m_s", "<f8", (3,)), ("std9", "<f8", (9,)),
-                                            ("sensors", "<f8", (N_SENSORS,)), ("n_updates", "<u8"),
-                                            ("n_rejected", "<u8")])
-_INNOV_DTYPE = _struct_dtype("gf_ins_innovation", [("t_s", "<f8"), ("type", "<i4"), ("status", "<i4"),
-                                                   ("m", "<i4"), ("nis", "<f8"), ("r", "<f8", (3,)),
-                                                   ("s_std", "<f8", (3,))])
-
-
-def _gather_measurements(gnss, baro, odometer, gnss_velocity: bool, speed=None) -> np.ndarray:
-    """All measurements as one array of gf_ins_meas, sorted by time (stable: position
-    before velocity at the same instant)."""
-    parts = []
-
-    def block(t, type_, z, std):
-        a = np.zeros(len(t), _MEAS_DTYPE)
-        a["type"], a["t_s"] = type_, t
-        a["z"][:, :z.shape[1]] = z
-        a["std"][:, :std.shape[1]] = std
-        parts.append(a)
-
-    if gnss is not None:
-        t = np.asarray(gnss.t_s, float)
-        block(t, lib.GF_INS_MEAS_GNSS_POS, np.c_[gnss.lat_rad, gnss.lon_rad, gnss.h_m],
-              np.asarray(gnss.pos_std_m, float))
-        if gnss_velocity and getattr(gnss, "vel_enu_m_s", None) is not None:
-            if getattr(gnss, "vel_std_m_s", None) is None:
-                raise ValueError("the GNSS record has velocities but no vel_std_m_s: give their "
-                                 "standard deviations or pass gnss_velocity=False")
-            block(t, lib.GF_INS_MEAS_GNSS_VEL, np.asarray(gnss.vel_enu_m_s, float),
-                  np.asarray(gnss.vel_std_m_s, float))
-    if baro is not None:
-        block(np.asarray(baro.t_s, float), lib.GF_INS_MEAS_BARO, np.asarray(baro.h_m, float)[:, None],
-              np.asarray(baro.std_m, float)[:, None])
-    if odometer is not None:
-        block(np.asarray(odometer.t_s, float), lib.GF_INS_MEAS_ODO,
-              np.asarray(odometer.speed_m_s, float)[:, None], np.asarray(odometer.std_m_s, float)[:, None])
-    if speed is not None:
-        block(np.asarray(speed.t_s, float), lib.GF_INS_MEAS_SPEED,
-              np.asarray(speed.speed_m_s, float)[:, None], np.asarray(speed.std_m_s, float)[:, None])
-    if not parts:
-        return np.zeros(0, _MEAS_DTYPE)
-    meas = np.concatenate(parts)
-    bad = ~(np.isfinite(meas["t_s"]) & np.all(np.isfinite(meas["z"]), axis=1) &
-            np.all(np.isfinite(meas["std"]), axis=1))
-    if np.any(bad):
-        k = int(np.flatnonzero(bad)[0])
-        raise ValueError(f"measurement {MEAS_TYPES[int(meas['type'][k])]} at t = {meas['t_s'][k]} s "
-                         "holds NaN or Inf (value or standard deviation): remove it or mark the "
-                         "epoch invalid")
-    for type_, m in ((lib.GF_INS_MEAS_GNSS_POS, 3), (lib.GF_INS_MEAS_GNSS_VEL, 3),
-                     (lib.GF_INS_MEAS_BARO, 1), (lib.GF_INS_MEAS_ODO, 1), (lib.GF_INS_MEAS_SPEED, 1)):
-        sel = meas["type"] == type_
-        if np.any(sel) and not np.all(meas["std"][sel, :m] > 0):
-            k = int(np.flatnonzero(sel & ~np.all(meas["std"][:, :m] > 0, axis=1))[0])
-            raise ValueError(f"{MEAS_TYPES[int(type_)]} at t = {meas['t_s'][k]} s has a standard "
-                             f"deviation <= 0 ({meas['std'][k, :m].tolist()}): every std must be > 0")
-    order = np.argsort(meas["t_s"], kind="stable")
-    out = np.zeros(len(meas), _MEAS_DTYPE)      # concatenate drops the C padding: copy by field
-    for name in _MEAS_DTYPE.names:
-        out[name] = meas[name][order]
-    return out
-
-
-@dataclass
-class IntegratedSolution:
-    """Filter output, row k = the state after IMU sample k.
-
-    Attributes
-    ----------
-    t_s (n,), q_bn (n, 4), v_n_m_s (n, 3) ENU, lat_rad, lon_rad, h_m (n,);
-    std (n, 9): 1-sigma of velocity E, N, U (m/s), position E, N, U (m), attitude
-        E, N, U (rad);
-    sensors (n, 16): sensor-error estimates (``SENSOR_NAMES``);
-    standstill (n,) bool: the detector's output;
-    innovations: structured array, one row per update (t_s, type, status, m, nis, r[3],
-        s_std[3]; ``MEAS_TYPES``, ``UPDATE_STATUS``);
-    epochs: what the smoother needs (None unless the run kept it);
-    config, n_states.
-    """
-
-    t_s: np.ndarray
-    q_bn: np.ndarray
-    v_n_m_s: np.ndarray
-    lat_rad: np.ndarray
-    lon_rad: np.ndarray
-    h_m: np.ndarray
-    std: np.ndarray
-    sensors: np.ndarray
-    standstill: np.ndarray
-    innovations: np.ndarray
-    config: FilterConfig
-    epochs: Optional[dict] = None
-    _euler: Optional[np.ndarray] = field(default=None, repr=False)
-
-    def __len__(self) -> int:
-        return int(self.t_s.shape[0])
-
-    @property
-    def euler_rad(self) -> np.ndarray:
-        """(heading, pitch, roll) per row, rad."""
-        if self._euler is None:
-            self._euler = quat_to_euler(self.q_bn) if len(self) else np.zeros((0, 3))
-        return self._euler
-
-    def rejected(self) -> np.ndarray:
-        """The updates that were not applied (gate, singular, stale)."""
-        st = self.innovations["status"]
-        return self.innovations[(st != lib.GF_INS_ACCEPTED) & (st != lib.GF_INS_FORCED)]
-
-    def innovations_of(self, kind: str) -> np.ndarray:
-        """Rows of the innovation log of one measurement kind (``MEAS_TYPES`` values)."""
-        code = {v: k for k, v in MEAS_TYPES.items()}
-        if kind not in code:
-            raise ValueError(f"kind must be one of {sorted(code)}; got {kind!r}")
-        return self.innovations[self.innovations["type"] == code[kind]]
-
-    def _rows(self, sl) -> "IntegratedSolution":
-        return IntegratedSolution(self.t_s[sl].copy(), self.q_bn[sl].copy(), self.v_n_m_s[sl].copy(),
-                                  self.lat_rad[sl].copy(), self.lon_rad[sl].copy(), self.h_m[sl].copy(),
-                                  self.std[sl].copy(), self.sensors[sl].copy(), self.standstill[sl].copy(),
-                                  self.innovations, self.config, self.epochs)
-
-    def smooth(self, progress: bool = False) -> "SmoothedSolution":
-        """Rauch–Tung–Striebel smoothing (backward pass over the stored epochs, one C
-        call), applied to every row (corrections interpolated between epochs)."""
-        if self.epochs is None:
-            raise ValueError("this solution kept no epochs: run with smoother=True")
-        return _smooth(self, progress)
-
-
-@dataclass
-class SmoothedSolution(IntegratedSolution):
-    """The smoothed solution at the IMU rows (same fields; ``std`` smoothed, interpolated
-    between epochs) and at the epochs themselves (``epoch_t_s``, ``epoch_std``)."""
-
-    epoch_t_s: Optional[np.ndarray] = None
-    epoch_std: Optional[np.ndarray] = None
 
 
 class _Epochs:
@@ -610,8 +137,8 @@ class IntegratedNavigator:
     def error_model(self, f_b_m_s2, w_ib_b_rad_s):
         """F (n x n), G (n x n-3), q (n-3) of the C filter at its current nominal state."""
         n = self.n_states
-        fb = _vec3("f_b_m_s2", f_b_m_s2, "m/s^2")
-        wb = _vec3("w_ib_b_rad_s", w_ib_b_rad_s, "rad/s")
+        fb = vector3("f_b_m_s2", f_b_m_s2, "m/s^2")
+        wb = vector3("w_ib_b_rad_s", w_ib_b_rad_s, "rad/s")
         F, G, q = np.empty((n, n)), np.empty((n, n - 3)), np.empty(n - 3)
         check_status(lib.gf_ins_error_model(self._f, ptr(fb, 3), ptr(wb, 3), ptr(F, n * n), ptr(G, n * (n - 3)),
                                              ptr(q, n - 3)),
@@ -662,7 +189,7 @@ class IntegratedNavigator:
         chunk = -(-int(chunk) // cfg.subsamples) * cfg.subsamples
         if self.reversed:
             raise ValueError("the filter is reversed in time: use run_backward(), or reverse() it again")
-        meas = _gather_measurements(gnss, baro, odometer, gnss_velocity, speed)
+        meas = gather_measurements(gnss, baro, odometer, gnss_velocity, speed)
         # capacity: one epoch per propagation and up to two per measurement
         duration = float(t[-1] - self.t_s) if n else 0.0
         if cfg.propagation_interval_s > 0:
@@ -679,7 +206,7 @@ class IntegratedNavigator:
             check_status(lib.gf_ins_epochs_begin(self._f, epochs.c), "gf_ins_epochs_begin")
             self._epochs_started = True
         internal = (int(cfg.nhc) + 2 * int(cfg.zupt)) * n_prop
-        log_arr = np.zeros(len(meas) + internal + 16, _INNOV_DTYPE)
+        log_arr = np.zeros(len(meas) + internal + 16, INNOVATION_DTYPE)
         log = ffi.new("gf_ins_log *")
         log.capacity = len(log_arr)
         log.entries = ptr(log_arr, len(log_arr), "gf_ins_innovation")
@@ -779,7 +306,7 @@ class IntegratedNavigator:
         return t, g, a
 
     def _log(self, n_entries: int):
-        arr = np.zeros(n_entries + 16, _INNOV_DTYPE)
+        arr = np.zeros(n_entries + 16, INNOVATION_DTYPE)
         log = ffi.new("gf_ins_log *")
         log.capacity = len(arr)
         log.entries = ptr(arr, len(arr), "gf_ins_innovation")
@@ -796,7 +323,7 @@ class IntegratedNavigator:
             raise ValueError("run_backward needs a reversed filter: call reverse() first")
         t, g, a = self._record(imu)
         n = len(t)
-        meas = _gather_measurements(gnss, baro, odometer, gnss_velocity, speed)
+        meas = gather_measurements(gnss, baro, odometer, gnss_velocity, speed)
         internal = (int(self.config.nhc) + 2 * int(self.config.zupt)) * \
             (int((t[-1] - t_start_s) / max(self.config.propagation_interval_s, 1e-3)) + n + 2 if n else 0)
         log_arr, log = self._log(len(meas) + internal)
@@ -837,12 +364,12 @@ class IntegratedNavigator:
         n = len(t)
         if n < 2:
             raise ValueError(f"forward-backward processing needs a record of at least 2 IMU samples; got {n}")
-        meas = _gather_measurements(gnss, baro, odometer, gnss_velocity, speed)
+        meas = gather_measurements(gnss, baro, odometer, gnss_velocity, speed)
         np_total = 1 + 2 * int(passes)
         n_prop = int((t[-1] - self.t_s) / max(self.config.propagation_interval_s, 1e-3)) + n + 2
         internal = (int(self.config.nhc) + 2 * int(self.config.zupt)) * n_prop
         log_arr, log = self._log(np_total * (len(meas) + internal))
-        table = np.zeros(np_total, _PASS_DTYPE)
+        table = np.zeros(np_total, PASS_DTYPE)
         done = ffi.new("int32_t *")
         mptr = ptr(meas, len(meas), "gf_ins_meas") if len(meas) else ffi.NULL
         st = lib.gf_ins_forward_backward(self._f, n, ptr(t, n), ptr(g, 3 * n), ptr(a, 3 * n), len(meas), mptr,
@@ -854,65 +381,6 @@ class IntegratedNavigator:
                               f"{status_text(st)} (the filter must start at the record's start, before "
                               f"its first sample at {t[0]!r} s)", int(st), -1)
         return table, log_arr[:int(log.count)].copy()
-
-def _smooth(sol: IntegratedSolution, progress: bool) -> SmoothedSolution:
-    ep = sol.epochs
-    n = ep["n_states"]
-    E = len(ep["t_s"])
-    keep = ep["_keepalive"]
-    c = ffi.new("gf_ins_epochs *")
-    c.capacity = c.count = E
-    for k in ("t_s", "nav", "sensors", "dx", "P_prior", "P_post", "Phi"):
-        setattr(c, k, ptr(keep.arrays[k], keep.arrays[k].size))
-    xs = np.empty((E, n))
-    Ps = np.empty_like(ep["P_post"])
-    check_status(lib.gf_ins_smooth(n, c, ptr(xs, xs.size), ptr(Ps, Ps.size)), "gf_ins_smooth (a prior covariance "
-                 "is not positive definite)")
-    # apply to the rows
-    q, v = sol.q_bn.copy(), sol.v_n_m_s.copy()
-    pos = np.c_[sol.lat_rad, sol.lon_rad, sol.h_m]
-    sens = sol.sensors.copy()
-    f = ffi.new("gf_ins_filter *")
-    f.n_states = n
-    cfg = sol.config
-    f.idx_sg = f.idx_sa = f.idx_baro = f.idx_odo = f.idx_mount = -1
-    nxt = 15
-    if cfg.scale_factors:
-        f.idx_sg, f.idx_sa = nxt, nxt + 3
-        nxt += 6
-    if cfg.baro_bias:
-        f.idx_baro = nxt
-        nxt += 1
-    if cfg.odometer_scale:
-        f.idx_odo = nxt
-        nxt += 1
-    if cfg.odometer_mount:
-        f.idx_mount = nxt
-    et = np.ascontiguousarray(ep["t_s"])
-    dx = np.ascontiguousarray(ep["dx"])
-    t_rows = np.ascontiguousarray(sol.t_s)
-    nr = len(sol)
-    check_status(lib.gf_ins_smooth_apply(f, E, ptr(et, E), ptr(xs, E * n), ptr(dx, E * n), nr,
-                                         ptr(t_rows, nr), ptr(q, 4 * nr), ptr(v, 3 * nr),
-                                         ptr(pos, 3 * nr), ptr(sens, N_SENSORS * nr)),
-                 "gf_ins_smooth_apply")
-    # smoothed std at the epochs, interpolated to the rows
-    tri_idx = np.triu_indices(n)
-    diag_pos = np.flatnonzero(tri_idx[0] == tri_idx[1])
-    var = Ps[:, diag_pos]
-    from gfins_fmi.trajectory import radii
-    nav = ep["nav"]
-    RM, RN, _, _ = radii(nav[:, 7])
-    estd = np.empty((E, 9))
-    estd[:, 0:3] = np.sqrt(var[:, 0:3])
-    estd[:, 3] = np.sqrt(var[:, 4]) * (RN + nav[:, 9]) * np.cos(nav[:, 7])
-    estd[:, 4] = np.sqrt(var[:, 3]) * (RM + nav[:, 9])
-    estd[:, 5] = np.sqrt(var[:, 5])
-    estd[:, 6:9] = np.sqrt(var[:, 6:9])
-    std = np.column_stack([np.interp(sol.t_s, et, estd[:, i]) for i in range(9)])
-    return SmoothedSolution(sol.t_s.copy(), q, v, pos[:, 0].copy(), pos[:, 1].copy(), pos[:, 2].copy(),
-                            std, sens, sol.standstill.copy(), sol.innovations, cfg, ep,
-                            epoch_t_s=et.copy(), epoch_std=estd)
 
 
 def integrate(imu, gnss=None, baro=None, odometer=None, *, config: FilterConfig,

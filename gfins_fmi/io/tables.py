@@ -584,10 +584,12 @@ class _WriteBehind:
 
 class _CsvSink:
     """CSV text: ``# `` comment lines, the header line, then each chunk formatted by
-    polars (the shortest decimal that reads back as the same float64)."""
+    polars (the shortest decimal that reads back as the same float64), or, with
+    ``float_format="repr"``, by Python (the same shortest digits in Python's notation:
+    ``1e-05``, ``nan``)."""
 
-    def __init__(self, tmp: pathlib.Path, names, dtypes, comments, rows=None):
-        self.names, self.dtypes = names, dtypes
+    def __init__(self, tmp: pathlib.Path, names, dtypes, comments, rows=None, float_format=None):
+        self.names, self.dtypes, self.float_format = names, dtypes, float_format
         self._file = open(tmp, "wb")
         head = "".join(f"# {' '.join(c.split())}\n" for c in comments) + ",".join(names) + "\n"
         self._file.write(head.encode("utf-8"))
@@ -595,9 +597,14 @@ class _CsvSink:
         self._behind = _WriteBehind(self._file.fileno())
 
     def write(self, arrays) -> None:
-        import polars as pl
-        pl.DataFrame([pl.Series(n, a) for n, a in zip(self.names, arrays)]).write_csv(
-            self._file, include_header=False)
+        if self.float_format == "repr":
+            cols = [[repr(x) for x in a.tolist()] if a.dtype.kind == "f" else
+                    [str(x) for x in a.tolist()] for a in arrays]
+            self._file.write("".join(",".join(row) + "\n" for row in zip(*cols)).encode("utf-8"))
+        else:
+            import polars as pl   # lazy: polars costs start-up time (0.1-0.2 s)
+            pl.DataFrame([pl.Series(n, a) for n, a in zip(self.names, arrays)]).write_csv(
+                self._file, include_header=False)
         self._file.flush()
         end = self._file.tell()
         self._behind.written(self._end, end - self._end)
@@ -611,7 +618,7 @@ class _CsvSink:
 
 
 class _ParquetSink:
-    def __init__(self, tmp: pathlib.Path, names, dtypes, comments, rows=None):
+    def __init__(self, tmp: pathlib.Path, names, dtypes, comments, rows=None, float_format=None):
         pa, pq = _pyarrow()
         self._pa = pa
         meta = {"gfins_fmi.comments": "\n".join(comments)} if comments else None
@@ -719,7 +726,8 @@ class _NpzSink:
     different: a partial output) the columns go to raw side files, zipped at
     :meth:`close`."""
 
-    def __init__(self, tmp: pathlib.Path, names, dtypes, comments, rows: int | None = None):
+    def __init__(self, tmp: pathlib.Path, names, dtypes, comments, rows: int | None = None,
+                 float_format=None):
         self.tmp = tmp
         self.side = pathlib.Path(str(tmp) + ".d")
         self.names, self.dtypes = list(names), [np.dtype(d) for d in dtypes]
@@ -823,6 +831,15 @@ class TableWriter:
     rows : int, optional
         The number of rows expected, when known (a binary input): an npz file is then
         written in place, without side files (any other count is still written right).
+    float_format : {None, "repr"}, optional
+        CSV only: ``"repr"`` writes every value as Python's ``repr`` (the same shortest
+        round-trip digits as the default, in Python's notation: ``1e-05`` where polars
+        writes ``0.00001``, ``nan`` for ``NaN``), row by row in Python — for small tables
+        whose bytes must stay those of an earlier writer (the innovation log of ``gfins
+        integrate``).
+
+    Text columns (dtype ``str``: words without commas, quotes or line breaks, such as
+    the names of measurement kinds) are written to CSV only.
 
     Use as a context manager: leaving the block without :meth:`commit` (an exception,
     Ctrl-C) deletes the temporary file and leaves the destination as it was::
@@ -835,7 +852,7 @@ class TableWriter:
 
     def __init__(self, path, names: Sequence[str], dtypes: Sequence | None = None, *,
                  comments: Sequence[str] = (), format: str | None = None,
-                 rows: int | None = None):
+                 rows: int | None = None, float_format: str | None = None):
         self.path = pathlib.Path(path)
         self.names = tuple(names)
         if not self.names or not all(isinstance(n, str) and n and n.replace("_", "a").isalnum()
@@ -843,16 +860,20 @@ class TableWriter:
             raise ValueError(f"column names must be non-empty words of letters, digits and _; "
                              f"got {self.names!r}")
         self.dtypes = tuple(np.dtype(d) for d in (dtypes or [np.float64] * len(self.names)))
-        if len(self.dtypes) != len(self.names) or any(d.kind not in "iuf" for d in self.dtypes):
-            raise ValueError(f"dtypes must give a numeric type per column ({len(self.names)}); "
-                             f"got {dtypes!r}")
+        if len(self.dtypes) != len(self.names) or any(d.kind not in "iufU" for d in self.dtypes):
+            raise ValueError(f"dtypes must give a numeric type (or str) per column "
+                             f"({len(self.names)}); got {dtypes!r}")
         self.format = _format(self.path, format)
+        if float_format not in (None, "repr"):
+            raise ValueError(f"float_format must be None or 'repr'; got {float_format!r}")
+        if self.format != "csv" and (float_format or any(d.kind == "U" for d in self.dtypes)):
+            raise ValueError(f"{self.path}: text columns and float_format are CSV only")
         if self.path.is_dir():
             raise IsADirectoryError(f"{self.path} is a folder: give a file name for the output")
         self._tmp, self._remove = _temp_beside(self.path, self)
         try:
             self._sink = _SINKS[self.format](self._tmp, self.names, self.dtypes, list(comments),
-                                             rows)
+                                             rows, float_format)
         except BaseException:
             self._remove()
             raise
@@ -870,6 +891,10 @@ class TableWriter:
         if any(a.ndim != 1 or a.shape[0] != m for a in arrays):
             raise ValueError("columns must be 1-D arrays of one length; got shapes "
                              f"{[a.shape for a in arrays]}")
+        for name, a in zip(self.names, arrays):
+            if a.dtype.kind == "U" and any(set(x) & set(',"\r\n') for x in a.tolist()):
+                raise ValueError(f"text column {name}: values must not hold commas, quotes or "
+                                 "line breaks")
         self._sink.write(arrays)
         self.rows += m
 

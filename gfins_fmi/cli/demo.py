@@ -1,0 +1,26 @@
+"""``gfins demo``: the main job end to end (:mod:`gfins_fmi.experiments.demo`) and its
+verdict."""
+from __future__ import annotations
+
+from gfins_fmi.experiments import demo
+
+__all__ = ["run", "check"]
+
+
+def run(args) -> int:
+    res = demo.run(out_dir=args.out, duration_s=args.duration, dt_s=args.dt, l_m=args.lever_arm,
+                   noise_m_s2=args.noise)
+    ok = all(res[f"fmi{v}"]["problems"] == [] and res[f"fmi{v}"]["max_rel_diff"] <= 1e-12
+             for v in (2, 3)) and res["sins"]["fmu_max_rel_diff"] <= 1e-12 \
+        and res["cosim"]["master_diff"] == 0.0 and res["cosim"]["ssp_diff"] == 0.0
+    print("\ndemo " + ("passed: C core, FMUs and analysis agree" if ok else "FAILED"))
+    return 0 if ok else 1
+
+
+def check(args) -> str | None:
+    """A combination of options refused at parse time (None: fine)."""
+    n = int(round(args.duration / args.dt))
+    if n < 2:
+        return (f"--duration {args.duration:g} s at --dt {args.dt:g} s gives {n} sample"
+                f"{'' if n == 1 else 's'}; the demo needs at least 2")
+    return None

@@ -240,7 +240,8 @@ def _api(g: Golden):
     import gfins_fmi as gf
     from gfins_fmi.estimation import FilterConfig, InitialState, IntegratedNavigator
     from gfins_fmi.sim.scenarios import TACTICAL
-    from gfins_fmi.fmi import run_ins_gnss_fmu, run_sins_fmu, run_gfnav_fmu
+    from gfins_fmi.fmi.ins_gnss import run_ins_gnss_fmu
+    from gfins_fmi.fmi.models import run_sins_fmu, run_gfnav_fmu
     d = _drive(60.0)
     init = InitialState(d.initial, position_std_m=(0.3, 0.2, 0.5), velocity_std_m_s=0.05,
                         attitude_std_rad=(1e-3, 1e-3, 5e-3))

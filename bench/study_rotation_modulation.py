@@ -24,6 +24,7 @@ import time
 
 import numpy as np
 
+from gfins_fmi.nav import rotating
 from gfins_fmi.sim import rotation as rot
 from gfins_fmi.nav.imu_errors import ImuErrors
 from gfins_fmi.sim.vehicle import Segment, VehicleProfile
@@ -95,10 +96,10 @@ def main(argv=None):
     for name, sched in schemes().items():
         t0 = time.perf_counter()
         rec = rot.simulate_static(sched, T, a.dt, LAT, H)
-        ref, _, _ = horizontal_error(rot.navigate(rec), LAT, rec.lon_rad)
+        ref, _, _ = horizontal_error(rotating.navigate(rec), LAT, rec.lon_rad)
         for ek in ("A", "B"):
             th, dv = ERRORS[ek].apply_increments(rec.dtheta_rad, rec.dv_m_s, rec.dt_s)
-            err, dn, de = horizontal_error(rot.navigate(rec, th, dv), LAT, rec.lon_rad)
+            err, dn, de = horizontal_error(rotating.navigate(rec, th, dv), LAT, rec.lon_rad)
             lin = ""
             if ek == "A":
                 tl, ln, le, mb = linear_prediction(rec, ERRORS["A"])
@@ -116,7 +117,7 @@ def main(argv=None):
         rec = rot.simulate_static(schemes()[name], T, a.dt, LAT, H)
         for bk, kw in B_BLOCKS.items():
             th, dv = ImuErrors(**kw).apply_increments(rec.dtheta_rad, rec.dv_m_s, rec.dt_s)
-            err, _, _ = horizontal_error(rot.navigate(rec, th, dv), LAT, rec.lon_rad)
+            err, _, _ = horizontal_error(rotating.navigate(rec, th, dv), LAT, rec.lon_rad)
             print(f"| {bk} | {name} | {err.max():.4g} | {err[-1]:.4g} |", flush=True)
     # C: the vehicle turns
     segs = [Segment(60.0, dspeed_m_s=10.0)]
@@ -132,7 +133,7 @@ def main(argv=None):
         def err_on_vehicle(errors):
             th, dv = (rec.dtheta_rad, rec.dv_m_s) if errors is None else \
                 errors.apply_increments(rec.dtheta_rad, rec.dv_m_s, rec.dt_s)
-            sol = rot.navigate(rec, th, dv)
+            sol = rotating.navigate(rec, th, dv)
             return np.hypot((sol.imu.lat_rad - v["lat_rad"]) * R_E,
                             (sol.imu.lon_rad - v["lon_rad"]) * R_E * np.cos(LAT))
         e, e0 = err_on_vehicle(ERRORS["B"]), err_on_vehicle(None)

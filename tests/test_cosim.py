@@ -13,8 +13,13 @@ import pytest
 
 import gfins_fmi as gf
 from gfins_fmi import ImuErrors
-from gfins_fmi import fmi as cosim
-from gfins_fmi.fmi import FmuRunError, FmuLog, FmuSlave, fmu_path, validate
+from gfins_fmi.fmi.master import CoSimulation
+from gfins_fmi.fmi.reference import direct_navigation
+from gfins_fmi.fmi.container import run_container, write_container
+from gfins_fmi.fmi.ssp import run_ssp, write_ssp
+from gfins_fmi.fmi.system import vehicle_integrated_navigation, vehicle_navigation
+from gfins_fmi.fmi.paths import FmuRunError, fmu_path, validate
+from gfins_fmi.fmi.runner import FmuLog, FmuSlave
 from gfins_fmi.sim.vehicle import GnssReceiver, Segment, VehicleProfile, simulate_vehicle
 
 # a short run that still turns: 2 s at rest, start to 15 m/s in 3 s, a 180 deg turn
@@ -35,11 +40,11 @@ def test_vehicle_fmu_equals_cffi_vehicle_with_sensor_errors(version):
                            accel_bias_ug=1000, accel_scale_ppm=50, accel_misalignment_arcsec=10,
                            accel_k2_ug_g2=20, lever_arm_cm=3)
     bias = rng.normal(0, 1e-3, 9)
-    system = cosim.vehicle_navigation("gfnav_qin9", PROFILE, stop_s=STOP_S, imu_errors=imu,
+    system = vehicle_navigation("gfnav_qin9", PROFILE, stop_s=STOP_S, imu_errors=imu,
                                       array_bias_m_s2=bias)
     system.outputs = {"vehicle": ["time_s", "lat", "lon", "v", "q", "gyro_rate", "specific_force",
                                   "dtheta", "dv", "A", "angular_accel"]}
-    with cosim.CoSimulation(system, fmi_version=version) as m:
+    with CoSimulation(system, fmi_version=version) as m:
         m.initialize()
         r = m.run()
     rec = simulate_vehicle(PROFILE, STOP_S, system.step_s)
@@ -157,20 +162,20 @@ def test_vehicle_fmu_under_a_master_sequence_stop_time_variability(version):
 @pytest.mark.parametrize("navigator", ["gfnav_qin9", "gfnav_cube6", "sins"])
 @pytest.mark.parametrize("version", [2, 3])
 def test_python_master_equals_direct_pipeline(navigator, version):
-    system = cosim.vehicle_navigation(navigator, PROFILE, stop_s=STOP_S)
-    with cosim.CoSimulation(system, fmi_version=version) as m:
+    system = vehicle_navigation(navigator, PROFILE, stop_s=STOP_S)
+    with CoSimulation(system, fmi_version=version) as m:
         m.initialize()
         r = m.run()
     nav = r["navigator.lat"][:, 0]
     if navigator == "sins":
         # row k + 1 holds the state after the increment that ends at t_k (k >= 1)
-        sol = cosim.direct_navigation(system, {"dtheta": r["vehicle.dtheta"][1:-1],
+        sol = direct_navigation(system, {"dtheta": r["vehicle.dtheta"][1:-1],
                                                "dv": r["vehicle.dv"][1:-1]})
         got, got_v = nav[2:], r["navigator.v"][2:]
     else:
         n = {"gfnav_qin9": 9, "gfnav_cube6": 6}[navigator]
         # Jacobi: the step at t_k takes the vehicle's outputs at t_k (row k)
-        sol = cosim.direct_navigation(system, {"A": r["vehicle.A"][:-1, :n]})
+        sol = direct_navigation(system, {"A": r["vehicle.A"][:-1, :n]})
         got, got_v = nav[1:], r["navigator.v"][1:]
     assert np.array_equal(got, sol.lat_rad) and np.array_equal(got_v, sol.v_n_m_s)
     # and it navigates: the error stays small (exact sensors)
@@ -185,21 +190,21 @@ def test_integrated_navigator_takes_every_gnss_epoch_through_the_master(version)
     and a velocity update, none stale or rejected; the recorded Int32 outputs are the
     counts. (tests/test_osp.py compares the same system with libcosim bit for bit.)"""
     rx = GnssReceiver(rate_hz=5.0, offset_s=0.0137, lever_arm_m=(0.3, 1.1, 1.6))
-    system = cosim.vehicle_integrated_navigation(PROFILE, stop_s=5.0, gnss=rx)
-    with cosim.CoSimulation(system, fmi_version=version) as m:
+    system = vehicle_integrated_navigation(PROFILE, stop_s=5.0, gnss=rx)
+    with CoSimulation(system, fmi_version=version) as m:
         m.initialize()
         r = m.run()
     assert r["vehicle.gnss_valid"].sum() == 25
     assert r["navigator.n_updates"][-1, 0] == 50 and r["navigator.n_rejected"][-1, 0] == 0
     with pytest.raises(ValueError, match="vehicle_integrated_navigation"):
-        cosim.vehicle_navigation("ins_gnss", PROFILE)
+        vehicle_navigation("ins_gnss", PROFILE)
 
 
 def test_gauss_seidel_navigator_first_equals_jacobi():
-    system = cosim.vehicle_navigation("gfnav_qin9", PROFILE, stop_s=4.0)
+    system = vehicle_navigation("gfnav_qin9", PROFILE, stop_s=4.0)
     out = []
     for kw in (dict(algorithm="jacobi"), dict(algorithm="gauss-seidel", order=["navigator", "vehicle"])):
-        with cosim.CoSimulation(system, **kw) as m:
+        with CoSimulation(system, **kw) as m:
             m.initialize()
             out.append(m.run())
     assert np.array_equal(out[0]["navigator.q"], out[1]["navigator.q"])
@@ -209,13 +214,13 @@ def test_ssp_run_equals_direct_pipeline(tmp_path):
     """fmpy's SSP simulator: FMI 2.0, scalar connections. It starts every connection at
     0 and passes no output before the first step, so the navigator skips that step
     (skip_steps=1) and starts from the truth at h."""
-    system = cosim.vehicle_navigation("gfnav_qin9", PROFILE, stop_s=STOP_S, skip_steps=1)
-    path = cosim.write_ssp(system, tmp_path / "vn.ssp")
-    r = cosim.run_ssp(path, STOP_S, system.step_s)
+    system = vehicle_navigation("gfnav_qin9", PROFILE, stop_s=STOP_S, skip_steps=1)
+    path = write_ssp(system, tmp_path / "vn.ssp")
+    r = run_ssp(path, STOP_S, system.step_s)
     # row k, recorded after the step at t_k: vehicle at t_(k+1), navigator the sample at
     # t_k, taken from the vehicle's row k - 1
     A = np.stack([r[f"vehicle.A[{i}]"] for i in range(1, 10)], 1)
-    sol = cosim.direct_navigation(system, {"A": A[:-1]})
+    sol = direct_navigation(system, {"A": A[:-1]})
     assert np.array_equal(r["navigator.lat"][1:], sol.lat_rad)
     assert np.array_equal(r["navigator.v[2]"][1:], sol.v_n_m_s[:, 1])
     assert np.max(np.abs(r["navigator.lat"][1:] - r["vehicle.lat"][:-1])) * 6.4e6 < 0.05
@@ -223,12 +228,12 @@ def test_ssp_run_equals_direct_pipeline(tmp_path):
 
 def test_ssp_sins_equals_direct_pipeline(tmp_path):
     """The SSP of the vehicle and the strapdown INS (increments dtheta, dv connected)."""
-    system = cosim.vehicle_navigation("sins", PROFILE, stop_s=STOP_S, skip_steps=1)
-    r = cosim.run_ssp(cosim.write_ssp(system, tmp_path / "vs.ssp"), STOP_S, system.step_s)
+    system = vehicle_navigation("sins", PROFILE, stop_s=STOP_S, skip_steps=1)
+    r = run_ssp(write_ssp(system, tmp_path / "vs.ssp"), STOP_S, system.step_s)
     inc = {k: np.stack([r[f"vehicle.{k}[{i}]"] for i in (1, 2, 3)], 1) for k in ("dtheta", "dv")}
     # navigation restarts at t_1 (skip), the first increment it uses ends at t_2: it is
     # the vehicle's row 1; the navigator's row k >= 2 is the state at t_k
-    sol = cosim.direct_navigation(system, {k: v[1:-1] for k, v in inc.items()})
+    sol = direct_navigation(system, {k: v[1:-1] for k, v in inc.items()})
     assert np.array_equal(r["navigator.lat"][2:], sol.lat_rad)
     assert np.array_equal(r["navigator.v[1]"][2:], sol.v_n_m_s[:, 0])
     # and navigates: exact increments, a 180 deg turn in 6 s: 2 mm measured
@@ -238,21 +243,21 @@ def test_ssp_sins_equals_direct_pipeline(tmp_path):
 def test_ssp_without_skip_navigates_a_zero_first_sample(tmp_path):
     """Why skip_steps exists: without it the first array sample the navigator gets from
     fmpy's SSP simulator is zeros (no gravity), a velocity error of g h / 2."""
-    system = cosim.vehicle_navigation("gfnav_qin9", PROFILE, stop_s=1.0, hold_height=False)
-    r = cosim.run_ssp(cosim.write_ssp(system, tmp_path / "vn0.ssp"), 1.0, system.step_s)
+    system = vehicle_navigation("gfnav_qin9", PROFILE, stop_s=1.0, hold_height=False)
+    r = run_ssp(write_ssp(system, tmp_path / "vn0.ssp"), 1.0, system.step_s)
     assert abs(r["navigator.v[3]"][-1]) > 0.01
 
 
 def test_container_fmi2_valid_and_equals_direct_pipeline(tmp_path):
-    system = cosim.vehicle_navigation("gfnav_qin9", PROFILE, stop_s=STOP_S, skip_steps=1)
-    path = cosim.write_container(system, tmp_path / "vn2.fmu", fmi_version=2)
+    system = vehicle_navigation("gfnav_qin9", PROFILE, stop_s=STOP_S, skip_steps=1)
+    path = write_container(system, tmp_path / "vn2.fmu", fmi_version=2)
     assert validate(path) == []
-    r = cosim.run_container(path, STOP_S, system.step_s)
+    r = run_container(path, STOP_S, system.step_s)
     # fmpy's container also passes no connection before its first internal step (the
     # navigator's first sample would be zeros): skip_steps=1 as for SSP; rows as in SSP
     # but with one more row (the initial one) first
     A = _rows(r, "vehicle_A", 9)
-    sol = cosim.direct_navigation(system, {"A": A[1:-1]})
+    sol = direct_navigation(system, {"A": A[1:-1]})
     assert np.array_equal(r["navigator_lat"][2:], sol.lat_rad)
     assert np.array_equal(_rows(r, "navigator_v", 3)[2:], sol.v_n_m_s)
 
@@ -262,21 +267,21 @@ def test_container_fmi3_array_connections(tmp_path):
     array outputs and array parameters do not in fmpy 0.3.32 (docs/cosim.md), so the
     check uses scalar outputs and the cffi vehicle's array data: same samples to an ulp
     of time (1e-15 relative in A), so the navigators agree to 1e-9 m over 16 s."""
-    system = cosim.vehicle_navigation("gfnav_12", None, stop_s=STOP_S, skip_steps=1)
+    system = vehicle_navigation("gfnav_12", None, stop_s=STOP_S, skip_steps=1)
     system.outputs = {"vehicle": ["time_s", "lat"], "navigator": ["time_s", "lat", "lon"]}
-    path = cosim.write_container(system, tmp_path / "vn3.fmu", fmi_version=3)
+    path = write_container(system, tmp_path / "vn3.fmu", fmi_version=3)
     assert validate(path) == []
-    r = cosim.run_container(path, STOP_S, system.step_s)
+    r = run_container(path, STOP_S, system.step_s)
     rec = simulate_vehicle(VehicleProfile.seed001(align_s=60.0), STOP_S, system.step_s)
-    sol = cosim.direct_navigation(system, {"A": rec.array_outputs(__import__("gfins_fmi").layout("12", 0.1))[1:]})
+    sol = direct_navigation(system, {"A": rec.array_outputs(__import__("gfins_fmi").layout("12", 0.1))[1:]})
     assert np.max(np.abs(r["navigator_lat"][2:] - sol.lat_rad[:-1])) * 6.4e6 < 1e-9
 
 
 # ---- roll-back and instances ----------------------------------------------------------
 @pytest.mark.parametrize("version", [2, 3])
 def test_rollback_serialize_restore_reproduces(version):
-    system = cosim.vehicle_navigation("gfnav_qin9", PROFILE, stop_s=STOP_S)
-    with cosim.CoSimulation(system, fmi_version=version) as m:
+    system = vehicle_navigation("gfnav_qin9", PROFILE, stop_s=STOP_S)
+    with CoSimulation(system, fmi_version=version) as m:
         m.initialize()
         m.run(stop_s=7.0)                       # t1 = 7 s: inside the turn
         saved = m.serialize_state(m.get_state())
@@ -291,14 +296,14 @@ def test_rollback_serialize_restore_reproduces(version):
 
 
 def test_two_interleaved_systems_equal_separate_runs():
-    sa = cosim.vehicle_navigation("gfnav_qin9", PROFILE, stop_s=6.0)
-    sb = cosim.vehicle_navigation("sins", VehicleProfile.circle(30.0, 6.0), stop_s=6.0)
+    sa = vehicle_navigation("gfnav_qin9", PROFILE, stop_s=6.0)
+    sb = vehicle_navigation("sins", VehicleProfile.circle(30.0, 6.0), stop_s=6.0)
     sep = []
     for s in (sa, sb):
-        with cosim.CoSimulation(s) as m:
+        with CoSimulation(s) as m:
             m.initialize()
             sep.append(m.run())
-    with cosim.CoSimulation(sa) as ma, cosim.CoSimulation(sb) as mb:
+    with CoSimulation(sa) as ma, CoSimulation(sb) as mb:
         ma.initialize()
         mb.initialize()
         la, lb = [], []
@@ -313,9 +318,9 @@ def test_two_interleaved_systems_equal_separate_runs():
 
 
 def test_master_reports_fmu_errors_with_the_log():
-    system = cosim.vehicle_navigation("gfnav_qin9", VehicleProfile(segments=[Segment(1.0)]), stop_s=1.0)
+    system = vehicle_navigation("gfnav_qin9", VehicleProfile(segments=[Segment(1.0)]), stop_s=1.0)
     system.components["navigator"][1]["l"] = -1.0
-    with cosim.CoSimulation(system) as m:
+    with CoSimulation(system) as m:
         with pytest.raises(FmuRunError, match="lever arm"):
             m.initialize()
 
@@ -338,8 +343,8 @@ def test_master_keeps_the_rows_before_a_failing_step():
     """The vehicle runs north into 89 deg latitude: the FMU refuses the step, the error
     names the reason and the rows recorded before it are kept."""
     fast = VehicleProfile(lat0_rad=np.radians(88.99), speed0_m_s=200.0)
-    system = cosim.vehicle_navigation("sins", fast, stop_s=100.0)
-    with cosim.CoSimulation(system) as m:
+    system = vehicle_navigation("sins", fast, stop_s=100.0)
+    with CoSimulation(system) as m:
         m.initialize()
         with pytest.raises(FmuRunError, match="89 deg") as info:
             m.run()
@@ -403,10 +408,10 @@ def test_vehicle_fmu_noise_is_seeded_and_restored():
     assert all(np.array_equal(a[k], b[k]) for k in a)
     assert not np.array_equal(a["A"], c["A"]) and not np.array_equal(a["gyro_rate"], c["gyro_rate"])
     # an FMU state holds the generators: roll back and replay the same noise
-    system = cosim.vehicle_navigation("gfnav_qin9", PROFILE, stop_s=4.0,
+    system = vehicle_navigation("gfnav_qin9", PROFILE, stop_s=4.0,
                                       navigator_parameters={"strategy": 3})
     system.components["vehicle"][1].update(p)
-    with cosim.CoSimulation(system, fmi_version=3) as m:
+    with CoSimulation(system, fmi_version=3) as m:
         m.initialize()
         m.run(stop_s=1.0)
         st = m.get_state()

@@ -17,10 +17,15 @@ import numpy as np
 import pytest
 from fmpy import read_model_description
 
-from gfins_fmi import fmi as cosim
+from gfins_fmi.fmi.system import AIDING_VARIABLES, InitialError, vehicle_integrated_navigation
+from gfins_fmi.fmi.master import CoSimulation
+from gfins_fmi.fmi.reference import direct_navigation, integrated_recording
+from gfins_fmi.fmi.container import run_container, write_container
+from gfins_fmi.fmi.ssp import run_ssp, write_ssp
 from gfins_fmi.estimation import FilterConfig, IntegratedNavigator
 from gfins_fmi.sim.scenarios import TACTICAL
-from gfins_fmi.fmi import FmuRunError, fmu_path, ins_gnss_fmu_parameters, validate
+from gfins_fmi.fmi.paths import FmuRunError, fmu_path, validate
+from gfins_fmi.fmi.ins_gnss import ins_gnss_fmu_parameters
 from gfins_fmi.nav.earth import attitude_error_rad, radii
 from gfins_fmi.sim.vehicle import (Barometer, GnssReceiver, Odometer, VehicleProfile,
                                    simulate_vehicle)
@@ -35,7 +40,7 @@ BARO = Barometer(rate_hz=10.0, offset_s=0.051, bias0_m=2.0, bias_rw_m_sqrt_s=0.0
 ODO = Odometer(rate_hz=10.0, offset_s=0.027, lever_arm_m=(0.75, 0.0, -0.3), scale_error=0.005)
 CONFIG = FilterConfig(imu=TACTICAL, baro_bias=True, baro_bias_std_m=3.0, odometer_scale=True,
                       nhc=True, max_latency_s=0.2)
-ERROR = cosim.InitialError(position_m=(1.0, -0.8, 1.2), velocity_m_s=(0.05, -0.04, 0.02),
+ERROR = InitialError(position_m=(1.0, -0.8, 1.2), velocity_m_s=(0.05, -0.04, 0.02),
                            attitude_rad=(0.002, -0.002, 0.01))
 UNCERTAINTY = dict(position_std_m=(1.5, 1.5, 2.0), velocity_std_m_s=0.1,
                    attitude_std_rad=(0.005, 0.005, 0.02))
@@ -45,7 +50,7 @@ SEED = 5
 def _system(stop_s=STOP_S, **kw):
     args = dict(gnss=GNSS, baro=BARO, odometer=ODO, config=CONFIG, initial_uncertainty=UNCERTAINTY,
                 initial_error=ERROR, imu_noise=TACTICAL, noise_seed=SEED, stop_s=stop_s)
-    return cosim.vehicle_integrated_navigation(PROFILE, **{**args, **kw})
+    return vehicle_integrated_navigation(PROFILE, **{**args, **kw})
 
 
 SYSTEM = _system()
@@ -56,7 +61,7 @@ def _run(version, algorithm="jacobi", order=None):
     """One master run per configuration, shared by the tests (each takes ~2 s)."""
     key = (version, algorithm, tuple(order or ()))
     if key not in _RUNS:
-        with cosim.CoSimulation(SYSTEM, fmi_version=version, algorithm=algorithm, order=order) as m:
+        with CoSimulation(SYSTEM, fmi_version=version, algorithm=algorithm, order=order) as m:
             m.initialize()
             _RUNS[key] = m.run()
     return _RUNS[key]
@@ -76,7 +81,7 @@ def test_builder_wires_increments_and_aiding_epochs():
     """dtheta, dv and the 16 aiding variables, each a vehicle output feeding the navigator
     input of the same name and type; the filter's lever arms are the sensors'."""
     wired = {c.source_var: c for c in SYSTEM.connections}
-    expect = {"dtheta", "dv"} | {v for group in cosim.AIDING_VARIABLES.values() for v, _ in group}
+    expect = {"dtheta", "dv"} | {v for group in AIDING_VARIABLES.values() for v, _ in group}
     assert set(wired) == expect and len(expect) == 18
     veh = {v.name: v for v in read_model_description(str(fmu_path("vehicle", 3))).modelVariables}
     nav = {v.name: v for v in read_model_description(str(fmu_path("ins_gnss", 3))).modelVariables}
@@ -126,7 +131,7 @@ def test_builder_refuses_inconsistent_latency_and_lever_arms():
     with pytest.raises(ValueError, match="history"):
         _system(gnss=replace(GNSS, latency_s=1.5), config=replace(CONFIG, max_latency_s=2.0))
     # without a config: the IMU model given, the latency covered
-    s = cosim.vehicle_integrated_navigation(PROFILE, gnss=GNSS, imu_noise=TACTICAL, stop_s=1.0)
+    s = vehicle_integrated_navigation(PROFILE, gnss=GNSS, imu_noise=TACTICAL, stop_s=1.0)
     assert s.sources["config"].imu == TACTICAL and s.sources["config"].max_latency_s >= GNSS.latency_s
 
 
@@ -138,15 +143,15 @@ def test_master_equals_batch_api(version):
     time, kind, outcome and NIS equal the batch API's on the recorded increments and
     epochs, bit for bit."""
     r = _run(version)
-    rec = cosim.integrated_recording(SYSTEM, r)
-    sol, ref = rec["solution"], cosim.direct_navigation(SYSTEM, rec)
+    rec = integrated_recording(SYSTEM, r)
+    sol, ref = rec["solution"], direct_navigation(SYSTEM, rec)
     assert len(sol) == STOP_S / SYSTEM.step_s - 1            # one sample per step after the start
     _assert_same(sol, ref)
     # the batch API's own InitialState (numpy's radii in P0: two variances an ulp apart):
     # measured here 0 in position, 1e-17 m/s, 7e-19 in q, 7e-16 relative in the stds,
     # 2e-18 in the sensor estimates; over the 600 s example (docs/cosim.md) 1.4e-14 m in
     # height, 5e-15 m/s, 3e-16 in q, 1.1e-15 in the sensors; bounds 70 times those or more
-    plain = cosim.direct_navigation(SYSTEM, rec, initial=SYSTEM.sources["initial"])
+    plain = direct_navigation(SYSTEM, rec, initial=SYSTEM.sources["initial"])
     assert np.max(np.abs(plain.lat_rad - sol.lat_rad)) <= 1e-15           # rad (6 nm)
     assert np.max(np.abs(plain.lon_rad - sol.lon_rad)) <= 1e-15
     assert np.max(np.abs(plain.h_m - sol.h_m)) <= 1e-12                    # m
@@ -161,7 +166,7 @@ def test_measurement_timing_as_delivered():
     valid before the interval of the sample they came with: a delayed update from the
     core's history (max_latency_s), accepted, never stale; none in the outage;
     barometer and odometer inside their sample's interval (the interval split there)."""
-    rec = cosim.integrated_recording(SYSTEM, _run(3))
+    rec = integrated_recording(SYSTEM, _run(3))
     T = rec["t_s"]
     g, k = rec["gnss"], rec["gnss_sample"]
     assert len(g.t_s) == 90 - (OUTAGE[1] - OUTAGE[0])                # 1 Hz, 16 s out
@@ -184,7 +189,7 @@ def test_epochs_are_simulate_vehicles():
     """The epochs reconstructed from the vehicle FMU's *_valid rows are those of
     simulate_vehicle with the same seed, bit for bit, each arriving with the first sample
     that reaches its delivery time (time of validity + latency)."""
-    rec = cosim.integrated_recording(SYSTEM, _run(2))
+    rec = integrated_recording(SYSTEM, _run(2))
     sim = simulate_vehicle(PROFILE, STOP_S, SYSTEM.step_s, gnss=GNSS, baro=BARO, odometer=ODO, seed=SEED)
     T = rec["t_s"]
     for key, fields in (("gnss", ("t_s", "lat_rad", "lon_rad", "h_m", "pos_std_m", "vel_enu_m_s",
@@ -209,7 +214,7 @@ def test_latency_makes_a_delayed_update():
     (predicted from the state kept at the time of validity, the error state taken as
     constant over the delay) brings it to the in-time filter: measured 2.8 mm apart
     (median), 14 mm at most, after the updates; bound 3 cm."""
-    rec = cosim.integrated_recording(SYSTEM, _run(3))
+    rec = integrated_recording(SYSTEM, _run(3))
     sol = rec["solution"]
     init = SYSTEM.sources["initial"]
     init = replace(init, nav=replace(init.nav, t_s=float(rec["t_s"][0])))
@@ -231,7 +236,7 @@ def test_filter_navigates_within_its_uncertainty():
     (measured 2.9 at most); horizontal error below 1.5 m (measured 1.33 m: the initial
     1.3 m); odometer scale factor recovered (measured 0.00514 for 0.005)."""
     r = _run(3)
-    rec = cosim.integrated_recording(SYSTEM, r)
+    rec = integrated_recording(SYSTEM, r)
     sol = rec["solution"]
     # the navigator's row j (the sample at t_(j-1)) took the vehicle's row j - 1 (its truth then)
     rows = slice(int(np.flatnonzero(r["navigator.n_imu"][:, 0] == 1)[0]) - 1, None)
@@ -258,7 +263,7 @@ def test_gauss_seidel_navigator_first_equals_jacobi():
 def test_gauss_seidel_vehicle_first_is_refused():
     """The vehicle stepped first hands the navigator at t the outputs of t + h: an epoch
     valid after the sample it comes with, which the FMU refuses with the reason."""
-    with cosim.CoSimulation(_system(stop_s=2.0), fmi_version=2, algorithm="gauss-seidel",
+    with CoSimulation(_system(stop_s=2.0), fmi_version=2, algorithm="gauss-seidel",
                             order=["vehicle", "navigator"]) as m:
         m.initialize()
         with pytest.raises(FmuRunError, match="after the IMU sample it was delivered with"):
@@ -271,17 +276,17 @@ def test_ssp_equals_batch_api(tmp_path):
     hence skip_steps = 1; its clock accumulated): bit for bit the batch API on what the
     navigator took."""
     system = _system(stop_s=20.0, skip_steps=1)
-    r = cosim.run_ssp(cosim.write_ssp(system, tmp_path / "vi.ssp"), system.stop_s, system.step_s)
-    rec = cosim.integrated_recording(system, r, "ssp")
+    r = run_ssp(write_ssp(system, tmp_path / "vi.ssp"), system.stop_s, system.step_s)
+    rec = integrated_recording(system, r, "ssp")
     assert len(rec["gnss"].t_s) == 20 and len(rec["solution"]) == 20 / 0.01 - 2
-    _assert_same(rec["solution"], cosim.direct_navigation(system, rec))
+    _assert_same(rec["solution"], direct_navigation(system, rec))
 
 
 def test_container_fmi2_equals_batch_api(tmp_path):
     system = _system(stop_s=20.0, skip_steps=1)
-    path = cosim.write_container(system, tmp_path / "vi.fmu", fmi_version=2)
+    path = write_container(system, tmp_path / "vi.fmu", fmi_version=2)
     assert validate(path) == []
-    r = cosim.run_container(path, system.stop_s, system.step_s)
-    rec = cosim.integrated_recording(system, r, "container")
+    r = run_container(path, system.stop_s, system.step_s)
+    rec = integrated_recording(system, r, "container")
     assert len(rec["gnss"].t_s) == 20 and len(rec["solution"]) == 20 / 0.01 - 2
-    _assert_same(rec["solution"], cosim.direct_navigation(system, rec))
+    _assert_same(rec["solution"], direct_navigation(system, rec))

@@ -246,7 +246,8 @@ def test_fmu_alignment_phase():
     the batch filter started with that attitude (1e-12: the two starts normalise the same
     quaternion once more or once less). A turning vehicle in the phase is refused."""
     from gfins_fmi.sim import trajectory as tj
-    from gfins_fmi.fmi import FmuRunError, run_ins_gnss_fmu
+    from gfins_fmi.fmi.paths import FmuRunError
+    from gfins_fmi.fmi.ins_gnss import run_ins_gnss_fmu
     tr = tj.sample(tj.Stationary(heading=37 * DEG, pitch=1.5 * DEG, roll=-2 * DEG, lat=30 * DEG), 12.0, 0.01)
     imu = ImuRecord(t_s=tr.t_s[1:], gyro=tr.dtheta_rad, accel=tr.dv_m_s, kind="increments")
     nav0 = NavState(np.array([1.0, 0, 0, 0]), np.zeros(3), tr.lat_rad[0], tr.lon_rad[0], tr.h_m[0], tr.t_s[0])

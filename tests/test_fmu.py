@@ -190,7 +190,8 @@ def test_fmu_call_sequence_and_stop_time(record, version):
 # ---- the strapdown navigator FMU ----------------------------------------------------
 
 from gfins_fmi.sim import trajectory as tj
-from gfins_fmi.fmi import run_fmu, run_sins_fmu  # noqa: E402
+from gfins_fmi.fmi.runner import run_fmu  # noqa: E402
+from gfins_fmi.fmi.models import run_sins_fmu
 
 
 @pytest.fixture(scope="module")
@@ -274,7 +275,8 @@ def test_sins_fmu_error_partial_is_a_solution(circle):
 
 # ---- gyro-free navigator FMUs (one per layout) ---------------------------------------
 
-from gfins_fmi.fmi import MODELS, run_gfnav_fmu  # noqa: E402
+from gfins_fmi.fmi.paths import MODELS  # noqa: E402
+from gfins_fmi.fmi.models import run_gfnav_fmu
 
 
 @pytest.mark.parametrize("model", sorted(MODELS))

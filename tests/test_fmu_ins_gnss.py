@@ -20,8 +20,8 @@ import gfins_fmi as gf
 from gfins_fmi.nav import earth
 from gfins_fmi._lib import lib
 from gfins_fmi.estimation import FilterConfig, InitialState, IntegratedNavigator
-from gfins_fmi.fmi import (FmuRunError, InsGnssDriver, ins_gnss_fmu_parameters,
-                           run_ins_gnss_fmu)
+from gfins_fmi.fmi.paths import FmuRunError
+from gfins_fmi.fmi.ins_gnss import InsGnssDriver, ins_gnss_fmu_parameters, run_ins_gnss_fmu
 from gfins_fmi.fmi.ins_gnss import INS_CONFIG_FIELDS
 from test_estimation import Rec, drive, gnss_record, quiet_config
 

@@ -29,7 +29,8 @@ import zlib
 import numpy as np
 import pytest
 
-from gfins_fmi.fmi import FmuLog, FmuSlave, fmu_path
+from gfins_fmi.fmi.runner import FmuLog, FmuSlave
+from gfins_fmi.fmi.paths import fmu_path
 
 H_S = 0.01
 N_STEPS = 5

@@ -1,7 +1,7 @@
 """A second, independent FMI master: OSP libcosim (C++, FMI Library import, its own
 nanosecond clock and parallel step loop) runs the vehicle + navigator FMUs (gyro-free,
 strapdown, and the integrated INS/GNSS navigator fed by the vehicle's GNSS receiver,
-Integer connection included), and the SSP file cosim.write_ssp writes.
+Integer connection included), and the SSP file write_ssp writes.
 
 Truth: our Python master (tests/test_cosim.py: equal to the cffi pipeline bit for bit)
 on the same communication points. libcosim is a Jacobi master like ours (every FMU steps
@@ -15,7 +15,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gfins_fmi import fmi as cosim
+from gfins_fmi.fmi.master import CoSimulation
+from gfins_fmi.fmi.paths import FmuRunError
+from gfins_fmi.fmi.system import vehicle_integrated_navigation, vehicle_navigation
+from gfins_fmi.fmi.ssp import write_ssp
 from gfins_fmi.fmi import osp
 from gfins_fmi.sim.vehicle import GnssReceiver, VehicleProfile
 
@@ -39,11 +42,11 @@ RECEIVER = GnssReceiver(rate_hz=5.0, offset_s=0.0137, lever_arm_m=(0.3, 1.1, 1.6
 def case(request):
     """(system, our master's result on libcosim's clock, libcosim's result)."""
     if request.param == "ins_gnss":
-        system = cosim.vehicle_integrated_navigation(PROFILE, gnss=RECEIVER, step_s=STEP_S,
+        system = vehicle_integrated_navigation(PROFILE, gnss=RECEIVER, step_s=STEP_S,
                                                      stop_s=STOP_S)
     else:
-        system = cosim.vehicle_navigation(request.param, PROFILE, step_s=STEP_S, stop_s=STOP_S)
-    with cosim.CoSimulation(system, fmi_version=2) as m:
+        system = vehicle_navigation(request.param, PROFILE, step_s=STEP_S, stop_s=STOP_S)
+    with CoSimulation(system, fmi_version=2) as m:
         m.initialize()
         ours = m.run(points=osp.communication_points(STEP_S, N_STEPS))
     return system, ours, osp.run_libcosim(system)
@@ -71,7 +74,7 @@ def test_on_our_own_clock_the_results_differ_by_the_time_rounding(case):
     integrates the angular acceleration twice), 0 (SINS and INS/GNSS); bound 1e-12
     rad (6 um)."""
     system, _, theirs = case
-    with cosim.CoSimulation(system, fmi_version=2) as m:
+    with CoSimulation(system, fmi_version=2) as m:
         m.initialize()
         own = m.run()
     assert not np.array_equal(own["time"], theirs["time"])
@@ -85,7 +88,7 @@ def test_libcosim_runs_the_ssp_file_of_write_ssp(case, tmp_path):
     """libcosim loads the .ssp archive (FMUs, connections, the components' parameter
     sets) itself: equal to the Python master bit for bit."""
     system, ours, _ = case
-    path = cosim.write_ssp(system, tmp_path / "vehicle_navigation.ssp")
+    path = write_ssp(system, tmp_path / "vehicle_navigation.ssp")
     theirs = osp.run_libcosim_ssp(path, system.outputs, STOP_S, STEP_S)
     for key in ours:
         assert np.array_equal(theirs[key], ours[key], equal_nan=True), key
@@ -95,12 +98,12 @@ def test_refusals_before_libcosim_sees_them(tmp_path):
     """An FMU that refuses its start values would end the process inside libcosim: the
     start values are checked first and the FMU's reason raised; a step that is no whole
     number of nanoseconds is refused."""
-    system = cosim.vehicle_navigation("sins", PROFILE, step_s=STEP_S, stop_s=1.0)
+    system = vehicle_navigation("sins", PROFILE, step_s=STEP_S, stop_s=1.0)
     system.components["vehicle"][1]["lat0"] = 1.56                  # beyond 89 deg
-    with pytest.raises(cosim.FmuRunError, match="vehicle refuses its start values.*lat0"):
+    with pytest.raises(FmuRunError, match="vehicle refuses its start values.*lat0"):
         osp.run_libcosim(system)
-    with pytest.raises(cosim.FmuRunError, match="vehicle refuses its start values.*lat0"):
-        osp.run_libcosim_ssp(cosim.write_ssp(system, tmp_path / "bad.ssp"), system.outputs, 1.0, STEP_S)
+    with pytest.raises(FmuRunError, match="vehicle refuses its start values.*lat0"):
+        osp.run_libcosim_ssp(write_ssp(system, tmp_path / "bad.ssp"), system.outputs, 1.0, STEP_S)
     with pytest.raises(ValueError, match="not a whole number of nanoseconds"):
         osp.communication_points(1e-10 / 3, 3)
 
@@ -109,7 +112,7 @@ def test_every_row_of_a_long_run_is_kept():
     """More than the 10 000 samples libcosim's time-series observer keeps by default:
     10 001 rows, in order (the vehicle's time output at each row is the row's time; the
     vehicle adds the step to the previous point, so within an ulp: bound 1e-14 s)."""
-    system = cosim.vehicle_navigation("sins", PROFILE, step_s=0.001, stop_s=10.0)
+    system = vehicle_navigation("sins", PROFILE, step_s=0.001, stop_s=10.0)
     system.outputs = {"vehicle": ["time_s"]}
     theirs = osp.run_libcosim(system)
     assert theirs["vehicle.time_s"].shape == (10_001, 1)

@@ -154,7 +154,7 @@ def test_integrated_navigator_in_pieces_equals_whole(short_drive, cut_fraction, 
 @settings(max_examples=3, deadline=None, derandomize=True)   # FMUs are slow to instantiate
 @given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 60))
 def test_sins_fmu_equals_batch(seed, n):
-    from gfins_fmi.fmi import run_sins_fmu
+    from gfins_fmi.fmi.models import run_sins_fmu
     rng = np.random.default_rng(seed)
     dth = rng.normal(0, 1e-3, (n, 3))
     dv = rng.normal(0, 1e-2, (n, 3)) + [0, 0, 0.098]

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gfins_fmi.nav import earth
+from gfins_fmi.nav import earth, rotating
 from gfins_fmi.sim import rotation as rot
 
 
@@ -129,7 +129,7 @@ def test_vehicle_attitude_roundtrip():
     Cm = np.array([_dcm(q) @ _rx(a) @ _rz(b) for q, (a, b) in zip(qb, g)])
     from scipy.spatial.transform import Rotation
     q_mn = Rotation.from_matrix(Cm).as_quat()[:, [3, 0, 1, 2]]
-    out = rot.vehicle_attitude(q_mn, g)
+    out = rotating.vehicle_attitude(q_mn, g)
     for k in range(20):
         np.testing.assert_allclose(_dcm(out[k]), _dcm(qb[k]), atol=1e-12)
 
@@ -159,7 +159,7 @@ def test_vehicle_fmu_carries_the_rotating_imu(version):
     on the same vehicle: the master's communication points accumulate t + h, the direct
     run computes t0 + k h, so the phase boundaries fall a few ulp apart: 1e-12 relative
     to the increment (measured 1.5e-12 relative on dtheta at 30 deg/s, 7e-15 rad)."""
-    from gfins_fmi.fmi import run_fmu
+    from gfins_fmi.fmi.runner import run_fmu
     from gfins_fmi.sim.vehicle import VehicleProfile
     prof = VehicleProfile.seed001(align_s=10.0, turn_times_s=(25.0,), turn_s=10.0)
     sched = rot.indexing_scheme(16, dwell_s=2.0, rate_deg_s=30.0)
@@ -180,12 +180,12 @@ def test_vehicle_fmu_carries_the_rotating_imu(version):
 @pytest.mark.parametrize("version", [2, 3])
 def test_sins_fmu_navigates_the_rotating_imu_with_compensation(version):
     """The SINS FMU with rotating = 1 and the calibrated error model as parameters (seed
-    001 S6: dynamic error suppression in the FMU) equals rotation.navigate through cffi:
+    001 S6: dynamic error suppression in the FMU) equals nav.rotating.navigate through cffi:
     compensation, mechanization and the vehicle attitude from the gimbal angles. The
     FMU compensates increments as mean rates, as ImuErrors.compensate_increments does:
     same operations, so 1e-12 relative covers the compiler's freedom between the two
     builds (measured: 0)."""
-    from gfins_fmi.fmi import run_sins_fmu
+    from gfins_fmi.fmi.models import run_sins_fmu
     from gfins_fmi.nav.imu_errors import ImuErrors
     from gfins_fmi.nav.strapdown import SinsConfig
     from gfins_fmi.sim.vehicle import VehicleProfile
@@ -196,7 +196,7 @@ def test_sins_fmu_navigates_the_rotating_imu_with_compensation(version):
                   accel_bias_ug=[500, -300, 200], accel_k2_ug_g2=[20, -20, 20], lever_arm_cm=[3, 3, -3])
     th, dv = e.apply_increments(rec.dtheta_rad, rec.dv_m_s, rec.dt_s)
     cfg = SinsConfig(vertical="hold")
-    want = rot.navigate(rec, th, dv, compensation=e, config=cfg)
+    want = rotating.navigate(rec, th, dv, compensation=e, config=cfg)
     got = run_sins_fmu(th, dv, rec.dt_s, rec.initial, config=cfg, imu_errors=e,
                        gimbal_rad=rec.gimbal_rad, fmi_version=version)
     np.testing.assert_allclose(got.imu.q_bn, want.imu.q_bn, rtol=0, atol=1e-12)

@@ -517,6 +517,6 @@ def test_held_height_defaults_to_the_initial_state():
     sol, _ = gf.GyroFreeNavigator(g, x0, "sqrt", tr.gyro_rad_s[0],
                                   sins=gf.SinsConfig(vertical="hold")).run(tr.array_outputs(g), 0.01)
     assert np.all(sol.h_m == x0.h_m)
-    from gfins_fmi.fmi import run_sins_fmu
+    from gfins_fmi.fmi.models import run_sins_fmu
     fmu = run_sins_fmu(tr.dtheta_rad[:20], tr.dv_m_s[:20], 0.01, x0, config=gf.SinsConfig(vertical="hold"))
     assert np.all(fmu.h_m == x0.h_m)

@@ -263,7 +263,7 @@ def test_cli_navigate_subsamples(tmp_path, capsys, fmt):
 def test_one_update_per_sample_navigators_refuse_subsamples():
     """The SINS FMU (one sample per communication step) and the gyro-free navigator (one
     update per array sample) have no subsample groups: asked for them, they say so."""
-    from gfins_fmi.fmi import run_gfnav_fmu, run_sins_fmu
+    from gfins_fmi.fmi.models import run_gfnav_fmu, run_sins_fmu
     tr = tj.sample(tj.Circle(), 0.1, 0.01)
     x0 = gf.NavState.from_trajectory(tr, 0)
     with pytest.raises(ValueError, match="the SINS FMU takes one sample per communication step"):

@@ -54,12 +54,12 @@ def _gfnav_flat(x0, tr):
 
 
 def _sins_fmu(x0, tr):
-    from gfins_fmi.fmi import run_sins_fmu
+    from gfins_fmi.fmi.models import run_sins_fmu
     run_sins_fmu(tr.dtheta_rad, tr.dv_m_s, 0.01, x0)
 
 
 def _gfnav_fmu(x0, tr):
-    from gfins_fmi.fmi import run_gfnav_fmu
+    from gfins_fmi.fmi.models import run_gfnav_fmu
     run_gfnav_fmu("qin9", tr.array_outputs(gf.layout("qin9", 0.1)), 0.01, x0, strategy="sqrt",
                   omega_init_rad_s=tr.gyro_rad_s[0])
 
@@ -306,7 +306,7 @@ def test_misspelled_keywords_are_refused():
 def test_commands_python_entry_points_check_their_parameters_first(tmp_path):
     """The functions behind ``gfins demo / reproduce / cosim`` refuse bad parameters
     before doing any work (before: tracebacks after part of the run, NaN tables)."""
-    from gfins_fmi import fmi as cosim
+    from gfins_fmi.fmi.reference import compare_runners
     from gfins_fmi.experiments import demo
     from gfins_fmi.experiments import qin as reproduce
     from gfins_fmi.sim.vehicle import VehicleProfile
@@ -320,5 +320,5 @@ def test_commands_python_entry_points_check_their_parameters_first(tmp_path):
     with pytest.raises(ValueError, match="runs must be an integer >= 1"):
         reproduce.run_qin(runs=0, progress=False)
     with pytest.raises(ValueError, match="stop_s must be finite and >= 0.01 s"):
-        cosim.compare_runners("gfnav_qin9", VehicleProfile.seed001(align_s=1.0), 0.0, out)
+        compare_runners("gfnav_qin9", VehicleProfile.seed001(align_s=1.0), 0.0, out)
     assert not out.exists()

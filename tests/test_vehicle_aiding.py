@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 from scipy.stats import chi2
 
-from gfins_fmi.fmi import FmuLog, FmuSlave, fmu_path
+from gfins_fmi.fmi.runner import FmuLog, FmuSlave
+from gfins_fmi.fmi.paths import fmu_path
 from gfins_fmi.nav.earth import WGS84, quat_to_dcm, radii
 from gfins_fmi.sim.trajectory import VehicleRun
 from gfins_fmi.sim.vehicle import (Barometer, GnssReceiver, Odometer, VehicleProfile,

@@ -6,6 +6,7 @@ share: reading and writing files (``files``) and the initial state from options
 (``initial``)."""
 from __future__ import annotations
 
+import importlib
 import sys
 
 from gfins_fmi._lib import GfinsError
@@ -17,11 +18,14 @@ __all__ = ["main"]
 def main(argv: list[str] | None = None) -> int:
     parser, parsers = build_parser()
     args = parser.parse_args(argv)
-    problem = args.check(args) if getattr(args, "check", None) else None
+    problem = args.check(args) if args.check else None
     if problem:   # a combination of options: refused at parse time too
         parsers[args.command].error(problem)
     try:
-        return args.func(args)
+        # the chosen command's module only: importing all of them (and the whole package
+        # with them) would make `gfins --help` ~1.7x slower (tests/repository/test_source_audit.py)
+        command = importlib.import_module(f"gfins_fmi.cli.{args.module}")
+        return getattr(command, args.function)(args)
     except (ValueError, TypeError, OSError, ImportError, GfinsError) as exc:
         print(f"gfins {args.command}: error: {exc}", file=sys.stderr)
         return 2

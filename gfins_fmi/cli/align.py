@@ -22,29 +22,13 @@ import numpy as np
 from gfins_fmi import io
 from gfins_fmi.cli.files import write_table
 from gfins_fmi.cli.initial import from_initial_option, record_start_s
-from gfins_fmi.cli.options import imu_noise
+from gfins_fmi.cli.noise import imu_noise
 from gfins_fmi.estimation.alignment import coarse_align, coarse_align_inertial
 from gfins_fmi.estimation.config import UG, FilterConfig, InitialState
 from gfins_fmi.estimation.fine_alignment import align_in_motion, fine_align
 from gfins_fmi.io.columns import ALIGNMENT_PASS_COLUMNS
 
-__all__ = ["run", "check"]
-
-
-def check(args):
-    """A combination of options refused at parse time (None: fine)."""
-    if args.mode == "static" and args.position is None:
-        return "static alignment needs --position LAT,LON,H"
-    if args.mode == "motion" and (args.speed is None or args.initial is None):
-        return "motion alignment needs a SPEED record and --initial LAT,LON,H,HEADING,PITCH,ROLL"
-    if args.disturbed and (args.mode != "static" or args.fine):
-        return ("--disturbed is a static coarse alignment; the fine alignment's zero-velocity "
-                "updates assume a base at rest (leave out --fine)")
-    if args.position is not None and not abs(args.position[0]) < 90:
-        return f"--position: latitude must be in (-90, 90) deg; got {args.position[0]}"
-    if args.initial is not None and not abs(args.initial[0]) < 90:
-        return f"--initial: latitude must be in (-90, 90) deg; got {args.initial[0]}"
-    return None
+__all__ = ["run"]
 
 
 def _biases(args, noise):

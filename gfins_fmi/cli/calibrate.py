@@ -1,18 +1,9 @@
-"""``gfins calibrate``: system-level calibration of a recorded multi-position run.
-
-    gfins calibrate IMU --lat DEG --height M [--lon DEG] [--format csv|kfgins]
-                    [--arw DEG_SQRT_H] [--vrw UG_SQRT_HZ] [--delay] [--passes N]
-                    [--prior NAME=VALUE ...] [--report REPORT.md] [--json PARAMS.json] [--plot DIR]
-                    [--simulate seed001|turntable19 [--sim-seed N]]
-
-Prints the static intervals and turns found, every parameter with its 1-sigma and the
-parameters the path cannot observe; ``--json`` writes the estimates, their stds and the
-error model as start values of the SINS and vehicle FMUs; ``--simulate`` first writes a
-simulated raw record of that path to IMU (its true errors beside it, IMU.truth.json).
-"""
+"""``gfins calibrate``: system-level calibration of a recorded multi-position run
+(usage: ``gfins calibrate --help``, :data:`gfins_fmi.cli.parser.CALIBRATE_DESCRIPTION`):
+prints the segments, every parameter with its 1-sigma, the parameters the path cannot
+observe; writes the report, the JSON of estimates and FMU start values, the figures."""
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import json
 
@@ -21,26 +12,10 @@ import numpy as np
 from gfins_fmi.calibration.syscal_filter import PARAM_NAMES, PARAM_UNITS, Prior, SyscalConfig
 from gfins_fmi.calibration.system import calibrate, plot_report, random_params, simulate_record
 from gfins_fmi.cli.files import read_imu
-from gfins_fmi.cli.options import real
 from gfins_fmi.nav.imu_errors import ImuNoise
 from gfins_fmi.sim import rotation as rot
 
-__all__ = ["run", "prior_setting"]
-
-
-def prior_setting(text: str):
-    """``--prior NAME=VALUE``: a prior 1-sigma (a :class:`~gfins_fmi.calibration.
-    syscal_filter.Prior` field, in its unit), > 0 (gravity_ug >= 0)."""
-    names = [f.name for f in dataclasses.fields(Prior)]
-    if "=" not in text:
-        raise argparse.ArgumentTypeError(f"--prior takes NAME=VALUE with NAME one of {', '.join(names)}")
-    k, v = text.split("=", 1)
-    if k not in names:
-        raise argparse.ArgumentTypeError(f"--prior: unknown {k!r}; one of {', '.join(names)}")
-    val = real("its unit")(v)
-    if not (val > 0 or (k == "gravity_ug" and val >= 0)):
-        raise argparse.ArgumentTypeError(f"--prior {k} must be > 0; got {val}")
-    return k, val
+__all__ = ["run"]
 
 
 def _simulate(args, config) -> None:

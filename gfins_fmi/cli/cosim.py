@@ -10,7 +10,7 @@ import numpy as np
 from gfins_fmi.fmi.reference import compare_runners
 from gfins_fmi.sim.vehicle import VehicleProfile
 
-__all__ = ["run", "check"]
+__all__ = ["run"]
 
 
 def run(args) -> int:
@@ -44,10 +44,3 @@ def run(args) -> int:
     print("cosim " + (f"passed: every co-simulation equals {reference} bit for bit"
                       if ok else f"FAILED: a co-simulation differs from {reference}"))
     return 0 if ok else 1
-
-
-def check(args) -> str | None:
-    """A combination of options refused at parse time (None: fine)."""
-    if args.seconds < args.step:
-        return f"--seconds {args.seconds:g} s is shorter than one --step ({args.step:g} s)"
-    return None

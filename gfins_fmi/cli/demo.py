@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from gfins_fmi.experiments import demo
 
-__all__ = ["run", "check"]
+__all__ = ["run"]
 
 
 def run(args) -> int:
@@ -15,12 +15,3 @@ def run(args) -> int:
         and res["cosim"]["master_diff"] == 0.0 and res["cosim"]["ssp_diff"] == 0.0
     print("\ndemo " + ("passed: C core, FMUs and analysis agree" if ok else "FAILED"))
     return 0 if ok else 1
-
-
-def check(args) -> str | None:
-    """A combination of options refused at parse time (None: fine)."""
-    n = int(round(args.duration / args.dt))
-    if n < 2:
-        return (f"--duration {args.duration:g} s at --dt {args.dt:g} s gives {n} sample"
-                f"{'' if n == 1 else 's'}; the demo needs at least 2")
-    return None

@@ -17,7 +17,7 @@ import numpy as np
 from gfins_fmi import io
 from gfins_fmi.cli.files import read_gnss, read_imu, read_optional, read_truth, write_table
 from gfins_fmi.cli.initial import from_initial_option, record_start_s
-from gfins_fmi.cli.options import imu_noise
+from gfins_fmi.cli.noise import imu_noise
 from gfins_fmi.estimation.alignment import align_static_then_gnss
 from gfins_fmi.estimation.config import (MEAS_TYPES, SENSOR_NAMES, UPDATE_STATUS, FilterConfig,
                                          FilterError, InitialState)

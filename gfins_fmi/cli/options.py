@@ -6,14 +6,15 @@ from __future__ import annotations
 import argparse
 import math
 
+import dataclasses
+
 from gfins_fmi._lib import as_scalar
-from gfins_fmi.nav.imu_errors import ImuNoise
-from gfins_fmi.sim.scenarios import CONSUMER, NAVIGATION, TACTICAL
+from gfins_fmi.calibration.syscal_filter import Prior
 
-__all__ = ["real", "count", "vector", "GRADES", "imu_noise"]
+__all__ = ["real", "count", "vector", "prior_setting", "GRADES"]
 
-#: ``--grade``: the IMU noise models of gfins_fmi.sim.scenarios by name
-GRADES = {"consumer": CONSUMER, "tactical": TACTICAL, "navigation": NAVIGATION}
+#: ``--grade``: the names of the IMU noise models of gfins_fmi.sim.scenarios.GRADES
+GRADES = ("consumer", "tactical", "navigation")
 
 
 def real(unit: str, **bounds):
@@ -58,12 +59,18 @@ def vector(n: int, what: str):
     return parse
 
 
-def imu_noise(grade: str, noise=None) -> ImuNoise:
-    """The IMU noise model of ``--grade``, or of ``--noise`` ARW,VRW,GB,AB,TAU
-    (deg/sqrt(h), ug/sqrt(Hz), deg/h, ug, s) when given."""
-    if noise:
-        arw, vrw, gb, ab, tau = noise
-        return ImuNoise(gyro_arw_deg_sqrt_h=arw, accel_vrw_ug_sqrt_hz=vrw, gyro_bias_instability_deg_h=gb,
-                        accel_bias_instability_ug=ab, gyro_correlation_time_s=tau,
-                        accel_correlation_time_s=tau)
-    return GRADES[grade]
+
+def prior_setting(text: str):
+    """``--prior NAME=VALUE``: a prior 1-sigma (a
+    :class:`~gfins_fmi.calibration.syscal_filter.Prior` field, in its unit), > 0
+    (gravity_ug >= 0)."""
+    names = [f.name for f in dataclasses.fields(Prior)]
+    if "=" not in text:
+        raise argparse.ArgumentTypeError(f"--prior takes NAME=VALUE with NAME one of {', '.join(names)}")
+    k, v = text.split("=", 1)
+    if k not in names:
+        raise argparse.ArgumentTypeError(f"--prior: unknown {k!r}; one of {', '.join(names)}")
+    val = real("its unit")(v)
+    if not (val > 0 or (k == "gravity_ug" and val >= 0)):
+        raise argparse.ArgumentTypeError(f"--prior {k} must be > 0; got {val}")
+    return k, val

@@ -1,21 +1,73 @@
 """The ``gfins`` command line: every subcommand's options in one place, with the option
-types of :mod:`gfins_fmi.cli.options` (units and bounds); each subcommand runs the
-``run`` of its module (``gfins_fmi.cli.<command>``), after its ``check`` of option
-combinations where it has one."""
+types of :mod:`gfins_fmi.cli.options` (units and bounds), and the checks of option
+combinations made at parse time. A subcommand names the module that runs it
+(``gfins_fmi.cli.<module>``, its ``run`` or the function given): :func:`gfins_fmi.cli.main`
+imports only that one, so ``gfins --help`` and a command's refusal of its options stay as
+fast as before the package had one module per command (the parser imports nothing heavy).
+"""
 from __future__ import annotations
 
 import argparse
 import pathlib
 
-from gfins_fmi.analysis.error_report import CONFIGS
-from gfins_fmi.cli import (align, analyze, calibrate, cosim, demo, gfnav, integrate, navigate,
-                           reproduce, solve9, validate)
-from gfins_fmi.cli.options import GRADES, count, real, vector
-from gfins_fmi.cli.calibrate import prior_setting
+from gfins_fmi.cli.options import GRADES, count, prior_setting, real, vector
 from gfins_fmi.gyrofree.array import MIN_LEVER_ARM_M
 from gfins_fmi.nav.earth import WGS84
 
-__all__ = ["build_parser", "executor_arguments", "record_arguments", "state_arguments"]
+__all__ = ["build_parser", "executor_arguments", "record_arguments", "state_arguments",
+           "ANALYZE_CONFIGS"]
+
+#: ``gfins analyze --config``: the scenarios of gfins_fmi.analysis.error_report.CONFIGS (named
+#: here so that the parser does not import the analysis; a test checks that they agree)
+ANALYZE_CONFIGS = ("sins", "cube6", "qin9", "12", "qin9-sqrt", "12-sqrt", "qin9-fused", "12-fused")
+
+#: ``gfins calibrate --help``
+CALIBRATE_DESCRIPTION = """``gfins calibrate``: system-level calibration of a recorded multi-position run.
+
+    gfins calibrate IMU --lat DEG --height M [--lon DEG] [--format csv|kfgins]
+                    [--arw DEG_SQRT_H] [--vrw UG_SQRT_HZ] [--delay] [--passes N]
+                    [--prior NAME=VALUE ...] [--report REPORT.md] [--json PARAMS.json] [--plot DIR]
+                    [--simulate seed001|turntable19 [--sim-seed N]]
+
+Prints the static intervals and turns found, every parameter with its 1-sigma and the
+parameters the path cannot observe; ``--json`` writes the estimates, their stds and the
+error model as start values of the SINS and vehicle FMUs; ``--simulate`` first writes a
+simulated raw record of that path to IMU (its true errors beside it, IMU.truth.json).
+"""
+
+
+def _command(p, module: str, function: str = "run", check=None) -> None:
+    """The subcommand of parser ``p`` runs ``gfins_fmi.cli.<module>.<function>(args)``."""
+    p.set_defaults(module=module, function=function, check=check)
+
+
+def _check_demo(args) -> str | None:
+    n = int(round(args.duration / args.dt))
+    if n < 2:
+        return (f"--duration {args.duration:g} s at --dt {args.dt:g} s gives {n} sample"
+                f"{'' if n == 1 else 's'}; the demo needs at least 2")
+    return None
+
+
+def _check_cosim(args) -> str | None:
+    if args.seconds < args.step:
+        return f"--seconds {args.seconds:g} s is shorter than one --step ({args.step:g} s)"
+    return None
+
+
+def _check_align(args) -> str | None:
+    if args.mode == "static" and args.position is None:
+        return "static alignment needs --position LAT,LON,H"
+    if args.mode == "motion" and (args.speed is None or args.initial is None):
+        return "motion alignment needs a SPEED record and --initial LAT,LON,H,HEADING,PITCH,ROLL"
+    if args.disturbed and (args.mode != "static" or args.fine):
+        return ("--disturbed is a static coarse alignment; the fine alignment's zero-velocity "
+                "updates assume a base at rest (leave out --fine)")
+    if args.position is not None and not abs(args.position[0]) < 90:
+        return f"--position: latitude must be in (-90, 90) deg; got {args.position[0]}"
+    if args.initial is not None and not abs(args.initial[0]) < 90:
+        return f"--initial: latitude must be in (-90, 90) deg; got {args.initial[0]}"
+    return None
 
 
 def executor_arguments(p) -> None:
@@ -91,7 +143,7 @@ def _integrate(sub) -> argparse.ArgumentParser:
                    help="estimate the odometer's boresight (pitch, heading of the vehicle axes in "
                         "the IMU's; FilterConfig.odometer_mount): with --odometer and/or --nhc")
     p.add_argument("--truth", type=pathlib.Path, help="reference: KF-GINS .nav or TruthRecord CSV")
-    p.add_argument("--grade", choices=tuple(GRADES), default="tactical",
+    p.add_argument("--grade", choices=GRADES, default="tactical",
                    help="IMU noise model (gfins_fmi.sim.scenarios); overridden by --noise")
     p.add_argument("--noise", type=vector(5, "ARW deg/sqrt(h), VRW ug/sqrt(Hz), GB deg/h, AB ug, TAU s"),
                    default=None, metavar="ARW,VRW,GB,AB,TAU",
@@ -122,13 +174,13 @@ def _integrate(sub) -> argparse.ArgumentParser:
     p.add_argument("--nhc", action="store_true", help="non-holonomic constraints (ground vehicles)")
     p.add_argument("--plot", type=pathlib.Path, default=None, help="folder for figures")
     p.add_argument("--progress", action="store_true", help="progress bar")
-    p.set_defaults(func=integrate.run)
+    _command(p, "integrate")
     return p
 
 
 def _calibrate(sub) -> argparse.ArgumentParser:
     p = sub.add_parser("calibrate", help="system-level calibration (seed 001's 36-state filter) of a "
-                       "raw multi-position record", description=calibrate.__doc__,
+                       "raw multi-position record", description=CALIBRATE_DESCRIPTION,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("imu", type=pathlib.Path, help="raw IMU record (IMU frame), starting at rest")
     p.add_argument("--format", choices=("csv", "kfgins"), default="csv",
@@ -157,7 +209,7 @@ def _calibrate(sub) -> argparse.ArgumentParser:
                    help="first write a simulated record of this path to IMU (random errors at the "
                         "prior's level, the noise of --arw/--vrw)")
     p.add_argument("--sim-seed", type=int, default=0, help="seed of --simulate (default 0)")
-    p.set_defaults(func=calibrate.run)
+    _command(p, "calibrate")
     return p
 
 
@@ -192,11 +244,11 @@ def _align(sub) -> argparse.ArgumentParser:
                    help="1-sigma turn-on gyro bias, deg/h (default: the grade's bias instability)")
     p.add_argument("--accel-bias", type=real("ug", at_least=0.0), default=None,
                    help="1-sigma turn-on accelerometer bias, ug (default: the grade's)")
-    p.add_argument("--grade", choices=tuple(GRADES), default="navigation", help="IMU noise model")
+    p.add_argument("--grade", choices=GRADES, default="navigation", help="IMU noise model")
     p.add_argument("--output", type=pathlib.Path, default=None,
                    help="motion: CSV of the state after each pass")
     p.add_argument("--progress", action="store_true", help="report the passes as they run")
-    p.set_defaults(func=align.run, check=align.check)
+    _command(p, "align", check=_check_align)
     return p
 
 
@@ -221,7 +273,7 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict]:
     p.add_argument("--lever-arm", type=lever_arm, default=0.1, help="lever arm l, m (default 0.1)")
     p.add_argument("--noise", type=real("m/s^2", at_least=0.0), default=1e-4,
                    help="white noise per accelerometer, m/s^2 (default 1e-4)")
-    p.set_defaults(func=demo.run, check=demo.check)
+    _command(p, "demo", check=_check_demo)
 
     p = parsers["solve9"] = sub.add_parser(
         "solve9", help="solve a record of 9 accelerometer outputs (m/s^2; optional "
@@ -234,7 +286,7 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict]:
     p.add_argument("--omega-init", type=vector(3, "x,y,z in rad/s"), default=[0.0, 0.0, 0.0],
                    help="rate at the first sample, rad/s, as x,y,z: the first signs and the start "
                         "of the omega_dot integral that gives the later signs")
-    p.set_defaults(func=solve9.run)
+    _command(p, "solve9")
 
     p = parsers["navigate"] = sub.add_parser(
         "navigate", help="strapdown navigation of a record (t, gyro x y z, accel x y z "
@@ -251,7 +303,7 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict]:
                    help="increments per navigation update, 1..4 (default 1); N > 1 writes one "
                         "row per update (every N-th increment's time; the last row takes the "
                         "increments left)")
-    p.set_defaults(func=navigate.run)
+    _command(p, "navigate")
 
     p = parsers["gfnav"] = sub.add_parser(
         "gfnav", help="gyro-free navigation of a record of accelerometer-array outputs "
@@ -267,7 +319,7 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict]:
                    help="rate at the first sample, rad/s, x,y,z (write --omega-init=-1,0,0 "
                         "when it starts with -)")
     state_arguments(p)
-    p.set_defaults(func=gfnav.run)
+    _command(p, "gfnav")
 
     p = parsers["reproduce"] = sub.add_parser(
         "reproduce", help="reproduce a published experiment (qin: the 6- vs 9-accelerometer "
@@ -285,12 +337,12 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict]:
     p.add_argument("--out", type=pathlib.Path, default=pathlib.Path("gfins_reproduce"),
                    help="folder for the figure and the table")
     executor_arguments(p)
-    p.set_defaults(func=reproduce.run)
+    _command(p, "reproduce")
 
     p = parsers["analyze"] = sub.add_parser(
         "analyze", help="error growth: python-control predictions against a Monte Carlo of "
         "the C core, as a markdown report with figures")
-    p.add_argument("--config", action="append", choices=list(CONFIGS),
+    p.add_argument("--config", action="append", choices=list(ANALYZE_CONFIGS),
                    help="configuration (repeatable; default: all); see gfins_fmi.analysis.error_report")
     p.add_argument("--runs", type=count(2), default=1000,
                    help="Monte-Carlo runs per configuration (default 1000; a standard deviation "
@@ -300,7 +352,7 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict]:
                    help="folder for report.md and the figures")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     executor_arguments(p)
-    p.set_defaults(func=analyze.run)
+    _command(p, "analyze")
 
     p = parsers["cosim"] = sub.add_parser(
         "cosim", help="vehicle FMU + navigator FMU co-simulation (seed 001's run): Python "
@@ -315,14 +367,14 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict]:
     p.add_argument("--out", type=pathlib.Path, default=pathlib.Path("gfins_cosim"),
                    help="folder for the SSP, the container FMU and the error CSV")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
-    p.set_defaults(func=cosim.run, check=cosim.check)
+    _command(p, "cosim", check=_check_cosim)
 
     parsers["integrate"] = _integrate(sub)
     parsers["calibrate"] = _calibrate(sub)
     parsers["align"] = _align(sub)
 
     p = parsers["validate"] = sub.add_parser("validate", help="run fmpy's validation on every shipped FMU")
-    p.set_defaults(func=validate.run)
+    _command(p, "validate")
     p = parsers["info"] = sub.add_parser("info", help="version and paths of the shipped FMUs")
-    p.set_defaults(func=validate.info)
+    _command(p, "validate", "info")
     return parser, parsers

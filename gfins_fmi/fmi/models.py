@@ -13,8 +13,8 @@ from gfins_fmi.fmi.paths import MODELS, FmuRunError
 from gfins_fmi.fmi.runner import run_fmu
 from gfins_fmi.gyrofree.array import Accel9Solution
 from gfins_fmi.gyrofree.geometry import STRATEGIES
+from gfins_fmi.nav.rotating import RotatingNavSolution
 from gfins_fmi.nav.strapdown import EARTH_MODELS, INPUT_KINDS, VERTICAL_MODES, NavSolution, SinsConfig
-from gfins_fmi.sim.rotation import RotatingNavSolution
 
 __all__ = ["run_accel9_fmu", "run_sins_fmu", "run_gfnav_fmu"]
 
@@ -68,8 +68,8 @@ def run_sins_fmu(gyro, accel, dt_s: float, initial, *, config=None, h_ext_m=None
 
     ``gimbal_rad`` (n, 2; the middle and inner angles at each record row's time) makes it
     the navigator of a rotating INS (rotating = 1): the record is the IMU frame's and the
-    result is a :class:`gfins_fmi.sim.rotation.RotatingNavSolution` with the vehicle attitude
-    from the gimbal angles (as :func:`gfins_fmi.rotation.navigate`).
+    result is a :class:`gfins_fmi.nav.rotating.RotatingNavSolution` with the vehicle attitude
+    from the gimbal angles (as :func:`gfins_fmi.nav.rotating.navigate`).
 
     Returns a :class:`gfins_fmi.NavSolution` (with ``gimbal_rad``: a RotatingNavSolution).
     """

@@ -1,8 +1,8 @@
 """Rotating IMU (C core ``gf_rotation``; seed 001): the two-axis indexing mechanism, rotation
 schedules (seed 001's 18-position calibration path, turntable paths about the IMU's own
 axes, indexing and continuous modulation schemes) and the exact outputs of an IMU riding
-the mechanism on a static base or on a vehicle; the vehicle attitude from the navigated
-IMU attitude and the gimbal angles.
+the mechanism on a static base or on a vehicle. Their navigation (rotation modulation, the
+vehicle attitude from the gimbal angles) is :mod:`gfins_fmi.nav.rotating`.
 
 Frames and the mechanism (csrc/gf_rotation.h): base b fixed to the vehicle (right-front-up),
 IMU frame m; middle axis = base x, inner axis = IMU z, C_m^b = R_x(alpha) R_z(beta), both
@@ -18,18 +18,17 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from gfins_fmi._lib import (GfinsError, as_array, as_scalar, check_status, ffi, lib, ptr,
+from gfins_fmi._lib import (as_array, as_scalar, check_status, ffi, lib, ptr,
                             struct_columns, struct_doubles)
 from gfins_fmi.io.records import ImuRecord
 from gfins_fmi.nav.earth import quat_multiply, quat_to_dcm
-from gfins_fmi.nav.strapdown import NavState, SinsConfig, Strapdown
+from gfins_fmi.nav.strapdown import NavState
 from gfins_fmi.sim.vehicle import describe_bad_profile
 
 __all__ = ["Turn", "rest", "middle", "inner", "about_imu", "about_base", "RotationSchedule",
            "SEED001_TABLE", "seed001_path", "path_table", "check_seed001_table",
            "indexing_scheme", "continuous_scheme", "turntable_path_19", "RotatingImuRecord",
-           "simulate_static", "simulate_on_vehicle", "vehicle_attitude", "navigate",
-           "RotatingNavSolution", "MAX_TURNS"]
+           "simulate_static", "simulate_on_vehicle", "MAX_TURNS"]
 
 MAX_TURNS = int(lib.GF_ROT_MAX_SEGMENTS)
 _AXES = {None: -1, "x": 0, "y": 1, "z": 2}
@@ -455,49 +454,3 @@ def simulate_on_vehicle(schedule: RotationSchedule, profile, duration_s: float,
                              float(first.lon_rad), float(first.h_m), qb0, schedule, 0.0, cols,
                              NavState(q0, np.array(list(first.v_n_m_s)), float(first.lat_rad),
                                       float(first.lon_rad), float(first.h_m), 0.0))
-
-
-@dataclass(frozen=True)
-class RotatingNavSolution:
-    """Navigation of a rotating IMU: ``imu`` is the strapdown solution of the IMU frame
-    (its ``q_bn`` holds C_m^n), ``q_bn_vehicle`` the vehicle's attitude from it and the
-    gimbal angles (None when the schedule drives no mechanism)."""
-    imu: object
-    q_bn_vehicle: np.ndarray | None
-
-    @property
-    def t_s(self):
-        return self.imu.t_s
-
-
-def navigate(record: RotatingImuRecord, dtheta_rad=None, dv_m_s=None, *, initial=None,
-             compensation=None, config=None) -> RotatingNavSolution:
-    """Rotation-modulated navigation: the IMU's increments (``record``'s, or the given
-    ones, e.g. with sensor errors) compensated with ``compensation`` (an ImuErrors: the
-    calibrated model; seed 001 S6), navigated in the IMU frame by the one mechanization
-    (gf_sins), and the vehicle attitude from the navigated C_m^n and the gimbal angles
-    (the encoders). ``initial``: the IMU's initial state (default: the record's truth);
-    ``config``: a SinsConfig (default increments with coning, height held)."""
-    th = record.dtheta_rad if dtheta_rad is None else dtheta_rad
-    dv = record.dv_m_s if dv_m_s is None else dv_m_s
-    if compensation is not None:
-        th, dv = compensation.compensate_increments(th, dv, record.dt_s)
-    x0 = initial if initial is not None else record.initial
-    cfg = config or SinsConfig(vertical="hold")
-    sol = Strapdown(x0, cfg).run(th, dv, t_s=record.t_s)
-    qv = vehicle_attitude(sol.q_bn, record.gimbal_rad) if record.schedule.is_mechanism else None
-    return RotatingNavSolution(sol, qv)
-
-
-def vehicle_attitude(q_mn, gimbal_rad) -> np.ndarray:
-    """C_b^n of the vehicle (n, 4) from the navigated IMU attitude C_m^n (n, 4) and the
-    gimbal angles (n, 2: middle, inner) read by the encoders: C_b^n = C_m^n (C_m^b)^T."""
-    q = as_array("q_mn", q_mn, (None, 4), "1")
-    n = q.shape[0]
-    g = as_array("gimbal_rad", gimbal_rad, (n, 2), "rad")
-    out = np.empty((n, 4))
-    done = ffi.new("size_t *")
-    status = lib.gf_rot_vehicle_attitude(n, ptr(q, 4 * n), ptr(g, 2 * n), ptr(out, 4 * n), done)
-    if status != lib.GF_OK:
-        raise GfinsError(f"vehicle attitude: q_mn[{done[0]}] is not a rotation", int(status))
-    return out

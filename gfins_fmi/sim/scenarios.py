@@ -20,7 +20,7 @@ from gfins_fmi.sim.vehicle import (Barometer, GnssReceiver, Odometer, Segment, V
                                    VehicleRecord, simulate_vehicle)
 
 __all__ = ["SimulatedDrive", "simulate_drive", "town_drive", "TACTICAL", "NAVIGATION",
-           "CONSUMER"]
+           "CONSUMER", "GRADES"]
 
 #: a tactical-grade IMU (fibre-optic gyros, servo accelerometers)
 TACTICAL = ImuNoise(gyro_arw_deg_sqrt_h=0.05, gyro_bias_instability_deg_h=1.0,
@@ -38,6 +38,10 @@ NAVIGATION = ImuNoise(gyro_arw_deg_sqrt_h=0.003, gyro_bias_instability_deg_h=0.0
 CONSUMER = ImuNoise(gyro_arw_deg_sqrt_h=0.3, gyro_bias_instability_deg_h=10.0,
                     gyro_correlation_time_s=300.0, accel_vrw_ug_sqrt_hz=100.0,
                     accel_bias_instability_ug=500.0, accel_correlation_time_s=300.0)
+
+
+#: the noise models by grade name (``--grade`` of the estimation commands)
+GRADES = {"consumer": CONSUMER, "tactical": TACTICAL, "navigation": NAVIGATION}
 
 
 @dataclass

@@ -31,8 +31,9 @@ import gfins_fmi as gf
 from gfins_fmi.sim import trajectory as tj
 from gfins_fmi.cli import main
 from gfins_fmi.io import FileFormatError
-from gfins_fmi.io import tables
-from gfins_fmi.io.tables import TableReader, TableWriter, table_format
+from gfins_fmi.io import table_writer, tables
+from gfins_fmi.io.table_writer import TableWriter
+from gfins_fmi.io.tables import TableReader, table_format
 from conftest import W0, numpy_outputs, paper_layout, smooth_motion
 
 FORMATS = ["csv", "npz", "parquet"]
@@ -121,7 +122,7 @@ def test_write_behind_sends_each_range_then_drops_it_and_keeps_tables_exact(fmt,
     every range but the last step's is waited for before it is dropped, and the table
     still reads back bit for bit."""
     _needs(fmt)
-    real = tables._sync_file_range()
+    real = table_writer._sync_file_range()
     if real is None:
         pytest.skip("no sync_file_range here (not Linux): the writer leaves the cache alone")
     calls = []
@@ -129,8 +130,8 @@ def test_write_behind_sends_each_range_then_drops_it_and_keeps_tables_exact(fmt,
     def spy(fd, offset, length, flags):
         calls.append((offset, length, flags))
         return real(fd, offset, length, flags)
-    monkeypatch.setattr(tables, "_sync_file_range", lambda: spy)
-    monkeypatch.setattr(tables, "_WRITE_BEHIND_BYTES", 1)
+    monkeypatch.setattr(table_writer, "_sync_file_range", lambda: spy)
+    monkeypatch.setattr(table_writer, "_WRITE_BEHIND_BYTES", 1)
     path = tmp_path / f"t.{fmt}"
     with TableWriter(path, ["a_s", "b_m", "c", "d"], rows=1000) as w:
         for lo in range(0, 1000, 300):

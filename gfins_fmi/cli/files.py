@@ -11,7 +11,8 @@ import sys
 import numpy as np
 
 from gfins_fmi import io
-from gfins_fmi.io.tables import TableReader, TableWriter
+from gfins_fmi.io.table_writer import TableWriter
+from gfins_fmi.io.tables import TableReader
 
 __all__ = ["TimeColumn", "Refused", "record_reader", "stream", "nav_columns", "write_table", "read_imu",
            "read_gnss", "read_optional", "read_truth"]

@@ -26,7 +26,8 @@ from typing import ClassVar, Iterable, NamedTuple, Sequence
 import numpy as np
 
 from gfins_fmi.io._text import data_lines, record_errors_at_lines
-from gfins_fmi.io.tables import TableReader, TableWriter
+from gfins_fmi.io.table_writer import TableWriter
+from gfins_fmi.io.tables import TableReader
 from gfins_fmi.io.errors import FileFormatError, RecordError
 
 __all__ = ["ImuRecord", "GnssRecord", "BaroRecord", "OdometerRecord", "TruthRecord",

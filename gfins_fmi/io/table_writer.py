@@ -1,40 +1,15 @@
-"""Numeric tables in files, read and written in chunks of rows: CSV text, npz and
-Parquet (docs/io.md, "Tables").
-
-A :class:`TableReader` yields a file's rows in chunks of a fixed number of rows
-(float64, C-contiguous), so a record of any length flows through the C core with
-bounded memory: read a chunk, run it, write it. A :class:`TableWriter` appends chunks
-to a temporary file beside its destination and renames it into place only in
-:meth:`TableWriter.commit`: a failed or interrupted write never leaves half a file and
-never replaces an existing one.
-
-Formats, by the file name's suffix (:func:`table_format`):
-
-``.npz``
-    numpy's zip of ``.npy`` arrays: one 1-D array per column, named by the column
-    (what this writer makes: ``np.load(path)["t_s"]``), or a single 2-D array (n, k).
-    Stored uncompressed and streamed member by member; written in place when the row
-    count is known beforehand, otherwise through side files zipped at the end.
-``.parquet``, ``.pq``
-    Apache Parquet: named numeric columns, one row group per chunk. Needs pyarrow
-    (the optional extra ``gfins_fmi[parquet]``).
-anything else
-    CSV text: comma-separated numbers, one row per line; ``#`` comment lines and blank
-    lines are skipped, spaces and tabs ignored; with ``header=True`` the first other
-    line holds the column names (or, when that line holds numbers, the comment line
-    before it, as numpy's ``savetxt`` writes a header). Numbers in the usual forms,
-    ``nan`` and ``inf`` included; written as the shortest decimal that reads back as
-    the same float64 (``0.1``, ``1e-7``, ``0.00002201446582700049``), so every value
-    round-trips bit for bit.
-
-CSV parsing and formatting are polars' (Rust; shortest round-trip digits): 40-55 ns
-a value to read and 55-65 ns to write on one core of the development machine, where
-numpy's ``loadtxt`` takes 300 ns and ``savetxt`` 900 ns (docs/io.md, "Why polars";
-docs/benchmarks.md, "Record I/O"). When polars refuses a block of lines, the block is scanned in Python to
-name the line at fault (:func:`gfins_fmi.io._text.diagnose`).
+"""Numeric tables written in chunks of rows (docs/io.md, "Tables"): a
+:class:`TableWriter` appends chunks to a temporary file beside its destination and renames
+it into place only in :meth:`TableWriter.commit`: a failed or interrupted write never
+leaves half a file and never replaces an existing one. Formats as
+:mod:`gfins_fmi.io.tables` reads them: CSV text (polars formats the numbers: the shortest
+decimal that reads back as the same float64), npz (stored zip of ``.npy`` columns, in
+place when the row count is known), Parquet (pyarrow, one row group per chunk).
 """
 from __future__ import annotations
 
+import ctypes
+import io
 import os
 import pathlib
 import secrets
@@ -43,449 +18,16 @@ import struct
 import weakref
 import zipfile
 import zlib
-from typing import Iterator, Sequence
+from typing import Sequence
 
 import numpy as np
 
-from gfins_fmi.io._text import is_number, diagnose
-from gfins_fmi.io.errors import FileFormatError
+from gfins_fmi.io.tables import checked_format, pyarrow_module
 
-__all__ = ["TableReader", "TableWriter", "table_format", "FORMATS", "DEFAULT_CHUNK_ROWS"]
+__all__ = ["TableWriter"]
 
-#: the formats, as :func:`table_format` names them
-FORMATS = ("csv", "parquet", "npz")
-#: rows per chunk: 2^18 rows of 10 float64 columns are 21 MB, a few tenths of a second
-#: of parsing; large enough that per-chunk costs vanish, small enough for a smooth
-#: progress bar and a small memory footprint
-DEFAULT_CHUNK_ROWS = 1 << 18
-#: bytes of text parsed at a time (whole lines): polars' cost per call is about that of
-#: 1 MB of text, so 16 MB blocks parse a third faster than 4 MB (docs/benchmarks.md,
-#: "Record I/O"); the text, its columns and the chunk are 40 MB or so
-_TEXT_BLOCK_BYTES = 16 << 20
 #: bytes copied at a time when assembling an npz file
 _COPY_BYTES = 16 << 20
-
-
-def table_format(path) -> str:
-    """The format of a table file from its name: ``"parquet"`` (``.parquet``, ``.pq``),
-    ``"npz"`` (``.npz``), otherwise ``"csv"`` (text)."""
-    suffix = pathlib.Path(path).suffix.lower()
-    if suffix in (".parquet", ".pq"):
-        return "parquet"
-    if suffix == ".npz":
-        return "npz"
-    return "csv"
-
-
-def _format(path, format: str | None) -> str:
-    if format is None:
-        return table_format(path)
-    if format not in FORMATS:
-        raise ValueError(f"format must be one of {FORMATS}; got {format!r}")
-    return format
-
-
-def _chunk_rows(value) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise ValueError(f"chunk_rows must be an integer >= 1; got {value!r}")
-    return int(value)
-
-
-# --- reading ---------------------------------------------------------------------------------
-
-class _TextSource:
-    """CSV text: read in blocks of whole lines, each parsed by polars. The head of the
-    file (comments, the header line, the first data line) is read here to know the
-    columns; the line number of each block's start is counted, so a refused block is
-    diagnosed alone, naming the line."""
-
-    format = "csv"
-
-    def __init__(self, path: pathlib.Path, header: bool, what: str, header_hint: str):
-        self.path, self.what = path, what
-        self.header_message = ("the first data line holds text ({text}) where numbers were "
-                               f"expected: {header_hint}")
-        self.n_rows = None
-        self.size = path.stat().st_size
-        skip, offset, names, first, comment = 0, 0, None, None, None
-        with open(path, "rb") as f:
-            for raw in f:
-                body = raw.decode("utf-8", errors="replace").strip()
-                if not body or body.startswith("#"):
-                    skip, offset = skip + 1, offset + len(raw)
-                    comment = body[1:] if body else comment
-                    continue
-                fields = body.split(",")
-                if header and names is None:
-                    if not all(is_number(x) for x in fields):
-                        names = tuple(x.strip() for x in fields)
-                        skip, offset = skip + 1, offset + len(raw)
-                        continue
-                    # numbers: the names may be the comment line before them, as numpy's
-                    # savetxt writes its header ("# t,gx,gy")
-                    if comment is None or len(comment.split(",")) != len(fields):
-                        raise FileFormatError(path, skip + 1, "a header line of column names was "
-                                              "expected, but the first line holds numbers")
-                    names = tuple(x.strip() for x in comment.split(","))
-                first = fields
-                break
-        if first is None:
-            if names is not None:
-                raise FileFormatError(path, None, f"no data lines after the header line "
-                                      f"({','.join(names)}): a {what} holds at least one row")
-            raise FileFormatError(path, None, f"no data lines: the file is empty (a {what} holds "
-                                  "one row of numbers per line)")
-        self.names, self.n_columns = names, len(first)
-        self._skip, self._offset = skip, offset
-        if names is not None and len(names) != self.n_columns:
-            raise FileFormatError(path, skip + 1, f"{self.n_columns} columns where the header line "
-                                  f"names {len(names)} ({','.join(names)})")
-        self.position = 0
-
-    def batches(self) -> Iterator[list[np.ndarray]]:
-        offset, rows, rest = self._offset, 0, b""
-        with open(self.path, "rb") as f:
-            f.seek(offset)
-            while True:
-                buf = f.read(_TEXT_BLOCK_BYTES)
-                if buf:
-                    cut = buf.rfind(b"\n") + 1
-                    if cut == 0:          # a line longer than a block: read on
-                        rest += buf
-                        continue
-                    # the lines: one copy (none when the block ends a line); the partial
-                    # line after them starts the next block
-                    view = memoryview(buf)
-                    block = b"".join((rest, view[:cut])) if rest or cut < len(buf) else buf
-                    rest = bytes(view[cut:])
-                else:
-                    block, rest = rest, b""
-                if block:
-                    cols = self._parse(block, offset, rows)
-                    self.position = offset = f.tell() - len(rest)
-                    if len(cols[0]):
-                        rows += len(cols[0])
-                        yield cols
-                if not buf:
-                    break
-
-    def _parse(self, block: bytes, offset: int, rows: int) -> list[np.ndarray]:
-        """The columns of a block of whole lines that starts at byte ``offset`` of the
-        file, its first data line row ``rows`` of the table."""
-        import polars as pl
-        k = self.n_columns
-        text = block.translate(None, b" \t") if (b" " in block or b"\t" in block) else block
-        # comment lines are looked for only in a block that holds a '#': polars parses
-        # 40 % slower when it must look for them
-        comment = "#" if b"#" in block else None
-        try:
-            df = pl.read_csv(text, has_header=False, schema=self._schema(), comment_prefix=comment,
-                             quote_char=None)
-        except pl.exceptions.PolarsError as exc:
-            err = self._diagnose(block, offset, rows)
-            if err.line is None and not any(_data(x) for x in block.split(b"\n")):
-                return [np.empty(0)] * k          # comments and blank lines only
-            raise (err if err.line is not None else FileFormatError(
-                self.path, None, f"the file could not be read as a {self.what} table ({exc})")) from None
-        if df.null_count().sum_horizontal().item():
-            # a blank line reads as a row of nulls (dropped); a missing or empty field
-            # leaves a null in a row with numbers (refused)
-            blank = df.select(pl.all_horizontal(pl.all().is_null())).to_series()
-            if k > 1 and (df.null_count().sum_horizontal().item() > k * int(blank.sum())):
-                raise self._diagnose(block, offset, rows)
-            df = df.filter(~blank)
-        return [s.to_numpy() for s in df.get_columns()]
-
-    def _schema(self):
-        import polars as pl
-        return {f"c{j}": pl.Float64 for j in range(self.n_columns)}
-
-    def _diagnose(self, block: bytes, offset: int, rows: int) -> FileFormatError:
-        """The line at fault in a refused block (the lines before it are counted only
-        now: a good file is never scanned in Python)."""
-        line = 0
-        with open(self.path, "rb") as f:
-            while f.tell() < offset:
-                line += f.read(min(_TEXT_BLOCK_BYTES, offset - f.tell())).count(b"\n")
-        lines = block.decode("utf-8", errors="replace").split("\n")
-        # comment lines of another width are comments; one of k fields is a row to polars
-        k = self.n_columns
-        lines = ["" if x.lstrip().startswith("#") and x.count(",") + 1 != k else x for x in lines]
-        return diagnose(self.path, lines, ",", None, 0, [k], self.what, self.header_message,
-                        first_row=rows, line_offset=line)
-
-    def close(self) -> None:
-        pass
-
-
-def _data(line: bytes) -> bool:
-    body = line.strip()
-    return bool(body) and not body.startswith(b"#")
-
-
-def _pyarrow():
-    """pyarrow and pyarrow.parquet, or a ValueError that says how to get them."""
-    try:
-        import pyarrow
-        import pyarrow.parquet
-    except ImportError:
-        raise ValueError("Parquet files need pyarrow, which is not installed: pip install "
-                         "'gfins_fmi[parquet]' (or use .npz or .csv)") from None
-    return pyarrow, pyarrow.parquet
-
-
-def _numeric(path, name: str, dtype) -> None:
-    if np.dtype(dtype).kind not in "iuf":
-        raise FileFormatError(path, None, f"column {name!r} holds {dtype}, not numbers")
-
-
-class _ParquetSource:
-    format = "parquet"
-
-    def __init__(self, path: pathlib.Path, chunk_rows: int):
-        pa, pq = _pyarrow()
-        try:
-            # no pre-buffering: it reads the whole file ahead (memory = file size)
-            self._pf = pq.ParquetFile(path, pre_buffer=False)
-        except (pa.ArrowInvalid, OSError) as exc:
-            raise FileFormatError(path, None, f"not a Parquet file ({exc})") from None
-        schema = self._pf.schema_arrow
-        for field in schema:
-            if not (pa.types.is_integer(field.type) or pa.types.is_floating(field.type)):
-                raise FileFormatError(path, None, f"column {field.name!r} holds {field.type}, "
-                                      "not numbers")
-        self.path, self.chunk_rows = path, chunk_rows
-        self.names = tuple(schema.names)
-        self.n_columns = len(self.names)
-        self.n_rows = self.size = int(self._pf.metadata.num_rows)
-        self.position = 0
-        if self.n_columns == 0 or self.n_rows == 0:
-            raise FileFormatError(path, None, "no data: the file holds no column or no row")
-
-    def batches(self) -> Iterator[list[np.ndarray]]:
-        rows = 0
-        try:
-            for batch in self._pf.iter_batches(batch_size=self.chunk_rows, use_threads=False):
-                cols = []
-                for name, col in zip(self.names, batch.columns):
-                    if col.null_count:
-                        k = rows + int(np.flatnonzero(col.is_null().to_numpy(zero_copy_only=False))[0])
-                        raise FileFormatError(self.path, None, f"column {name!r}, row {k}: no value "
-                                              "(null); every field must hold a number")
-                    cols.append(col.to_numpy())
-                rows += batch.num_rows
-                self.position = rows
-                yield cols
-        finally:
-            self.close()
-
-    def close(self) -> None:
-        self._pf.close()
-
-
-class _NpzSource:
-    """An npz file streamed member by member: its members' ``.npy`` headers give shapes
-    and types; the data are read in chunks from the members' streams."""
-
-    format = "npz"
-
-    def __init__(self, path: pathlib.Path, chunk_rows: int):
-        self.chunk_rows = chunk_rows
-        try:
-            self._zip = zipfile.ZipFile(path)
-        except (zipfile.BadZipFile, OSError) as exc:
-            raise FileFormatError(path, None, f"not an npz (zip) file ({exc})") from None
-        self.path = path
-        members = self._zip.namelist()
-        heads = []
-        for m in members:
-            if not m.endswith(".npy"):
-                raise FileFormatError(path, None, f"member {m!r} is not a .npy array: an npz "
-                                      "record holds .npy arrays only")
-            with self._zip.open(m) as fh:
-                shape, fortran, dtype = _npy_header(path, m, fh)
-                heads.append((m, shape, fortran, dtype, fh.tell()))
-        layout = ("an npz record holds one 2-D array (n, k) or 1-D arrays of one length, "
-                  "one per column")
-        if len(heads) == 1 and len(heads[0][1]) == 2:
-            m, (n, k), fortran, dtype, offset = heads[0]
-            _numeric(path, m, dtype)
-            self.names = None
-            # C order: rows are contiguous, one stream; Fortran order: one stream per column
-            self._plan = ([(m, offset, dtype, k)] if not fortran else
-                          [(m, offset + j * n * dtype.itemsize, dtype, 1) for j in range(k)])
-        elif heads and all(len(h[1]) == 1 for h in heads):
-            lengths = {h[1][0] for h in heads}
-            if len(lengths) != 1:
-                raise FileFormatError(path, None, f"{layout}; the 1-D arrays have lengths "
-                                      f"{sorted(lengths)}")
-            for h in heads:
-                _numeric(path, h[0], h[3])
-            n, k = heads[0][1][0], len(heads)
-            self.names = tuple(h[0][:-4] for h in heads)
-            self._plan = [(h[0], h[4], h[3], 1) for h in heads]
-        else:
-            shapes = ", ".join(f"{h[0]} {h[1]}" for h in heads) or "nothing"
-            raise FileFormatError(path, None, f"{layout}; found {shapes}")
-        self.n_rows, self.n_columns, self.size = int(n), int(k), int(n)
-        if self.n_rows == 0 or self.n_columns == 0:
-            raise FileFormatError(path, None, "no data: the arrays are empty")
-        self.position = 0
-
-    def batches(self) -> Iterator[list[np.ndarray]]:
-        streams = []
-        try:
-            for m, offset, dtype, width in self._plan:
-                fh = self._zip.open(m)
-                fh.seek(offset)
-                streams.append((fh, dtype, width))
-            rows = 0
-            while rows < self.n_rows:
-                m = min(self.chunk_rows, self.n_rows - rows)
-                cols = []
-                for fh, dtype, width in streams:
-                    nbytes = m * width * dtype.itemsize
-                    buf = fh.read(nbytes)
-                    if len(buf) != nbytes:
-                        raise FileFormatError(self.path, None, "an array ends before its header's "
-                                              "shape says: the file is truncated")
-                    a = np.frombuffer(buf, dtype=dtype).reshape(m, width)
-                    cols.extend(a[:, j] for j in range(width))
-                rows += m
-                self.position = rows
-                yield cols
-        finally:
-            for fh, _, _ in streams:
-                fh.close()
-            self.close()
-
-    def close(self) -> None:
-        self._zip.close()
-
-
-def _npy_header(path, member: str, fh):
-    fmt = np.lib.format
-    try:
-        version = fmt.read_magic(fh)
-        read = fmt.read_array_header_1_0 if version == (1, 0) else fmt.read_array_header_2_0
-        shape, fortran, dtype = read(fh)
-    except ValueError as exc:
-        raise FileFormatError(path, None, f"member {member!r} is not a .npy array ({exc})") from None
-    return shape, fortran, dtype
-
-
-class TableReader:
-    """A table file read in chunks of rows.
-
-    Parameters
-    ----------
-    path : str or path-like
-        The file; its format from its suffix (:func:`table_format`).
-    header : bool
-        CSV text: the first line that is not a comment holds the column names.
-    chunk_rows : int
-        Rows per chunk (the last may be shorter).
-    what : str
-        What the file holds, for messages ("navigation record").
-    header_hint : str
-        The end of the message when the first data line of a text file holds text
-        (default: how to read it with this class).
-    format : {"csv", "npz", "parquet"}, optional
-        The format, whatever the file's name (default: from the name).
-
-    Attributes
-    ----------
-    format : str
-    n_columns : int
-    names : tuple of str or None
-        Column names (Parquet, npz of columns, CSV with a header).
-    n_rows : int or None
-        Known before reading for the binary formats.
-    size, position : int
-        Progress: bytes of the file (text) or rows (binary), in total and read so far.
-
-    Iterating gives ``(start, block)``: the index of the chunk's first row in the table
-    and a float64 C-contiguous array of shape (m, n_columns). A file that breaks the
-    format raises :class:`FileFormatError` naming the line (text) or the column.
-    """
-
-    def __init__(self, path, *, header: bool = False, chunk_rows: int = DEFAULT_CHUNK_ROWS,
-                 what: str = "table", header_hint: str | None = None, format: str | None = None):
-        self.path = pathlib.Path(path)
-        self.chunk_rows = _chunk_rows(chunk_rows)
-        if not self.path.is_file():
-            raise FileNotFoundError(f"{self.path}: no such file (a {what} file was expected)")
-        self.format = _format(self.path, format)
-        if self.format == "csv":
-            hint = header_hint or "if it is a line of column names, read it with header=True"
-            self._src = _TextSource(self.path, header, what, hint)
-        elif self.format == "parquet":
-            self._src = _ParquetSource(self.path, self.chunk_rows)
-        else:
-            self._src = _NpzSource(self.path, self.chunk_rows)
-        self.n_columns = self._src.n_columns
-        self.names = self._src.names
-        self.n_rows = self._src.n_rows
-        self.size = self._src.size
-
-    @property
-    def position(self) -> int:
-        """Bytes (text) or rows (binary) read so far."""
-        return self._src.position
-
-    @property
-    def unit(self) -> str:
-        """The unit of :attr:`size` and :attr:`position`: ``"B"`` or ``"row"``."""
-        return "B" if self.format == "csv" else "row"
-
-    def __iter__(self) -> Iterator[tuple[int, np.ndarray]]:
-        k, want = self.n_columns, self.chunk_rows
-        pending: list[list[np.ndarray]] = []
-        n_pending, start = 0, 0
-        for cols in self._src.batches():
-            pending.append(cols)
-            n_pending += len(cols[0])
-            while n_pending >= want:
-                block, pending = _take(pending, want, k)
-                n_pending -= want
-                yield start, block
-                start += want
-        if n_pending:
-            block, _ = _take(pending, n_pending, k)
-            yield start, block
-
-    def close(self) -> None:
-        self._src.close()
-
-    def __enter__(self) -> "TableReader":
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self.close()
-
-
-def _take(pending: list[list[np.ndarray]], m: int, k: int) -> tuple[np.ndarray, list]:
-    """The first ``m`` rows of the pending batches as one (m, k) float64 array, and the
-    batches left."""
-    out = np.empty((m, k))
-    row = 0
-    rest = []
-    for i, cols in enumerate(pending):
-        n = len(cols[0])
-        take = min(n, m - row)
-        for j in range(k):
-            out[row:row + take, j] = cols[j][:take]
-        row += take
-        if take < n:
-            rest = [[c[take:] for c in cols]] + pending[i + 1:]
-            break
-        if row == m:
-            rest = pending[i + 1:]
-            break
-    return out, rest
-
-
-# --- writing ---------------------------------------------------------------------------------
 
 def _remove_temporary(tmp: pathlib.Path) -> None:
     """A temporary output and its side folder (npz), where they exist."""
@@ -522,7 +64,6 @@ def _sync_file_range():
     if not hasattr(os, "posix_fadvise"):
         return None
     try:
-        import ctypes
         fn = ctypes.CDLL(None, use_errno=True).sync_file_range
     except (OSError, AttributeError):    # pragma: no cover - not glibc/musl Linux
         return None
@@ -619,7 +160,7 @@ class _CsvSink:
 
 class _ParquetSink:
     def __init__(self, tmp: pathlib.Path, names, dtypes, comments, rows=None, float_format=None):
-        pa, pq = _pyarrow()
+        pa, pq = pyarrow_module()
         self._pa = pa
         meta = {"gfins_fmi.comments": "\n".join(comments)} if comments else None
         self.schema = pa.schema([(n, pa.from_numpy_dtype(d)) for n, d in zip(names, dtypes)],
@@ -657,7 +198,6 @@ class _ParquetSink:
 
 def _npy_head(dtype: np.dtype, rows: int) -> bytes:
     """The ``.npy`` header of a 1-D array of ``rows`` values of ``dtype``."""
-    import io
     fmt = np.lib.format
     buf = io.BytesIO()
     fmt.write_array_header_1_0(buf, {"descr": fmt.dtype_to_descr(dtype), "fortran_order": False,
@@ -863,7 +403,7 @@ class TableWriter:
         if len(self.dtypes) != len(self.names) or any(d.kind not in "iufU" for d in self.dtypes):
             raise ValueError(f"dtypes must give a numeric type (or str) per column "
                              f"({len(self.names)}); got {dtypes!r}")
-        self.format = _format(self.path, format)
+        self.format = checked_format(self.path, format)
         if float_format not in (None, "repr"):
             raise ValueError(f"float_format must be None or 'repr'; got {float_format!r}")
         if self.format != "csv" and (float_format or any(d.kind == "U" for d in self.dtypes)):

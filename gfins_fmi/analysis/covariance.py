@@ -28,7 +28,7 @@ class TimeVaryingModel:
     output_labels: list
 
     def nlsys(self):
-        import control
+        import control   # lazy: python-control (~0.8 s) off the start-up path
         return control.nlsys(lambda t, x, u, params: self.A_of_t(t) @ x + self.B_of_t(t) @ u,
                              lambda t, x, u, params: self.C @ x, states=self.state_labels,
                              inputs=self.input_labels, outputs=self.output_labels)
@@ -64,7 +64,7 @@ def propagate(sys, t_s, bias_std, white_density, dt_s: float = 1.0) -> ErrorStd:
     error, by Van Loan's discretisation over steps of dt_s. A sampled white noise of
     std sigma at interval T has q = sigma sqrt(T).
     """
-    from scipy.linalg import expm
+    from scipy.linalg import expm   # lazy: scipy (0.1-0.5 s) off the start-up path
     varying = isinstance(sys, TimeVaryingModel)
     A_of_t = sys.A_of_t if varying else (lambda t, A=np.asarray(sys.A): A)
     B_of_t = sys.B_of_t if varying else (lambda t, B=np.asarray(sys.B): B)
@@ -121,7 +121,7 @@ def with_bias_states(sys):
     error states, named after the inputs): the form a Kalman filter or an
     observability study uses. The original inputs remain, entering the error states
     as before: they are now the white-noise parts of the sensor errors."""
-    import control
+    import control   # lazy: python-control (~0.8 s) off the start-up path
     A, B, C = np.asarray(sys.A), np.asarray(sys.B), np.asarray(sys.C)
     n, m = A.shape[0], B.shape[1]
     Aa = np.zeros((n + m, n + m))
@@ -189,7 +189,7 @@ def observability(A, H, t_s, states=None, tol: float = 1e-9) -> Observability:
     python-control's Gramians are infinite-horizon and need a stable system; an INS
     error model is marginally stable (Schuler, Earth rate) or unstable, hence this.
     """
-    from scipy.linalg import expm, svd
+    from scipy.linalg import expm, svd   # lazy: scipy (0.1-0.5 s) off the start-up path
     t_s = np.atleast_1d(np.asarray(t_s, float))
     if t_s.ndim != 1 or t_s.size < 1 or np.any(np.diff(t_s) <= 0):
         raise ValueError("t_s must be a non-empty increasing sequence of times (s)")
@@ -226,7 +226,7 @@ def frequency_response(sys, omega_rad_s, inputs=None, outputs=None):
     frequencies ``omega_rad_s`` (rad/s): ``control.frequency_response`` of the selected
     input/output channels (names from the model's labels). Returns the
     ``control.FrequencyResponseData`` (``.magnitude``, ``.phase``, ``.plot()``)."""
-    import control
+    import control   # lazy: python-control (~0.8 s) off the start-up path
     sub = sys
     if inputs is not None or outputs is not None:
         ins = list(sys.input_labels) if inputs is None else list(inputs)

@@ -163,7 +163,7 @@ def compare(config: str, runs: int = 200, seed: int = 0, executor: cf.Executor |
 
 
 def _plot(c: GrowthComparison, path: pathlib.Path) -> None:
-    import matplotlib
+    import matplotlib   # lazy: matplotlib (~0.3 s) only for figures
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     att = [i for i, n in enumerate(c.labels) if n.startswith("phi")]

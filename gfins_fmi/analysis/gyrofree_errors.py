@@ -97,7 +97,7 @@ def gyrofree_error_model(geometry, q_bn=(1.0, 0.0, 0.0, 0.0), gravity_m_s2: floa
     control.StateSpace at rest, else ``TimeVaryingModel``. Outputs ``GYROFREE_OUTPUTS``
     (attitude rad, velocity m/s, position m); inputs ``b_0..b_{N-1}`` (m/s^2).
     """
-    import control
+    import control   # lazy: python-control (~0.8 s) off the start-up path
     lm = _array_maps(geometry, gravity_m_s2, omega_b_rad_s, dt_s)
     ns, n_est, P, K, S, w, g = lm.ns, lm.n_est, lm.P, lm.K, lm.S, lm.w, lm.g
     S_f, S_wd = S(range(3)), S(range(3, 6))

@@ -242,7 +242,7 @@ def plot_report(rep: CalibrationReport, folder, truth=None,
     +-1 sigma bands (and ``truth``, SI, if known), and the zero-velocity residuals of the
     last pass with the static intervals shaded. Returns their paths."""
 
-    import matplotlib
+    import matplotlib   # lazy: matplotlib (~0.3 s) only for figures
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     folder = pathlib.Path(folder)

@@ -323,7 +323,7 @@ def predict_outage_std(P0: np.ndarray, t_s, lat_rad, h_m, v_enu_m_s, q_bn, f_b_m
 # ---- figures ----------------------------------------------------------------------------------
 
 def _axes(nrows, ncols=1, figsize=(9, 7)):
-    import matplotlib
+    import matplotlib   # lazy: matplotlib (~0.3 s) only for figures
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(nrows, ncols, figsize=figsize, sharex=True, squeeze=False)

@@ -240,7 +240,7 @@ def _strapdown(out_dir: pathlib.Path, duration_s: float, dt_s: float, l_m: float
     echo(f"[gyro-free chain] noise-free 9-accelerometer array -> solver -> mechanization "
          f"(rates): max horizontal error {e_gf.max():.2e} m")
 
-    import matplotlib
+    import matplotlib   # lazy: matplotlib (~0.3 s) only for figures
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(1, 2, figsize=(11, 4.5), constrained_layout=True)
@@ -263,7 +263,7 @@ def _strapdown(out_dir: pathlib.Path, duration_s: float, dt_s: float, l_m: float
 
 
 def _plot(png: pathlib.Path, m: Motion, sol, gains, noise_m_s2: float) -> None:
-    import matplotlib
+    import matplotlib   # lazy: matplotlib (~0.3 s) only for figures
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 

@@ -228,7 +228,7 @@ def improvement(res: QinResult) -> dict:
 
 def qin_plot(res: QinResult, path: str | pathlib.Path) -> pathlib.Path:
     """Error versus time (median and 10-90% band of |error|) for every scheme."""
-    import matplotlib
+    import matplotlib   # lazy: matplotlib (~0.3 s) only for figures
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     path = pathlib.Path(path)

@@ -137,7 +137,7 @@ def run_seed001(runs: int = 3, seed: int = 1, scenario: Seed001Scenario = Seed00
     diff_steps, pos_diff, curves = [], [], {}
     bar = None
     if progress:
-        from tqdm import tqdm
+        from tqdm import tqdm   # lazy: tqdm (~25 ms) only with a progress bar
         bar = tqdm(total=runs, desc="seed 001 vehicle test", unit="run")
 
     def nav(p, th, dv):
@@ -211,7 +211,7 @@ def seed001_table(res: Seed001Result) -> str:
 def seed001_plot(res: Seed001Result, path) -> pathlib.Path:
     """East and north velocity errors and position errors of run 0 (noisy data), as the
     seed's figures 3 and 4."""
-    import matplotlib
+    import matplotlib   # lazy: matplotlib (~0.3 s) only for figures
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     path = pathlib.Path(path)

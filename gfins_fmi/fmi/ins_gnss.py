@@ -219,7 +219,7 @@ class InsGnssDriver:
         self.config = config
         self.log = FmuLog(echo)
         path = pathlib.Path(path) if path else fmu_path("ins_gnss", fmi_version)
-        from fmpy.fmi1 import FMICallException
+        from fmpy.fmi1 import FMICallException   # lazy: fmpy (~30 ms) only where an FMU runs
         try:
             self.slave = FmuSlave(path, fmi_version, self.log, logging_on)
         except FMICallException as exc:
@@ -343,13 +343,13 @@ def run_ins_gnss_fmu(imu, gnss=None, baro=None, odometer=None, *, config, initia
         An FMU call failed; carries the FMU's log and, in ``partial``, the solution of the
         samples before it.
     """
-    from fmpy.fmi1 import FMICallException
+    from fmpy.fmi1 import FMICallException   # lazy: fmpy (~30 ms) only where an FMU runs
     drv = InsGnssDriver(imu, gnss, baro, odometer, config=config, initial=initial,
                          gnss_velocity=gnss_velocity, fmi_version=fmi_version, path=path,
                          parameters=parameters, logging_on=logging_on, echo=echo)
     bar = None
     if progress:
-        from tqdm import tqdm
+        from tqdm import tqdm   # lazy: tqdm (~25 ms) only with a progress bar
         bar = tqdm(total=drv.n_steps, unit="step", unit_scale=True, desc="ins_gnss FMU")
     try:
         try:

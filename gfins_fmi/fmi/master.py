@@ -111,7 +111,7 @@ class CoSimulation:
                 self.slaves[d].set_group(dst, values)
 
     def _call(self, what: str, fn, *args, **kwargs):
-        from fmpy.fmi1 import FMICallException
+        from fmpy.fmi1 import FMICallException   # lazy: fmpy (~30 ms) only where an FMU runs
         try:
             return fn(*args, **kwargs)
         except FMICallException as exc:
@@ -209,7 +209,7 @@ class CoSimulation:
             return out
         bar = None
         if progress:
-            from tqdm import tqdm
+            from tqdm import tqdm   # lazy: tqdm (~25 ms) only with a progress bar
             bar = tqdm(total=n, unit="step", unit_scale=True, desc="co-simulation")
         done = 0
         try:

@@ -26,7 +26,10 @@ What libcosim does, as measured here against our master (docs/cosim.md):
 """
 from __future__ import annotations
 
+import ctypes
 import pathlib
+import tempfile
+import zipfile
 from typing import Mapping
 
 import numpy as np
@@ -43,6 +46,7 @@ _NS = 1_000_000_000
 def available() -> str | None:
     """None when libcosimpy can be used here, else the reason it cannot."""
     try:
+        # lazy: libcosimpy: optional extra (OSP)
         import libcosimpy.CosimExecution  # noqa: F401
         from libcosimpy._internal import libcosimc
         libcosimc()                  # loads the bundled C library (lazily loaded otherwise)
@@ -58,6 +62,7 @@ def _libcosim():
     reason = available()
     if reason:
         raise ImportError(reason)
+    # lazy: libcosimpy: optional extra (OSP)
     from libcosimpy import CosimExecution, CosimLogging, CosimObserver
     from libcosimpy.CosimEnums import CosimVariableType
     from libcosimpy.CosimSlave import CosimLocalSlave
@@ -140,9 +145,7 @@ class _Run:
         (cosim_observer_slave_get_{real,integer}_samples) straight into numpy arrays:
         libcosimpy's reader builds Python lists (half of a 60 000-step run's time) and
         drops one sample when step 0 is among those read (0.0.6)."""
-        import ctypes
-
-        from libcosimpy._internal import libcosimc
+        from libcosimpy._internal import libcosimc   # lazy: libcosimpy: optional extra (OSP)
         real = self.VT(v.type) == self.VT.REAL
         fn = libcosimc()["cosim_observer_slave_get_real_samples" if real
                          else "cosim_observer_slave_get_integer_samples"]
@@ -163,7 +166,7 @@ class _Run:
         return values.astype(float)
 
     def simulate(self, n_steps: int, step_ns: int) -> dict:
-        from libcosimpy._internal import get_last_error_message
+        from libcosimpy._internal import get_last_error_message   # lazy: libcosimpy: optional extra (OSP)
         if not self.ex.simulate_until(n_steps * step_ns):
             raise FmuRunError(f"libcosim stopped with an error: {get_last_error_message()}",
                               [get_last_error_message()])
@@ -193,7 +196,7 @@ def _check_initialization(components, stop_s: float) -> None:
     FmuRunError with the FMU's log if it refuses: inside libcosim an FMU that fails its
     initialization ends the whole process (libcosimpy 0.0.6: the error escapes one of
     libcosim's worker threads), so start values are checked before it sees them."""
-    from fmpy.fmi1 import FMICallException
+    from fmpy.fmi1 import FMICallException   # lazy: fmpy (~30 ms) only where an FMU runs
 
     for name, path, params in components:
         log = FmuLog()
@@ -280,10 +283,7 @@ def run_libcosim_ssp(path: str | pathlib.Path, outputs: Mapping[str, list], stop
     path = pathlib.Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"no SSP file at {path}")
-    import tempfile
-    import zipfile
-
-    from fmpy.ssp.ssd import read_ssd
+    from fmpy.ssp.ssd import read_ssd   # lazy: fmpy (~30 ms) only where an FMU runs
     with tempfile.TemporaryDirectory() as tmp:
         zipfile.ZipFile(path).extractall(tmp)
         _check_initialization(
@@ -293,7 +293,7 @@ def run_libcosim_ssp(path: str | pathlib.Path, outputs: Mapping[str, list], stop
     try:
         ex = Execution.from_ssp_file(str(path), ns)
     except AssertionError as exc:                 # libcosimpy's way of saying it failed
-        from libcosimpy._internal import get_last_error_message
+        from libcosimpy._internal import get_last_error_message   # lazy: libcosimpy: optional extra (OSP)
         raise FmuRunError(f"libcosim could not load {path}: {get_last_error_message()}", []) from exc
     run = _Run(ex, n + 1)
     run.record(outputs)

@@ -164,7 +164,7 @@ class _TextSource:
     def _parse(self, block: bytes, offset: int, rows: int) -> list[np.ndarray]:
         """The columns of a block of whole lines that starts at byte ``offset`` of the
         file, its first data line row ``rows`` of the table."""
-        import polars as pl
+        import polars as pl   # lazy: polars (~0.1 s) off the start-up path
         k = self.n_columns
         text = block.translate(None, b" \t") if (b" " in block or b"\t" in block) else block
         # comment lines are looked for only in a block that holds a '#': polars parses
@@ -189,7 +189,7 @@ class _TextSource:
         return [s.to_numpy() for s in df.get_columns()]
 
     def _schema(self):
-        import polars as pl
+        import polars as pl   # lazy: polars (~0.1 s) off the start-up path
         return {f"c{j}": pl.Float64 for j in range(self.n_columns)}
 
     def _diagnose(self, block: bytes, offset: int, rows: int) -> FileFormatError:
@@ -218,7 +218,7 @@ def _data(line: bytes) -> bool:
 def pyarrow_module():
     """pyarrow and pyarrow.parquet, or a ValueError that says how to get them."""
     try:
-        import pyarrow
+        import pyarrow   # lazy: pyarrow: optional extra (Parquet)
         import pyarrow.parquet
     except ImportError:
         raise ValueError("Parquet files need pyarrow, which is not installed: pip install "

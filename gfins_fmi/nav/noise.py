@@ -15,7 +15,7 @@ def first_order_lowpass_noise(n: int, channels: int, std: float, corner_hz: floa
     dt), scaled to the stationary std ``std`` and started in steady state (the state
     drawn from the stationary distribution). Band-limited noise of bandwidth fc; with
     a = exp(-dt/tau) the same recursion is a first-order Gauss-Markov process."""
-    from scipy.signal import lfilter
+    from scipy.signal import lfilter   # lazy: scipy (0.1-0.5 s) off the start-up path
     if std == 0 or n == 0:
         return np.zeros((n, channels))
     a = np.exp(-2 * np.pi * corner_hz * dt_s)

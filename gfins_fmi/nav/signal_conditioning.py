@@ -38,7 +38,7 @@ def design_cheby2(cutoff_hz: float, fs_hz: float, order: int = 4,
     -------
     ndarray (n_sections, 6)
     """
-    from scipy.signal import cheby2
+    from scipy.signal import cheby2   # lazy: scipy (0.1-0.5 s) off the start-up path
     fs_hz = as_positive_scalar("fs_hz (sampling rate)", fs_hz, "Hz")
     cutoff_hz = as_positive_scalar("cutoff_hz", cutoff_hz, "Hz")
     if cutoff_hz >= fs_hz / 2:
@@ -89,7 +89,7 @@ class BiquadFilter:
 
     def steady_state(self, x0) -> None:
         """Start at steady state for a constant input x0 (n_channels,): no transient."""
-        from scipy.signal import sosfilt_zi
+        from scipy.signal import sosfilt_zi   # lazy: scipy (0.1-0.5 s) off the start-up path
         x0 = np.asarray(x0, float).reshape(self.n_channels)
         zi = sosfilt_zi(self.sos)                              # (n_sections, 2) per unit step
         z = np.ascontiguousarray(zi[:, None, :] * x0[None, :, None])
@@ -129,7 +129,7 @@ def recommend_cutoff(x, fs_hz: float, energy_fraction: float = 0.99,
     lies (Welch power spectrum of the detrended record, channels summed): the band the
     motion occupies, which a low-pass should keep (seed 004 read it off an FFT of its
     vehicle data: the energy sits at low frequency)."""
-    from scipy.signal import welch
+    from scipy.signal import welch   # lazy: scipy (0.1-0.5 s) off the start-up path
     fs_hz = as_positive_scalar("fs_hz (sampling rate)", fs_hz, "Hz")
     if not 0 < energy_fraction < 1:
         raise ValueError(f"energy_fraction must be in (0, 1); got {energy_fraction!r}")
@@ -150,7 +150,7 @@ def plot_spectrum(x, fs_hz: float, sos=None, path: str | pathlib.Path = "spectru
                   cutoff_hz: float | None = None) -> pathlib.Path:
     """Power spectrum of a record (Welch) with, if given, the filter's magnitude
     response and the cutoff; written to ``path`` (PNG)."""
-    import matplotlib
+    import matplotlib   # lazy: matplotlib (~0.3 s) only for figures
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from scipy.signal import sosfreqz, welch

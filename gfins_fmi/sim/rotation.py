@@ -233,7 +233,7 @@ class RotationSchedule:
 
 #: Seed 001's path (its table 1 and steps 0-18): (axis, angle in deg, directions of
 #: x_m, y_m, z_m after the turn; E N U W S D). Each row follows from the previous one by
-#: the mechanism's kinematics (tests/test_rotation.py, docs/rotating_ins.md).
+#: the mechanism's kinematics (tests/sim/test_rotation.py, docs/rotating_ins.md).
 SEED001_TABLE = (
     ("start", 0, "ENU"), ("middle", 90, "EUS"), ("middle", 180, "EDN"), ("middle", 180, "EUS"),
     ("inner", 90, "UWS"), ("inner", 180, "DES"), ("inner", 180, "UWS"), ("middle", 90, "SWD"),

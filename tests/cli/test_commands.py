@@ -1,4 +1,5 @@
-"""The gfins command (as installed) and the noise analysis."""
+"""The gfins command as installed (the console script): help, demo, validate, solve9,
+navigate and gfnav on small records and bad samples."""
 from __future__ import annotations
 
 import shutil

@@ -6,11 +6,11 @@
 1. bench/fmu_master.c (compiled here with cc) dlopens an FMU's FMI 2.0 binary and times
    {fmi2SetReal(inputs); fmi2DoStep; fmi2GetReal(outputs)} per sample, with the inputs
    recorded from the C vehicle model (seed 001's run): the cost a system tool pays.
-   Every navigator FMU the build makes (gfins_fmi.fmi.MODELS: sins, ins_gnss and the
+   Every navigator FMU the build makes (gfins_fmi.fmi.paths.MODELS: sins, ins_gnss and the
    gyro-free gfnav_*), plus the accel9 solver and the vehicle; CPU time of the master
    process (best and median of --runs). --steps-only stops after this part.
 2. The vehicle FMU + gyro-free navigator FMU co-simulated for --seconds at 100 Hz by
-   gfins_fmi.fmi.CoSimulation (FMI 2.0 and 3.0), fmpy's SSP simulator and fmpy's
+   gfins_fmi.fmi.master.CoSimulation (FMI 2.0 and 3.0), fmpy's SSP simulator and fmpy's
    container FMU; with --profile, cProfile of the Python master says where the time goes.
 """
 from __future__ import annotations

@@ -63,7 +63,7 @@ class System:
     Attributes
     ----------
     components : dict name -> (model, parameters)
-        ``model`` one of :data:`gfins_fmi.fmi.MODELS`; parameters by FMI 3.0 name
+        ``model`` one of :data:`gfins_fmi.fmi.paths.MODELS`; parameters by FMI 3.0 name
         (arrays as sequences).
     connections : list of Connection
     outputs : dict name -> list of variable names
@@ -304,7 +304,7 @@ def vehicle_integrated_navigation(profile=None, *, gnss: GnssReceiver | None = G
         if value is not None and not isinstance(value, cls):
             raise TypeError(f"{name} must be a {cls.__name__} or None; got {type(value).__name__}")
     if initial_error is not None and not isinstance(initial_error, InitialError):
-        raise TypeError(f"initial_error must be a gfins_fmi.fmi.InitialError; got {type(initial_error).__name__}")
+        raise TypeError(f"initial_error must be a gfins_fmi.fmi.system.InitialError; got {type(initial_error).__name__}")
     step_s = as_scalar("step_s", step_s, "s", above=0.0)
     profile = profile or VehicleProfile.seed001(align_s=60.0)
     stop_s = profile.duration_s() + 30.0 if stop_s is None else as_scalar("stop_s", stop_s, "s",

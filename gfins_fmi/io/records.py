@@ -250,7 +250,7 @@ class _Record:
         (``t_s,gyro_x_rad_s,...``), then one line per sample at full precision
         (the shortest decimal that reads back as the same float64, bit for bit). The
         file is written beside its destination and renamed into place, so a failure
-        never leaves half a file (:class:`~gfins_fmi.io.tables.TableWriter`)."""
+        never leaves half a file (:class:`~gfins_fmi.io.table_writer.TableWriter`)."""
         names, table = self._csv_table()
         dtypes = [np.int8 if name == "quality" else np.float64 for name in names]
         comments = [f"gfins_fmi {type(self).__name__}", f"source: {self.source}"]

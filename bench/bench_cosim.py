@@ -6,11 +6,11 @@
 1. bench/fmu_master.c (compiled here with cc) dlopens an FMU's FMI 2.0 binary and times
    {fmi2SetReal(inputs); fmi2DoStep; fmi2GetReal(outputs)} per sample, with the inputs
    recorded from the C vehicle model (seed 001's run): the cost a system tool pays.
-   Every navigator FMU the build makes (gfins_fmi.fmu.MODELS: sins, ins_gnss and the
+   Every navigator FMU the build makes (gfins_fmi.fmi.paths.MODELS: sins, ins_gnss and the
    gyro-free gfnav_*), plus the accel9 solver and the vehicle; CPU time of the master
    process (best and median of --runs). --steps-only stops after this part.
 2. The vehicle FMU + gyro-free navigator FMU co-simulated for --seconds at 100 Hz by
-   gfins_fmi.cosim.CoSimulation (FMI 2.0 and 3.0), fmpy's SSP simulator and fmpy's
+   gfins_fmi.fmi.master.CoSimulation (FMI 2.0 and 3.0), fmpy's SSP simulator and fmpy's
    container FMU; with --profile, cProfile of the Python master says where the time goes.
 """
 from __future__ import annotations
@@ -29,8 +29,11 @@ import time
 import numpy as np
 
 import gfins_fmi as gf
-from gfins_fmi import cosim
-from gfins_fmi.vehicle import VehicleProfile, simulate_vehicle
+from gfins_fmi.fmi.master import CoSimulation
+from gfins_fmi.fmi.system import System, vehicle_navigation
+from gfins_fmi.fmi.container import run_container, write_container
+from gfins_fmi.fmi.ssp import run_ssp, write_ssp
+from gfins_fmi.sim.vehicle import VehicleProfile, simulate_vehicle
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
@@ -89,7 +92,7 @@ def main() -> None:
         exe = _build_master(tmp)
         os.environ["FMU_MASTER_RUNS"] = str(args.runs)
         print(f"1. one doStep from a C master (dlopen, FMI 2.0), {n} steps of {h} s, CPU time:")
-        from gfins_fmi.fmu import MODELS
+        from gfins_fmi.fmi.paths import MODELS
         print(f"  FMUs built: {', '.join(sorted(MODELS))}")
         outs = ["q", "v", "lat", "lon", "h"]
         _time_fmu(exe, "gfnav_qin9", {"A": A9}, outs, n, h, tmp, "default strategy")
@@ -106,9 +109,9 @@ def main() -> None:
         if args.steps_only:
             return
         print(f"2. vehicle + gfnav_qin9 co-simulation, {args.seconds:g} s at 100 Hz ({n} steps):")
-        system = cosim.vehicle_navigation("gfnav_qin9", prof, stop_s=args.seconds)
+        system = vehicle_navigation("gfnav_qin9", prof, stop_s=args.seconds)
         for version in (2, 3):
-            with cosim.CoSimulation(system, fmi_version=version) as m:
+            with CoSimulation(system, fmi_version=version) as m:
                 m.initialize()
                 t0 = time.perf_counter()
                 if args.profile and version == 2:
@@ -120,21 +123,21 @@ def main() -> None:
                     m.run()
                 dt = time.perf_counter() - t0
             print(f"  Python master (fmpy FMU{version}Slave)  {dt:7.2f} s  {dt / n * 1e6:6.1f} us/step")
-        ssp_sys = cosim.vehicle_navigation("gfnav_qin9", prof, stop_s=args.seconds, skip_steps=1)
-        ssp = cosim.write_ssp(ssp_sys, tmp / "vn.ssp")
+        ssp_sys = vehicle_navigation("gfnav_qin9", prof, stop_s=args.seconds, skip_steps=1)
+        ssp = write_ssp(ssp_sys, tmp / "vn.ssp")
         t0 = time.perf_counter()
-        cosim.run_ssp(ssp, args.seconds, h)
+        run_ssp(ssp, args.seconds, h)
         dt = time.perf_counter() - t0
         print(f"  fmpy SSP simulator (FMI 2.0)      {dt:7.2f} s  {dt / n * 1e6:6.1f} us/step")
-        cont = cosim.write_container(ssp_sys, tmp / "vn.fmu", fmi_version=2)
+        cont = write_container(ssp_sys, tmp / "vn.fmu", fmi_version=2)
         t0 = time.perf_counter()
-        cosim.run_container(cont, args.seconds, h)
+        run_container(cont, args.seconds, h)
         dt = time.perf_counter() - t0
         print(f"  fmpy container FMU (FMI 2.0)      {dt:7.2f} s  {dt / n * 1e6:6.1f} us/step")
-        from gfins_fmi import osp
+        from gfins_fmi.fmi import osp
         if osp.available() is None:     # OSP libcosim: wall and CPU (its steps run on threads)
             for label, outputs in (("recording", system.outputs), ("no outputs", {})):
-                run_sys = cosim.System(system.components, system.connections, outputs,
+                run_sys = System(system.components, system.connections, outputs,
                                        system.step_s, system.stop_s)
                 c0, t0 = time.process_time(), time.perf_counter()
                 osp.run_libcosim(run_sys)

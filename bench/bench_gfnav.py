@@ -15,8 +15,8 @@ import time
 import numpy as np
 
 import gfins_fmi as gf
-from gfins_fmi import reproduce as R
-from gfins_fmi.accel_array import forward_model
+from gfins_fmi.experiments import qin as R
+from gfins_fmi.gyrofree.array import forward_model
 
 
 def main() -> None:

@@ -1,7 +1,7 @@
 """Monte-Carlo scaling on dask.distributed: the same workloads serially (one thread in
 this process) and on a local cluster of 1 and 2 single-threaded worker processes (what
 `dask scheduler` + `dask worker --nworkers N --nthreads 1` start), through
-gfins_fmi.montecarlo.executor as the CLI uses it. Prints wall time, CPU time of this
+gfins_fmi.analysis.montecarlo.executor as the CLI uses it. Prints wall time, CPU time of this
 process and of the workers, the load average before each run (the machine may be shared)
 and whether the results equal the serial ones bit for bit.
 
@@ -27,12 +27,13 @@ def _worker_cpu() -> float:
 
 def _warm() -> None:
     """Import what the tasks use (a worker that ran tasks before has it loaded)."""
-    import gfins_fmi.error_report  # noqa: F401
-    import gfins_fmi.reproduce  # noqa: F401
+    import gfins_fmi.analysis.error_report  # noqa: F401
+    import gfins_fmi.experiments.qin  # noqa: F401
 
 
 def workloads(runs_sins: int, runs_qin: int) -> dict:
-    from gfins_fmi import error_report, reproduce
+    from gfins_fmi.analysis import error_report
+    from gfins_fmi.experiments import qin as reproduce
     return {
         f"gfins analyze --config sins --runs {runs_sins}":
             lambda ex: error_report.compare("sins", runs=runs_sins, executor=ex).simulated,
@@ -60,7 +61,7 @@ def main(argv=None):
     a = ap.parse_args(argv)
     from distributed import Client, LocalCluster
 
-    from gfins_fmi import montecarlo
+    from gfins_fmi.analysis import montecarlo
     jobs = workloads(a.runs_sins, a.runs_qin)
     for fn in workloads(2, 2).values():      # warm-up here: imports, python-control
         fn(None)

@@ -4,11 +4,11 @@ the same data at equal or better accuracy").
 
     python bench/bench_pyins_filter.py [--minutes 30] [--repeat 3] [--seed 0] [--seeds 1]
 
-The record (gfins_fmi.estimation.scenarios)
+The record (gfins_fmi.sim.scenarios)
     town_drive(T) simulated by simulate_drive at 100 Hz: increments over (t_(k-1), t_k],
     tactical IMU (TACTICAL: ARW 0.05 deg/sqrt(h), VRW 50 ug/sqrt(Hz), Gauss-Markov biases
     1 deg/h and 100 ug with tau 3600 s, started in steady state); GNSS from
-    gfins_fmi.vehicle.GnssReceiver at 1 Hz, position and velocity with white errors of the
+    gfins_fmi.sim.vehicle.GnssReceiver at 1 Hz, position and velocity with white errors of the
     same std on every axis (1 m and 0.05 m/s: pyins' Position and NedVelocity take one
     scalar std for the three axes), no Gauss-Markov error, no latency, lever arm zero.
     Two 60 s GNSS outages (at 40 % and 70 % of the record) are cut from the GNSS record
@@ -29,7 +29,7 @@ the first 10 s)
     * frames: pyins navigates in NED with a body front-right-down frame; ours in ENU with
       body right-front-up: x_frd = y_rfu, y_frd = x_rfu, z_frd = -z_rfu for the
       increments; (VN, VE, VD) = (v_N, v_E, -v_U); (roll, pitch, heading) in deg are our
-      (roll, pitch, heading) (gfins_fmi.sins.quat_to_euler: the same angles, checked to
+      (roll, pitch, heading) (gfins_fmi.nav.strapdown.quat_to_euler: the same angles, checked to
       1e-10 deg by bench/bench_sins.py); lat, lon in deg.
     * time: pyins' IMU table is indexed by the end of each interval like ours;
       compute_increments_from_imu(..., "increment") needs one reading before the first,
@@ -85,10 +85,10 @@ import numpy as np  # noqa: E402
 
 from gfins_fmi.estimation import UPDATE_STATUS, FilterConfig, InitialState, integrate  # noqa: E402
 from gfins_fmi.estimation.evaluation import navigation_errors  # noqa: E402
-from gfins_fmi.estimation.scenarios import TACTICAL, simulate_drive, town_drive  # noqa: E402
-from gfins_fmi.sins import NavState, euler_to_quat, quat_to_euler  # noqa: E402
-from gfins_fmi.trajectory import euler_to_quat as euler_to_quat_rows, radii  # noqa: E402
-from gfins_fmi.vehicle import GnssReceiver  # noqa: E402
+from gfins_fmi.sim.scenarios import TACTICAL, simulate_drive, town_drive  # noqa: E402
+from gfins_fmi.nav.strapdown import NavState, euler_to_quat, quat_to_euler  # noqa: E402
+from gfins_fmi.nav.earth import euler_to_quat as euler_to_quat_rows, radii  # noqa: E402
+from gfins_fmi.sim.vehicle import GnssReceiver  # noqa: E402
 
 DEG = np.pi / 180.0
 DT_S = 0.01

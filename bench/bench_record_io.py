@@ -45,8 +45,8 @@ W_REST = (0.0, float(EARTH_RATE_RAD_S * np.cos(np.radians(LAT_DEG))),
 def generate(kind: str, path: pathlib.Path, n: int, chunk: int = 1 << 20) -> None:
     """Write the strapdown ("nav") or array ("arr") record of ``n`` rows to ``path``."""
     from gfins_fmi import layout
-    from gfins_fmi.accel_array import forward_model
-    from gfins_fmi.io.tables import TableWriter
+    from gfins_fmi.gyrofree.array import forward_model
+    from gfins_fmi.io.table_writer import TableWriter
     rng = np.random.default_rng(2026)
     dt = 1.0 / HZ
     if kind == "nav":

@@ -2,7 +2,7 @@
 
     python bench/bench_sins.py [--n 1000000] [--repeat 5]
 
-A closed-form sine-velocity motion (gfins_fmi.trajectory.SineVelocity, horizontal only,
+A closed-form sine-velocity motion (gfins_fmi.sim.trajectory.SineVelocity, horizontal only,
 100 Hz) gives exact increments; both navigators hold the height (the free vertical
 channel diverges as e^(t/570 s) and would dominate any record longer than an hour). The same increments are navigated by
   * gfins_fmi: gf_sins_run through cffi (one C call; best of --repeat), and through the
@@ -24,7 +24,8 @@ import time
 import numpy as np
 
 import gfins_fmi as gf
-from gfins_fmi import trajectory as tj
+from gfins_fmi.sim import trajectory as tj
+from gfins_fmi.nav import earth
 from gfins_fmi._lib import ffi, lib, ptr
 
 
@@ -119,7 +120,7 @@ def main() -> None:
     lat = np.radians(traj["lat"].values[1:])
     lon = np.radians(traj["lon"].values[1:])
     err_p = horizontal(lat, lon, tr.lat_rad[1:], tr.lon_rad[1:])
-    qp = tj.euler_to_quat(np.radians(traj["heading"].values[1:]), np.radians(traj["pitch"].values[1:]),
+    qp = earth.euler_to_quat(np.radians(traj["heading"].values[1:]), np.radians(traj["pitch"].values[1:]),
                           np.radians(traj["roll"].values[1:]))
     att_p = _att_err_deg(qp, tr.q_bn[1:])
     print(f"pyins {getattr(pyins, '__version__', '?')} (numba):              {t_p * 1e3:8.1f} ms  "

@@ -14,9 +14,10 @@ import time
 
 import numpy as np
 
-import gfins_fmi.rotation as rot
-from gfins_fmi.estimation import calibration36 as c36
-from gfins_fmi.imu_errors import ImuNoise
+from gfins_fmi.sim import rotation as rot
+from gfins_fmi.calibration import system as c36
+from gfins_fmi.calibration import segmentation, syscal_filter
+from gfins_fmi.nav.imu_errors import ImuNoise
 
 
 def main(argv=None):
@@ -31,8 +32,8 @@ def main(argv=None):
     rec, truth = c36.simulate_record(sched, p, lat, h, 0.01, duration_s=T,
                                      noise=ImuNoise(gyro_arw_deg_sqrt_h=0.002, accel_vrw_ug_sqrt_hz=10.0),
                                      seed=4)
-    cfg = c36.SyscalConfig(gyro_arw_deg_sqrt_h=0.002, accel_vrw_ug_sqrt_hz=10.0)
-    segs = c36.segment_record(rec.t_s[1:], np.asarray(rec.gyro)[1:])
+    cfg = syscal_filter.SyscalConfig(gyro_arw_deg_sqrt_h=0.002, accel_vrw_ug_sqrt_hz=10.0)
+    segs = segmentation.segment_record(rec.t_s[1:], np.asarray(rec.gyro)[1:])
     print(f"record: {len(rec)} samples over {T / 60:g} min at 100 Hz, "
           f"{sum(s.kind == 'turn' for s in segs)} turns")
     c36.calibrate(rec, lat, h, config=cfg, passes=1)           # warm-up (imports, caches)
@@ -41,7 +42,7 @@ def main(argv=None):
             ("calibrate(), 1 pass", lambda: c36.calibrate(rec, lat, h, config=cfg, passes=1)),
             ("calibrate(), 2 passes", lambda: c36.calibrate(rec, lat, h, config=cfg, passes=2)),
             ("C filter alone (gf_syscal_run), 1 pass",
-             lambda: c36.SyscalFilter(cfg, lat, h, truth.q_mn[0]).run(truth.t_s, rec.gyro, rec.accel))):
+             lambda: syscal_filter.SyscalFilter(cfg, lat, h, truth.q_mn[0]).run(truth.t_s, rec.gyro, rec.accel))):
         wall, cpu = [], []
         for _ in range(a.repeat):
             w0, c0 = time.perf_counter(), time.process_time()

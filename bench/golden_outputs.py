@@ -167,8 +167,8 @@ def run_all(g: Golden):
 
 
 def _drive(seconds=120.0):
-    from gfins_fmi.estimation.scenarios import TACTICAL, simulate_drive, town_drive
-    from gfins_fmi.vehicle import Barometer, GnssReceiver, Odometer
+    from gfins_fmi.sim.scenarios import TACTICAL, simulate_drive, town_drive
+    from gfins_fmi.sim.vehicle import Barometer, GnssReceiver, Odometer
     prof = town_drive(seconds, lat0_rad=0.6, lon0_rad=2.0, h0_m=30.0, heading0_rad=0.4)
     return simulate_drive(prof, seconds, 0.01, imu=TACTICAL, gnss=GnssReceiver(lever_arm_m=(0.3, 1.1, 1.5)),
                           baro=Barometer(), odometer=Odometer(), seed=11, imu_mount_rad=(0.01, -0.02))
@@ -206,7 +206,7 @@ def gf_quat_to_euler(q):
 
 def _align_motion(g: Golden):
     from gfins_fmi.io import BaroRecord, ImuRecord, OdometerRecord
-    from gfins_fmi.vehicle import Segment, VehicleProfile, simulate_vehicle
+    from gfins_fmi.sim.vehicle import Segment, VehicleProfile, simulate_vehicle
     dt = 0.02
     segs = [Segment(20.0), Segment(30.0, dheading_rad=np.pi / 2), Segment(20.0, dspeed_m_s=1.0)]
     prof = VehicleProfile(lat0_rad=30 * DEG, lon0_rad=114 * DEG, h0_m=-50.0, heading0_rad=40 * DEG,
@@ -239,8 +239,9 @@ def _api(g: Golden):
     FMUs, the laboratory calibration, the error models."""
     import gfins_fmi as gf
     from gfins_fmi.estimation import FilterConfig, InitialState, IntegratedNavigator
-    from gfins_fmi.estimation.scenarios import TACTICAL
-    from gfins_fmi.fmu import run_ins_gnss_fmu, run_sins_fmu, run_gfnav_fmu
+    from gfins_fmi.sim.scenarios import TACTICAL
+    from gfins_fmi.fmi.ins_gnss import run_ins_gnss_fmu
+    from gfins_fmi.fmi.models import run_sins_fmu, run_gfnav_fmu
     d = _drive(60.0)
     init = InitialState(d.initial, position_std_m=(0.3, 0.2, 0.5), velocity_std_m_s=0.05,
                         attitude_std_rad=(1e-3, 1e-3, 5e-3))
@@ -292,7 +293,7 @@ def _api(g: Golden):
     o = gf.run_accel9_fmu(r[:, 1:], 0.01, 0.1, omega_init_rad_s=w0)
     g.api("api/fmu_accel9", o.f_m_s2, o.omega_rad_s, o.omega_dot_rad_s2, o.flags)
     # laboratory calibration
-    from gfins_fmi.calibration import calibrate, simulate, test_plan
+    from gfins_fmi.calibration.laboratory import calibrate, simulate, test_plan
     errs = gf.ImuErrors(gyro_scale_ppm=(100, -50, 30), accel_bias_ug=(200, -100, 50))
     data = simulate(errs, test_plan(), np.random.default_rng(3))
     res = calibrate(data)
@@ -300,7 +301,7 @@ def _api(g: Golden):
           np.array([res.std[k] for k in sorted(res.std)]), res.residual_rms_accel_m_s2,
           res.residual_rms_gyro_rad_s)
     # error models
-    from gfins_fmi.error_models import sins_error_model
+    from gfins_fmi.analysis.strapdown_errors import sins_error_model
     m = sins_error_model(0.6, gf.euler_to_quat(np.array([0.3, 0.01, -0.02])))
     g.api("api/error_model_sins", *[np.asarray(x) for x in (m.A, m.B, m.C, m.D)])
 

@@ -18,11 +18,13 @@ import argparse
 
 import numpy as np
 
-from gfins_fmi import trajectory as tj
+from gfins_fmi.sim import trajectory as tj
+from gfins_fmi.nav import earth
 from gfins_fmi.estimation import FilterConfig
-from gfins_fmi.estimation.alignment import coarse_align, fine_align
+from gfins_fmi.estimation.alignment import coarse_align
+from gfins_fmi.estimation.fine_alignment import fine_align
 from gfins_fmi.estimation.evaluation import attitude_difference_rad, chi2_band
-from gfins_fmi.imu_errors import ImuNoise
+from gfins_fmi.nav.imu_errors import ImuNoise
 from gfins_fmi.io.records import ImuRecord
 
 DEG = np.pi / 180
@@ -34,7 +36,7 @@ def run(runs=100, seconds=300.0, lat_deg=30.0, dt=0.01, seed0=0, heading_deg=37.
     lat = lat_deg * DEG
     motion = tj.Stationary(heading=heading_deg * DEG, pitch=1.5 * DEG, roll=-2.0 * DEG, lat=lat)
     tr = tj.sample(motion, seconds, dt)
-    C = np.array(tj.quat_to_dcm(tr.q_bn[0]))
+    C = np.array(earth.quat_to_dcm(tr.q_bn[0]))
     noise = ImuNoise(gyro_arw_deg_sqrt_h=0.001, accel_vrw_ug_sqrt_hz=5.0)
     sig_g, sig_a = 0.01 * DEG / 3600, 50 * UG
     cfg = FilterConfig(imu=noise, gate_probability=None)

@@ -20,7 +20,7 @@ import warnings
 import numpy as np
 
 import gfins_fmi as gf
-from gfins_fmi.gyrofree import UnstableRateLoopWarning
+from gfins_fmi.gyrofree.rate_solver import UnstableRateLoopWarning
 
 STRATEGIES = ("integrate", "sqrt", "eigen", "fused")
 

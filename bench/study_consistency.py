@@ -8,7 +8,7 @@ written.
     python bench/study_consistency.py [--runs 100] [--minutes 30] [--filters ekf ukf] [--out docs/figures]
         [--workers N | --scheduler ADDRESS [--workers N]]
 
-The runs go through gfins_fmi.montecarlo.run: N threads here, or a dask cluster (see
+The runs go through gfins_fmi.analysis.montecarlo.run: N threads here, or a dask cluster (see
 docs/analysis.md, "Running on a cluster"); the figures do not depend on which.
 """
 from __future__ import annotations
@@ -18,14 +18,14 @@ import time
 
 import numpy as np
 
-from gfins_fmi import montecarlo
-from gfins_fmi.cli import executor_arguments
+from gfins_fmi.analysis import montecarlo
+from gfins_fmi.cli.parser import executor_arguments
 from gfins_fmi.estimation import FilterConfig, InitialState, IntegratedNavigator
 from gfins_fmi.estimation.evaluation import chi2_band, nees, plot_consistency, state_errors
-from gfins_fmi.estimation.scenarios import TACTICAL, simulate_drive, town_drive
-from gfins_fmi.sins import NavState
-from gfins_fmi.trajectory import _qmul
-from gfins_fmi.vehicle import GnssReceiver, simulate_vehicle
+from gfins_fmi.sim.scenarios import TACTICAL, simulate_drive, town_drive
+from gfins_fmi.nav.strapdown import NavState
+from gfins_fmi.nav.earth import quat_multiply
+from gfins_fmi.sim.vehicle import GnssReceiver, simulate_vehicle
 
 
 def main(argv=None):
@@ -62,7 +62,7 @@ def main(argv=None):
                 ang = np.linalg.norm(phi)
                 qphi = np.r_[np.cos(ang / 2), np.sin(ang / 2) * phi / ang]      # q(-phi) below
                 s0 = d.initial
-                nav0 = NavState(_qmul(np.r_[qphi[0], -qphi[1:]], s0.q_bn), s0.v_n_m_s + x0[0:3],
+                nav0 = NavState(quat_multiply(np.r_[qphi[0], -qphi[1:]], s0.q_bn), s0.v_n_m_s + x0[0:3],
                                 s0.lat_rad + x0[3], s0.lon_rad + x0[4], s0.h_m + x0[5], s0.t_s)
                 init.nav = nav0
                 # the sensor states start at 0 with the true biases drawn from the same model

@@ -14,10 +14,10 @@ import numpy as np
 
 from gfins_fmi.estimation import FilterConfig, InitialState, IntegratedNavigator
 from gfins_fmi.estimation.evaluation import navigation_errors
-from gfins_fmi.estimation.scenarios import TACTICAL, simulate_drive, town_drive
-from gfins_fmi.sins import NavState
-from gfins_fmi.trajectory import _qmul
-from gfins_fmi.vehicle import GnssReceiver, simulate_vehicle
+from gfins_fmi.sim.scenarios import TACTICAL, simulate_drive, town_drive
+from gfins_fmi.nav.strapdown import NavState
+from gfins_fmi.nav.earth import quat_multiply
+from gfins_fmi.sim.vehicle import GnssReceiver, simulate_vehicle
 
 
 def rotated(nav: NavState, heading_err_rad: float) -> NavState:
@@ -25,7 +25,7 @@ def rotated(nav: NavState, heading_err_rad: float) -> NavState:
     -heading_err: heading is clockwise)."""
     a = -heading_err_rad
     q = np.array([np.cos(a / 2), 0.0, 0.0, np.sin(a / 2)])
-    return NavState(_qmul(q, nav.q_bn), nav.v_n_m_s.copy(), nav.lat_rad, nav.lon_rad, nav.h_m, nav.t_s)
+    return NavState(quat_multiply(q, nav.q_bn), nav.v_n_m_s.copy(), nav.lat_rad, nav.lon_rad, nav.h_m, nav.t_s)
 
 
 def settle_time(t, err, bound):

@@ -10,8 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 
-import gfins_fmi.rotation as rot
-from gfins_fmi.estimation import calibration36 as c36
+from gfins_fmi.sim import rotation as rot
+from gfins_fmi.calibration import system as c36
+from gfins_fmi.calibration import syscal_filter
 
 LAT, H = np.radians(40.0), 50.0
 
@@ -32,9 +33,9 @@ def paths():
 
 
 def main():
-    cfg = c36.SyscalConfig(gyro_arw_deg_sqrt_h=0.002, accel_vrw_ug_sqrt_hz=10.0)
+    cfg = syscal_filter.SyscalConfig(gyro_arw_deg_sqrt_h=0.002, accel_vrw_ug_sqrt_hz=10.0)
     res = {name: c36.covariance_study(s, LAT, H, cfg, dt_s=0.05) for name, s in paths().items()}
-    names = c36.PARAM_NAMES[:27]
+    names = syscal_filter.PARAM_NAMES[:27]
     print("final 1-sigma / prior 1-sigma (1: not observed; > 0.9 marked *, > 0.3 marked ~)\n")
     print("| parameter | " + " | ".join(res) + " |")
     print("|---|" + "---|" * len(res))

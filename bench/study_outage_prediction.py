@@ -9,7 +9,7 @@ end, the python-control 1-sigma, and the filter's own 1-sigma there.
     python bench/study_outage_prediction.py [--runs 200] [--filter ekf] [--out docs/figures]
         [--workers N | --scheduler ADDRESS [--workers N]]
 
-The runs go through gfins_fmi.montecarlo.run: N threads here, or a dask cluster (see
+The runs go through gfins_fmi.analysis.montecarlo.run: N threads here, or a dask cluster (see
 docs/analysis.md, "Running on a cluster"); the figures do not depend on which.
 """
 from __future__ import annotations
@@ -19,12 +19,12 @@ import time
 
 import numpy as np
 
-from gfins_fmi import montecarlo
-from gfins_fmi.cli import executor_arguments
+from gfins_fmi.analysis import montecarlo
+from gfins_fmi.cli.parser import executor_arguments
 from gfins_fmi.estimation import FilterConfig, InitialState, IntegratedNavigator
 from gfins_fmi.estimation.evaluation import navigation_errors, predict_outage_std
-from gfins_fmi.estimation.scenarios import TACTICAL, simulate_drive, town_drive
-from gfins_fmi.vehicle import GnssReceiver, simulate_vehicle
+from gfins_fmi.sim.scenarios import TACTICAL, simulate_drive, town_drive
+from gfins_fmi.sim.vehicle import GnssReceiver, simulate_vehicle
 
 
 def main(argv=None):

@@ -16,8 +16,8 @@ import numpy as np
 
 from gfins_fmi.estimation import FilterConfig, InitialState
 from gfins_fmi.estimation.evaluation import outage_protocol, plot_outages
-from gfins_fmi.estimation.scenarios import NAVIGATION, simulate_drive, town_drive
-from gfins_fmi.vehicle import GnssReceiver, simulate_vehicle
+from gfins_fmi.sim.scenarios import NAVIGATION, simulate_drive, town_drive
+from gfins_fmi.sim.vehicle import GnssReceiver, simulate_vehicle
 
 RTK = dict(rate_hz=1.0, offset_s=0.21, pos_std_m=(0.02, 0.02, 0.04), vel_std_m_s=(0.01, 0.01, 0.02),
            quality=1)

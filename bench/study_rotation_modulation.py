@@ -1,7 +1,7 @@
 """Rotation modulation (issue 12 item 2): an 8 h run of a 0.01 deg/h-class IMU on a
 static base (a moored ship), navigated in the IMU frame with the height held, from the
 true initial state, with the IMU fixed and turned by the indexing and continuous schemes
-of gfins_fmi.rotation. Three error sets:
+of gfins_fmi.sim.rotation. Three error sets:
 
   A. constant biases only (gyro 0.01 deg/h, accelerometer 10 ug per axis): what
      rotation removes; the residual is compared with the linear error model (python-
@@ -24,9 +24,10 @@ import time
 
 import numpy as np
 
-import gfins_fmi.rotation as rot
-from gfins_fmi.imu_errors import ImuErrors
-from gfins_fmi.vehicle import Segment, VehicleProfile
+from gfins_fmi.nav import rotating
+from gfins_fmi.sim import rotation as rot
+from gfins_fmi.nav.imu_errors import ImuErrors
+from gfins_fmi.sim.vehicle import Segment, VehicleProfile
 
 LAT, H = np.radians(40.0), 50.0
 R_E = 6371e3
@@ -63,8 +64,8 @@ def linear_prediction(rec, errors: ImuErrors, step_s: float = 1.0):
     """North and east errors of the linear model driven by the modulated biases."""
     import control
 
-    from gfins_fmi.error_models import sins_error_model
-    from gfins_fmi.imu_errors import DEG_H, UG
+    from gfins_fmi.analysis.strapdown_errors import sins_error_model
+    from gfins_fmi.nav.imu_errors import DEG_H, UG
     sys = sins_error_model(LAT, [1.0, 0.0, 0.0, 0.0], H)     # body = n: inputs in n axes
     m = int(round(step_s / rec.dt_s))
     k = np.arange(m - 1, rec.t_s.size, m)          # t_s[k] = step, 2 step, ...
@@ -95,10 +96,10 @@ def main(argv=None):
     for name, sched in schemes().items():
         t0 = time.perf_counter()
         rec = rot.simulate_static(sched, T, a.dt, LAT, H)
-        ref, _, _ = horizontal_error(rot.navigate(rec), LAT, rec.lon_rad)
+        ref, _, _ = horizontal_error(rotating.navigate(rec), LAT, rec.lon_rad)
         for ek in ("A", "B"):
             th, dv = ERRORS[ek].apply_increments(rec.dtheta_rad, rec.dv_m_s, rec.dt_s)
-            err, dn, de = horizontal_error(rot.navigate(rec, th, dv), LAT, rec.lon_rad)
+            err, dn, de = horizontal_error(rotating.navigate(rec, th, dv), LAT, rec.lon_rad)
             lin = ""
             if ek == "A":
                 tl, ln, le, mb = linear_prediction(rec, ERRORS["A"])
@@ -116,7 +117,7 @@ def main(argv=None):
         rec = rot.simulate_static(schemes()[name], T, a.dt, LAT, H)
         for bk, kw in B_BLOCKS.items():
             th, dv = ImuErrors(**kw).apply_increments(rec.dtheta_rad, rec.dv_m_s, rec.dt_s)
-            err, _, _ = horizontal_error(rot.navigate(rec, th, dv), LAT, rec.lon_rad)
+            err, _, _ = horizontal_error(rotating.navigate(rec, th, dv), LAT, rec.lon_rad)
             print(f"| {bk} | {name} | {err.max():.4g} | {err[-1]:.4g} |", flush=True)
     # C: the vehicle turns
     segs = [Segment(60.0, dspeed_m_s=10.0)]
@@ -132,7 +133,7 @@ def main(argv=None):
         def err_on_vehicle(errors):
             th, dv = (rec.dtheta_rad, rec.dv_m_s) if errors is None else \
                 errors.apply_increments(rec.dtheta_rad, rec.dv_m_s, rec.dt_s)
-            sol = rot.navigate(rec, th, dv)
+            sol = rotating.navigate(rec, th, dv)
             return np.hypot((sol.imu.lat_rad - v["lat_rad"]) * R_E,
                             (sol.imu.lon_rad - v["lon_rad"]) * R_E * np.cos(LAT))
         e, e0 = err_on_vehicle(ERRORS["B"]), err_on_vehicle(None)

@@ -28,12 +28,13 @@ import time
 import numpy as np
 
 from gfins_fmi.estimation import FilterConfig, InitialState
-from gfins_fmi.estimation.alignment import AlignmentError, align_in_motion
+from gfins_fmi.estimation.alignment import AlignmentError
+from gfins_fmi.estimation.fine_alignment import align_in_motion
 from gfins_fmi.estimation.evaluation import attitude_difference_rad
-from gfins_fmi.imu_errors import ImuNoise
+from gfins_fmi.nav.imu_errors import ImuNoise
 from gfins_fmi.io.records import BaroRecord, ImuRecord, OdometerRecord
-from gfins_fmi.sins import NavState, euler_to_quat, quat_to_euler
-from gfins_fmi.vehicle import Segment, VehicleProfile, simulate_vehicle
+from gfins_fmi.nav.strapdown import NavState, euler_to_quat, quat_to_euler
+from gfins_fmi.sim.vehicle import Segment, VehicleProfile, simulate_vehicle
 
 DEG = np.pi / 180
 UG = 9.80665e-6

@@ -16,7 +16,7 @@ against closed-form motions, at several sample rates: the table of docs/sins.md
    A sin(Wt) along body y; the exact mean vertical acceleration is A J1(a) (Bessel).
    Measured: the missed acceleration A J1(a) - slope of v_up; theory a A e_N(lambda) /
    (N lambda).
-3. The sine-velocity motion on the WGS-84 Earth (gfins_fmi.trajectory.SineVelocity,
+3. The sine-velocity motion on the WGS-84 Earth (gfins_fmi.sim.trajectory.SineVelocity,
    exact increments, height held), 10 min: maximum horizontal, velocity and attitude
    errors; these are the navigation update's own truncation (mid-point extrapolation,
    trapezoidal position), second order in the update interval N h.
@@ -26,7 +26,8 @@ from __future__ import annotations
 import numpy as np
 
 import gfins_fmi as gf
-from gfins_fmi import trajectory as tj
+from gfins_fmi.sim import trajectory as tj
+from gfins_fmi.nav import earth
 
 SINE = tj.SineVelocity(amplitude_m_s=(2.0, 3.0, 0.0))    # horizontal: the height is held
 K = {1: [1 / 12], 2: [2 / 3], 3: [9 / 20, 27 / 20], 4: [54 / 105, 92 / 105, 214 / 105]}
@@ -70,7 +71,7 @@ def coning_drift(N: int, rate_hz: float, a: float = np.radians(1.0), f_hz: float
     sol = gf.Strapdown(x0, gf.SinsConfig(earth="flat", subsamples=N)).run(dth, np.zeros_like(dth),
                                                                           dt_s=h)
     idx = np.minimum(np.arange(1, len(sol) + 1) * N, t.size - 1)
-    err = tj.attitude_error_rad(sol.q_bn, qt[idx])
+    err = earth.attitude_error_rad(sol.q_bn, qt[idx])
     slope = np.polyfit(sol.t_s, err[:, 2], 1)[0]
     return abs(slope), np.sin(a) ** 2 * e_theory(N, W * h) / (N * h)
 
@@ -105,7 +106,7 @@ def sine_errors(N: int, rate_hz: float, tr=None, dur_s: float = 600.0):
     horiz = np.hypot((sol.lat_rad - tr.lat_rad[idx]) * R,
                      (sol.lon_rad - tr.lon_rad[idx]) * R * np.cos(tr.lat_rad[idx])).max()
     dv = np.abs(sol.v_n_m_s[:, :2] - tr.v_n_m_s[idx, :2]).max()
-    att = np.linalg.norm(tj.attitude_error_rad(sol.q_bn, tr.q_bn[idx]), axis=1).max()
+    att = np.linalg.norm(earth.attitude_error_rad(sol.q_bn, tr.q_bn[idx]), axis=1).max()
     return horiz, dv, att
 
 

@@ -4,7 +4,7 @@ accelerometer misalignment 10", K_a2 20 ug/g^2, bias 1000 ug, inner lever arm 3 
 scale factors 50 / 100 ppm), the seed's IMU noise class (0.01 deg/h laser gyros, 10 ug
 accelerometers: ARW 0.002 deg/sqrt(h), accelerometer white noise 10 ug/sqrt(Hz)), a path
 (seed 001's 18 positions run twice, or the 19-position turntable path processed as a raw
-record), 100 Hz increments. Every record goes through gfins_fmi.estimation.calibration36
+record), 100 Hz increments. Every record goes through gfins_fmi.calibration.system
 .calibrate (segmentation, coarse alignment, the C filter, 2 passes). Reports, over all
 (parameter, run) pairs, the fraction with |estimate - truth| <= 3 sigma, the mean z^2
 and the average NEES (27 or 28 dof) against their chi-square bands, the mean final
@@ -25,15 +25,16 @@ import time
 import numpy as np
 from scipy.stats import chi2
 
-import gfins_fmi.rotation as rot
-from gfins_fmi import montecarlo
-from gfins_fmi.estimation import calibration36 as c36
+from gfins_fmi.sim import rotation as rot
+from gfins_fmi.analysis import montecarlo
+from gfins_fmi.calibration import system as c36
+from gfins_fmi.calibration import syscal_filter
 from gfins_fmi.estimation.evaluation import chi2_band
-from gfins_fmi.imu_errors import UG
+from gfins_fmi.nav.imu_errors import UG
 
 LAT, H = np.radians(40.0), 50.0
 ARW_DEG_SQRT_H, ASD_UG_SQRT_HZ = 0.002, 10.0
-UNITS = np.array([u[1] for u in c36.PARAM_UNITS])
+UNITS = np.array([u[1] for u in syscal_filter.PARAM_UNITS])
 # parameter blocks for the NEES breakdown: gyro (9), accelerometer (12), K_a2, lever arms, delay
 BLOCKS = [np.arange(0, 9), np.arange(9, 21), np.arange(21, 24), np.arange(24, 27), np.arange(27, 28)]
 BLOCK_NAMES = ["gyro", "accelerometer", "K_a2", "lever arms", "delay"]
@@ -69,7 +70,7 @@ def main(argv=None):
     truth = rot.simulate_static(sched, sched.duration_s, a.dt, LAT, H, accel_delay_s=a.delay_ms * 1e-3)
     print(f"path {a.path}: {len(sched.turns)} turns, {sched.duration_s:.0f} s, {truth.t_s.size} samples "
           f"at {1 / a.dt:g} Hz (exact increments in {time.perf_counter() - t0:.1f} s)")
-    cfg = c36.SyscalConfig(gyro_arw_deg_sqrt_h=ARW_DEG_SQRT_H, accel_vrw_ug_sqrt_hz=ASD_UG_SQRT_HZ,
+    cfg = syscal_filter.SyscalConfig(gyro_arw_deg_sqrt_h=ARW_DEG_SQRT_H, accel_vrw_ug_sqrt_hz=ASD_UG_SQRT_HZ,
                            vel_std_m_s=a.vel_std, estimate_delay=a.states == 37, prop_interval_s=a.prop_interval)
     n_p = a.states - 9
     n_true = 27                                  # the delay is fixed by --delay-ms
@@ -77,7 +78,7 @@ def main(argv=None):
 
     def task(k, rng):
         p = c36.random_params(rng, cfg.prior, n_true)
-        errs = c36.params_to_imu_errors(p)
+        errs = syscal_filter.params_to_imu_errors(p)
         th, dv = errs.apply_increments(truth.dtheta_rad, truth.dv_m_s, a.dt)
         n = th.shape[0]
         th += rng.normal(0.0, ARW_DEG_SQRT_H * np.pi / 180 / 60 * np.sqrt(a.dt), (n, 3))
@@ -129,8 +130,8 @@ def main(argv=None):
     print("| parameter | unit | prior 1-sigma | mean final 1-sigma | mean z^2 |")
     print("|---|---|---|---|---|")
     prior = cfg.prior.params_std()[:n_p] / UNITS[:n_p]
-    for k, name in enumerate(c36.PARAM_NAMES[:n_p]):
-        print(f"| {name} | {c36.PARAM_UNITS[k][0]} | {prior[k]:.3g} | {std[k]:.3g} | "
+    for k, name in enumerate(syscal_filter.PARAM_NAMES[:n_p]):
+        print(f"| {name} | {syscal_filter.PARAM_UNITS[k][0]} | {prior[k]:.3g} | {std[k]:.3g} | "
               f"{np.mean(z[:, k] ** 2):.2f} |")
     out = {"runs": a.runs, "path": a.path, "states": a.states, "delay_ms": a.delay_ms, "pairs": pairs,
            "inside_3sigma": inside, "mean_z2": mz2, "mean_z2_band": [lo_z, hi_z],

@@ -4,7 +4,7 @@
 off the IMU grid, 0.1 s latency, out from 300 s to 360 s; a barometer with a 2 m bias; an
 odometer with a 0.5 % scale error — and feeds the integrated-navigator FMU (EKF with
 barometer-bias and odometer-scale states, NHC) through the Python master on fmpy's slave
-classes (cosim.integrated_example() has the whole set-up).
+classes (integrated_example() has the whole set-up).
 
 Prints the comparison with the batch API (IntegratedNavigator.run on the increments and
 epochs the FMU received, each epoch with the sample it arrived with) and the navigation
@@ -22,9 +22,11 @@ import types
 
 import numpy as np
 
-from gfins_fmi import cosim
+from gfins_fmi.fmi.master import CoSimulation
+from gfins_fmi.fmi.reference import direct_navigation, integrated_recording
+from gfins_fmi.fmi.system import integrated_example, vehicle_integrated_navigation
 from gfins_fmi.estimation.evaluation import navigation_errors, plot_errors
-from gfins_fmi.vehicle import VehicleProfile
+from gfins_fmi.sim.vehicle import VehicleProfile
 
 
 def main() -> None:
@@ -33,11 +35,11 @@ def main() -> None:
     ap.add_argument("--fmi", type=int, choices=[2, 3], default=3)
     ap.add_argument("--out", type=pathlib.Path, default=pathlib.Path("docs/figures/cosim_ins_gnss.png"))
     args = ap.parse_args()
-    options = cosim.integrated_example()
-    system = cosim.vehicle_integrated_navigation(VehicleProfile.seed001(align_s=60.0),
+    options = integrated_example()
+    system = vehicle_integrated_navigation(VehicleProfile.seed001(align_s=60.0),
                                                  stop_s=args.seconds, **options)
     t0 = time.perf_counter()
-    with cosim.CoSimulation(system, fmi_version=args.fmi) as m:
+    with CoSimulation(system, fmi_version=args.fmi) as m:
         m.initialize()
         r = m.run(progress=True)
     wall = time.perf_counter() - t0
@@ -46,16 +48,16 @@ def main() -> None:
           f"{wall:.1f} s ({1e6 * wall / steps:.0f} us a step)")
 
     # the batch API on what the FMU received
-    rec = cosim.integrated_recording(system, r)
+    rec = integrated_recording(system, r)
     sol = rec["solution"]
     t0 = time.perf_counter()
-    ref = cosim.direct_navigation(system, rec)
+    ref = direct_navigation(system, rec)
     batch_wall = time.perf_counter() - t0
     fields = ("t_s", "q_bn", "v_n_m_s", "lat_rad", "lon_rad", "h_m", "std", "sensors")
     same = all(np.array_equal(getattr(sol, f), getattr(ref, f)) for f in fields) and all(
         np.array_equal(sol.innovations[f], ref.innovations[f], equal_nan=True)
         for f in ("t_s", "type", "status", "nis"))
-    plain = cosim.direct_navigation(system, rec, initial=system.sources["initial"])
+    plain = direct_navigation(system, rec, initial=system.sources["initial"])
     print(f"batch API ({batch_wall:.2f} s), P0 as the FMU makes it: "
           f"{'bit for bit equal' if same else 'DIFFERENT'} ({len(sol)} rows, "
           f"{len(sol.innovations)} updates); with InitialState's own P0: max |dh| "

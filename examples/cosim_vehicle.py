@@ -24,8 +24,11 @@ import time
 import numpy as np
 
 import gfins_fmi as gf
-from gfins_fmi import cosim
-from gfins_fmi.vehicle import VehicleProfile
+from gfins_fmi.fmi.master import CoSimulation
+from gfins_fmi.fmi.reference import differences_from_direct
+from gfins_fmi.fmi.system import vehicle_navigation
+from gfins_fmi.fmi import reference
+from gfins_fmi.sim.vehicle import VehicleProfile
 
 # seed 001's IMU class (0.01 deg/h gyros, 10 ug-class accelerometers), as in
 # examples/imu_error_navigation.py
@@ -42,15 +45,15 @@ def cases(seconds: float):
     prof = VehicleProfile.seed001(align_s=60.0)
     comp = dict(imu_comp=1, **ERRORS.fmu_parameters())
     return {
-        "SINS, exact IMU": cosim.vehicle_navigation("sins", prof, stop_s=seconds),
-        "SINS, IMU errors uncompensated": cosim.vehicle_navigation("sins", prof, stop_s=seconds,
+        "SINS, exact IMU": vehicle_navigation("sins", prof, stop_s=seconds),
+        "SINS, IMU errors uncompensated": vehicle_navigation("sins", prof, stop_s=seconds,
                                                                    imu_errors=ERRORS),
-        "SINS, IMU errors compensated in the FMU": cosim.vehicle_navigation(
+        "SINS, IMU errors compensated in the FMU": vehicle_navigation(
             "sins", prof, stop_s=seconds, imu_errors=ERRORS, navigator_parameters=comp),
-        "SINS, errors compensated + IMU noise": cosim.vehicle_navigation(
+        "SINS, errors compensated + IMU noise": vehicle_navigation(
             "sins", prof, stop_s=seconds, imu_errors=ERRORS, navigator_parameters=comp,
             imu_noise=NOISE),
-        "gyro-free qin9 (sqrt), exact array": cosim.vehicle_navigation("gfnav_qin9", prof,
+        "gyro-free qin9 (sqrt), exact array": vehicle_navigation("gfnav_qin9", prof,
                                                                        stop_s=seconds),
     }
 
@@ -66,14 +69,14 @@ def main() -> None:
     print("|---|---|---|---|---|---|---|")
     for name, system in cases(args.seconds).items():
         t0 = time.perf_counter()
-        with cosim.CoSimulation(system, fmi_version=3) as m:
+        with CoSimulation(system, fmi_version=3) as m:
             m.initialize()
             r = m.run(progress=False)
         wall = time.perf_counter() - t0
-        e = cosim.navigation_errors(r)
+        e = reference.navigation_errors(r)
         results[name] = e
         # the recorded sensor data through the navigator called by cffi: bit-identical?
-        same = max(cosim.differences_from_direct(system, r, imu_errors=ERRORS).values()) == 0.0
+        same = max(differences_from_direct(system, r, imu_errors=ERRORS).values()) == 0.0
         print(f"| {name} | {e['horizontal_m'].max():.4g} | {e['horizontal_m'][-1]:.4g} | "
               f"{e['velocity_m_s'].max():.4g} | {np.degrees(e['attitude_rad'].max()):.3g} | "
               f"{'yes' if same else 'NO'} | {wall:.1f} |")

@@ -12,8 +12,8 @@ import pathlib
 import numpy as np
 
 import gfins_fmi as gf
-from gfins_fmi import calibration as cal
-from gfins_fmi import trajectory as tj
+from gfins_fmi.calibration import laboratory as cal
+from gfins_fmi.sim import trajectory as tj
 
 # seed 001's IMU class: 0.01 deg/h gyros, 10 ug-class accelerometers; errors that a
 # rotating INS does not modulate away: scale, misalignment, K2, inner lever arms

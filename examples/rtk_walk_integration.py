@@ -23,7 +23,7 @@ import numpy as np
 from gfins_fmi.estimation import FilterConfig, InitialState, IntegratedNavigator
 from gfins_fmi.estimation.alignment import align_static_then_gnss
 from gfins_fmi.estimation.evaluation import navigation_errors
-from gfins_fmi.imu_errors import ImuNoise
+from gfins_fmi.nav.imu_errors import ImuNoise
 from gfins_fmi.io import load_rtk_walk
 
 HERE = pathlib.Path(__file__).resolve().parent

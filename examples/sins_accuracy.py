@@ -1,5 +1,5 @@
 """Accuracy of the strapdown mechanization on the closed-form motions of
-gfins_fmi.trajectory: the figures of docs/sins.md (table printed, figure written).
+gfins_fmi.sim.trajectory: the figures of docs/sins.md (table printed, figure written).
 
     python examples/sins_accuracy.py [--out docs/figures/sins_accuracy.png]
 """
@@ -12,7 +12,7 @@ import sys
 import numpy as np
 
 import gfins_fmi as gf
-from gfins_fmi import trajectory as tj
+from gfins_fmi.sim import trajectory as tj
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "tests"))
 from conftest import attitude_error_rad, horizontal_error_m  # noqa: E402

@@ -180,7 +180,7 @@ def ptr(arr: np.ndarray, n: int | None = None, ctype: str = "double"):
     the C type (checked by :func:`as_array` for callers' data, allocated by the caller
     of ``ptr`` for outputs) and hold exactly ``n`` elements, so C can neither read nor
     write beyond it. The array must outlive the view. (``n=None`` skips the size check;
-    tests/test_validation.py makes sure no module calls it so.)
+    tests/lib/test_validation.py makes sure no module calls it so.)
     """
     if ctype not in _CTYPES:
         # an array of C structs: a numpy structured array laid out as the struct

@@ -1,10 +1,18 @@
 """Estimation on the one Kalman engine of the C core: integrated navigation (INS/GNSS
 with barometer, odometer, non-holonomic and zero-velocity aiding; EKF or UKF; RTS
-smoother) and the tools to evaluate it. See docs/estimation.md."""
-from gfins_fmi.estimation.ins_gnss import (MEAS_TYPES, SENSOR_NAMES, UPDATE_STATUS, FilterConfig,
-                                           FilterError, InitialState, IntegratedNavigator,
-                                           IntegratedSolution, SmoothedSolution, integrate,
-                                           state_names)
+smoother) and the tools to evaluate it. See docs/estimation.md.
+
+Modules: ``config`` (FilterConfig, InitialState, the names of measurement kinds and
+sensor estimates), ``error_model`` (the filter's error model in numpy: its definition),
+``measurements`` (the C structs as numpy dtypes, gathering the aiding records),
+``navigator`` (IntegratedNavigator), ``solution`` (IntegratedSolution and the smoother),
+``alignment`` (coarse alignment), ``fine_alignment`` (with the filter: at rest, in motion),
+``evaluation`` (errors against a reference, consistency, outages, figures).
+"""
+from gfins_fmi.estimation.config import (MEAS_TYPES, SENSOR_NAMES, UPDATE_STATUS, FilterConfig,
+                                         FilterError, InitialState, state_names)
+from gfins_fmi.estimation.navigator import IntegratedNavigator, integrate
+from gfins_fmi.estimation.solution import IntegratedSolution, SmoothedSolution
 
 __all__ = ["FilterConfig", "InitialState", "IntegratedNavigator", "IntegratedSolution",
            "SmoothedSolution", "FilterError", "integrate", "state_names", "MEAS_TYPES",

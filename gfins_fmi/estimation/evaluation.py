@@ -15,17 +15,20 @@ from typing import Optional, Sequence
 
 import numpy as np
 
+from gfins_fmi.estimation.error_model import ins_error_model
+from gfins_fmi.estimation.navigator import IntegratedNavigator
+from gfins_fmi.nav.earth import WGS84, attitude_error_rad
+from gfins_fmi.nav.strapdown import euler_to_quat, quat_to_euler
+
 __all__ = ["NavErrors", "navigation_errors", "state_errors", "nees", "chi2_band",
            "outage_windows", "OutageResult", "outage_protocol", "outage_drift",
            "predict_outage_std", "plot_errors", "plot_consistency", "plot_outages"]
 
-_A, _F = 6378137.0, 1.0 / 298.257223563
-_E2 = _F * (2.0 - _F)
-
-
 def _radii(lat):
-    q = 1.0 - _E2 * np.sin(lat) ** 2
-    return _A * (1.0 - _E2) / q ** 1.5, _A / np.sqrt(q)
+    # gfins_fmi.nav.earth.radii's R_M, R_N with e2 sin^2 rounded in another order: kept,
+    # so that the errors this module reports stay bit for bit what they were
+    q = 1.0 - WGS84.e2 * np.sin(lat) ** 2
+    return WGS84.a * (1.0 - WGS84.e2) / q ** 1.5, WGS84.a / np.sqrt(q)
 
 
 def _get(obj, *names):
@@ -43,12 +46,11 @@ def _quat_of(obj):
     e = _get(obj, "euler_rad")
     if e is None:
         return None
-    from gfins_fmi.sins import euler_to_quat
     return euler_to_quat(e)
 
 
 def _interp_quat(t_ref, q_ref, t):
-    from scipy.spatial.transform import Rotation, Slerp
+    from scipy.spatial.transform import Rotation, Slerp   # lazy: scipy's import costs start-up time
     # q_b^n scalar first -> scipy's scalar-last; the same active rotation C_b^n
     rot = Rotation.from_quat(np.c_[q_ref[:, 1:], q_ref[:, :1]])
     out = Slerp(t_ref, rot)(t).as_quat()
@@ -87,7 +89,6 @@ def reference_at(reference, t_s) -> dict:
 
 def attitude_difference_rad(q_est, q_ref) -> np.ndarray:
     """Rotation vector a (n, 3, ENU) with C(q_est) = exp([a x]) C(q_ref)."""
-    from gfins_fmi.trajectory import attitude_error_rad
     return attitude_error_rad(q_est, q_ref)
 
 
@@ -134,7 +135,6 @@ def navigation_errors(solution, reference, time_offset_s: float = 0.0) -> NavErr
         att = np.full((len(t), 3), np.nan)
         ok = ref["inside"]
         att[ok] = attitude_difference_rad(q[ok], ref["q"][ok])
-        from gfins_fmi.sins import quat_to_euler
         heading = np.full(len(t), np.nan)
         he = quat_to_euler(q[ok])[:, 0] - quat_to_euler(ref["q"][ok])[:, 0]
         heading[ok] = (he + np.pi) % (2 * np.pi) - np.pi
@@ -193,7 +193,7 @@ def nees(epochs: dict, errors: np.ndarray, states: Optional[Sequence[int]] = Non
 def chi2_band(dof: int, runs: int, prob: float = 0.95) -> tuple:
     """The two-sided ``prob`` band of the mean of ``runs`` independent chi-square
     variables of ``dof`` degrees of freedom (the band for an average NEES or NIS)."""
-    from scipy.stats import chi2
+    from scipy.stats import chi2   # lazy: scipy's import costs start-up time
     lo = chi2.ppf((1 - prob) / 2, dof * runs) / runs
     hi = chi2.ppf(1 - (1 - prob) / 2, dof * runs) / runs
     return float(lo), float(hi)
@@ -245,7 +245,6 @@ def outage_protocol(imu, gnss, reference, *, config, initial, outage_s: float = 
     ``period_s`` (from ``first_s`` after the first GNSS epoch, once converged) and score
     it: RMS over the outages of the maximum horizontal drift during each (KF-GINS's
     protocol), for the filter and, with ``smooth``, the RTS smoother."""
-    from gfins_fmi.estimation.ins_gnss import IntegratedNavigator
     t_g = np.asarray(gnss.t_s)
     win = outage_windows(t_g[0], min(t_g[-1], np.asarray(imu.t_s)[-1]), outage_s, period_s, first_s)
     if len(win) == 0:
@@ -267,7 +266,7 @@ def outage_protocol(imu, gnss, reference, *, config, initial, outage_s: float = 
 def predict_outage_std(P0: np.ndarray, t_s, lat_rad, h_m, v_enu_m_s, q_bn, f_b_m_s2, w_ib_b_rad_s,
                        config, step_s: float = 1.0) -> dict:
     """Covariance prediction of the drift during an outage with the python-control error
-    model (``error_models.ins_error_model`` along the nominal trajectory, Van Loan
+    model (``estimation.error_model.ins_error_model`` along the nominal trajectory, Van Loan
     discretisation over ``step_s``), from the filter's covariance ``P0`` at the outage
     start and its process noise (``config.noise_si()``).
 
@@ -275,8 +274,7 @@ def predict_outage_std(P0: np.ndarray, t_s, lat_rad, h_m, v_enu_m_s, q_bn, f_b_m
     model is evaluated at each step's midpoint. Returns ``t_s`` and the 1-sigma of the
     east, north and horizontal position errors (m) at those times.
     """
-    from scipy.linalg import expm
-    from gfins_fmi.error_models import ins_error_model
+    from scipy.linalg import expm   # lazy: scipy's import costs start-up time
     t = np.asarray(t_s, float)
     noise = config.noise_si()
     n = P0.shape[0]
@@ -325,7 +323,7 @@ def predict_outage_std(P0: np.ndarray, t_s, lat_rad, h_m, v_enu_m_s, q_bn, f_b_m
 # ---- figures ----------------------------------------------------------------------------------
 
 def _axes(nrows, ncols=1, figsize=(9, 7)):
-    import matplotlib
+    import matplotlib   # lazy: matplotlib (~0.3 s) only for figures
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(nrows, ncols, figsize=figsize, sharex=True, squeeze=False)

@@ -9,7 +9,8 @@ from gfins_fmi.io.records import (IMU_KINDS, QUALITY_NAMES, BaroRecord, Gap, Gns
 from gfins_fmi.io.rtk_walk import (load_rtk_walk, mounting_from_rpy, read_rtk_walk_imu,
                                    rtk_walk_mounting)
 from gfins_fmi.io.rtklib import read_rtklib_pos
-from gfins_fmi.io.tables import TableReader, TableWriter, table_format
+from gfins_fmi.io.table_writer import TableWriter
+from gfins_fmi.io.tables import TableReader, table_format
 
 __all__ = [
     "ImuRecord", "GnssRecord", "BaroRecord", "OdometerRecord", "TruthRecord",

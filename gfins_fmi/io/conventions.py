@@ -11,7 +11,7 @@ Both axis changes are the same permutation with a sign,
 v_RFU = P v_FRD and v_ENU = P v_NED, and P is its own inverse. Hence
 C_RFU^ENU = P C_FRD^NED P, and the angles carry over unchanged: heading = yaw (both
 clockwise from north), pitch = pitch (nose up +), roll = roll (right wing down +) —
-tests/test_io.py checks this with direction cosine matrices built both ways from
+tests/io/test_kfgins.py checks this with direction cosine matrices built both ways from
 random angles.
 
 Time: GPS time counts seconds since the GPS epoch 1980-01-06 00:00:00 GPST without

@@ -26,7 +26,8 @@ from typing import ClassVar, Iterable, NamedTuple, Sequence
 import numpy as np
 
 from gfins_fmi.io._text import data_lines, record_errors_at_lines
-from gfins_fmi.io.tables import TableReader, TableWriter
+from gfins_fmi.io.table_writer import TableWriter
+from gfins_fmi.io.tables import TableReader
 from gfins_fmi.io.errors import FileFormatError, RecordError
 
 __all__ = ["ImuRecord", "GnssRecord", "BaroRecord", "OdometerRecord", "TruthRecord",
@@ -249,7 +250,7 @@ class _Record:
         (``t_s,gyro_x_rad_s,...``), then one line per sample at full precision
         (the shortest decimal that reads back as the same float64, bit for bit). The
         file is written beside its destination and renamed into place, so a failure
-        never leaves half a file (:class:`~gfins_fmi.io.tables.TableWriter`)."""
+        never leaves half a file (:class:`~gfins_fmi.io.table_writer.TableWriter`)."""
         names, table = self._csv_table()
         dtypes = [np.int8 if name == "quality" else np.float64 for name in names]
         comments = [f"gfins_fmi {type(self).__name__}", f"source: {self.source}"]

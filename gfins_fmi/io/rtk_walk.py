@@ -63,7 +63,7 @@ def rtk_walk_mounting() -> np.ndarray:
     (sensor -> forward-right-down), symmetric, so reading the angles as the sensor in
     the body or the body in the sensor gives the same rotation. In right-front-up it is
     diag(-1, -1, 1): right = -x_s, forward = -y_s, up = +z_s, a half turn
-    about the sensor's z axis. The data agree (tests/test_io.py): at rest the specific
+    about the sensor's z axis. The data agree (tests/io/test_rtk_walk.py): at rest the specific
     force points up (+9.9 m/s^2), and in the walk's turns the lateral specific force has
     the sign of the centripetal acceleration.
     """

@@ -1,0 +1,380 @@
+"""The ``gfins`` command line: every subcommand's options in one place, with the option
+types of :mod:`gfins_fmi.cli.options` (units and bounds), and the checks of option
+combinations made at parse time. A subcommand names the module that runs it
+(``gfins_fmi.cli.<module>``, its ``run`` or the function given): :func:`gfins_fmi.cli.main`
+imports only that one, so ``gfins --help`` and a command's refusal of its options stay as
+fast as before the package had one module per command (the parser imports nothing heavy).
+"""
+from __future__ import annotations
+
+import argparse
+import pathlib
+
+from gfins_fmi.cli.options import GRADES, count, prior_setting, real, vector
+from gfins_fmi.gyrofree.array import MIN_LEVER_ARM_M
+from gfins_fmi.nav.earth import WGS84
+
+__all__ = ["build_parser", "executor_arguments", "record_arguments", "state_arguments",
+           "ANALYZE_CONFIGS"]
+
+#: ``gfins analyze --config``: the scenarios of gfins_fmi.analysis.error_report.CONFIGS (named
+#: here so that the parser does not import the analysis; a test checks that they agree)
+ANALYZE_CONFIGS = ("sins", "cube6", "qin9", "12", "qin9-sqrt", "12-sqrt", "qin9-fused", "12-fused")
+
+#: ``gfins calibrate --help``
+CALIBRATE_DESCRIPTION = """``gfins calibrate``: system-level calibration of a recorded multi-position run.
+
+    gfins calibrate IMU --lat DEG --height M [--lon DEG] [--format csv|kfgins]
+                    [--arw DEG_SQRT_H] [--vrw UG_SQRT_HZ] [--delay] [--passes N]
+                    [--prior NAME=VALUE ...] [--report REPORT.md] [--json PARAMS.json] [--plot DIR]
+                    [--simulate seed001|turntable19 [--sim-seed N]]
+
+Prints the static intervals and turns found, every parameter with its 1-sigma and the
+parameters the path cannot observe; ``--json`` writes the estimates, their stds and the
+error model as start values of the SINS and vehicle FMUs; ``--simulate`` first writes a
+simulated raw record of that path to IMU (its true errors beside it, IMU.truth.json).
+"""
+
+
+def _command(p, module: str, function: str = "run", check=None) -> None:
+    """The subcommand of parser ``p`` runs ``gfins_fmi.cli.<module>.<function>(args)``."""
+    p.set_defaults(module=module, function=function, check=check)
+
+
+def _check_demo(args) -> str | None:
+    n = int(round(args.duration / args.dt))
+    if n < 2:
+        return (f"--duration {args.duration:g} s at --dt {args.dt:g} s gives {n} sample"
+                f"{'' if n == 1 else 's'}; the demo needs at least 2")
+    return None
+
+
+def _check_cosim(args) -> str | None:
+    if args.seconds < args.step:
+        return f"--seconds {args.seconds:g} s is shorter than one --step ({args.step:g} s)"
+    return None
+
+
+def _check_align(args) -> str | None:
+    if args.mode == "static" and args.position is None:
+        return "static alignment needs --position LAT,LON,H"
+    if args.mode == "motion" and (args.speed is None or args.initial is None):
+        return "motion alignment needs a SPEED record and --initial LAT,LON,H,HEADING,PITCH,ROLL"
+    if args.disturbed and (args.mode != "static" or args.fine):
+        return ("--disturbed is a static coarse alignment; the fine alignment's zero-velocity "
+                "updates assume a base at rest (leave out --fine)")
+    if args.position is not None and not abs(args.position[0]) < 90:
+        return f"--position: latitude must be in (-90, 90) deg; got {args.position[0]}"
+    if args.initial is not None and not abs(args.initial[0]) < 90:
+        return f"--initial: latitude must be in (-90, 90) deg; got {args.initial[0]}"
+    return None
+
+
+def executor_arguments(p) -> None:
+    """--scheduler and --workers: where a Monte Carlo runs (gfins_fmi.analysis.montecarlo.
+    executor); shared by the commands and the bench studies."""
+    p.add_argument("--scheduler", metavar="ADDRESS", default=None,
+                   help="run the Monte-Carlo runs on a dask.distributed cluster: its "
+                        "scheduler's address, e.g. tcp://10.0.0.5:8786 (needs "
+                        "'gfins_fmi[dask]'; results equal a local run with the same seed)")
+    p.add_argument("--workers", type=count(1), default=None,
+                   help="without --scheduler: threads on this machine (default: one per "
+                        "CPU); with it: wait for this many cluster workers")
+
+
+def record_arguments(p, what: str) -> None:
+    """Input, output and streaming options, shared by the record commands."""
+    p.add_argument("input", type=pathlib.Path,
+                   help=f"{what}: CSV text (comma-separated, '#' comments), .parquet or .npz")
+    p.add_argument("output", type=pathlib.Path,
+                   help="solution file: CSV text unless it ends in .parquet or .npz; written "
+                        "beside its name and renamed into place when complete")
+    p.add_argument("--header", action="store_true",
+                   help="the CSV's first line (after '#' comments) is a line of column names")
+    p.add_argument("--chunk", type=count(2), default=1 << 18, metavar="SAMPLES",
+                   help="samples read, solved and written at a time (default 262144); memory "
+                        "grows with it")
+    p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                   help="progress bar over reading, solving and writing (default: on for "
+                        "inputs of 10^6 samples, or 64 MiB of text, or more)")
+
+
+def state_arguments(p) -> None:
+    """Initial state and vertical channel, shared by the navigation commands (the state:
+    :func:`gfins_fmi.cli.initial.from_state_options`)."""
+    p.add_argument("--lat0", type=real("deg", above=-90.0, below=90.0), required=True,
+                   help="initial latitude, deg")
+    p.add_argument("--lon0", type=real("deg"), required=True, help="initial longitude, deg")
+    p.add_argument("--h0", type=real("m", above=-0.5 * WGS84.a), default=0.0,
+                   help="initial height, m (also the held height)")
+    p.add_argument("--heading0", type=real("deg"), default=0.0,
+                   help="initial heading, deg clockwise from north")
+    p.add_argument("--pitch0", type=real("deg"), default=0.0, help="initial pitch, deg")
+    p.add_argument("--roll0", type=real("deg"), default=0.0, help="initial roll, deg")
+    p.add_argument("--v0", type=vector(3, "E,N,U in m/s"), default=[0.0, 0.0, 0.0],
+                   help="initial velocity E,N,U in m/s (write --v0=-1,2,0 when it starts with -)")
+    p.add_argument("--vertical", choices=["free", "hold", "baro"], default="free",
+                   help="vertical channel (baro needs the external height as the last column)")
+    p.add_argument("--baro-tau", type=real("s", above=0.0), default=10.0,
+                   help="baro loop time constant, s")
+
+
+#: ``--initial`` of integrate and align motion: LAT,LON,H,HEADING,PITCH,ROLL
+_INITIAL = vector(6, "LAT,LON,H,HEADING,PITCH,ROLL in deg, deg, m, deg, deg, deg")
+
+
+def _integrate(sub) -> argparse.ArgumentParser:
+    p = sub.add_parser("integrate", help="integrated navigation (INS/GNSS EKF or UKF, optional RTS "
+                       "smoother) of recorded IMU and GNSS files",
+                       description="Integrated navigation of recorded files (docs/estimation.md).")
+    p.add_argument("imu", type=pathlib.Path, help="IMU file")
+    p.add_argument("gnss", type=pathlib.Path, help="GNSS file")
+    p.add_argument("output", type=pathlib.Path, help="solution CSV to write")
+    p.add_argument("--imu-format", choices=("csv", "kfgins", "rtk_walk"), default="csv",
+                   help="csv: gfins_fmi.io ImuRecord CSV; kfgins: KF-GINS IMU text/.bin (increments, "
+                        "front-right-down); rtk_walk: the rtk_walk CSV (rates in g and rad/s)")
+    p.add_argument("--gnss-format", choices=("pos", "kfgins", "csv"), default="pos",
+                   help="pos: RTKLIB .pos; kfgins: KF-GINS GNSS text; csv: GnssRecord CSV")
+    p.add_argument("--gps-week", type=int, default=None,
+                   help="KF-GINS files: GPS week, to put seconds-of-week on the RTKLIB time scale")
+    p.add_argument("--baro", type=pathlib.Path, help="BaroRecord CSV (barometric height)")
+    p.add_argument("--odometer", type=pathlib.Path, help="OdometerRecord CSV (forward speed)")
+    p.add_argument("--odometer-mount", action="store_true",
+                   help="estimate the odometer's boresight (pitch, heading of the vehicle axes in "
+                        "the IMU's; FilterConfig.odometer_mount): with --odometer and/or --nhc")
+    p.add_argument("--truth", type=pathlib.Path, help="reference: KF-GINS .nav or TruthRecord CSV")
+    p.add_argument("--grade", choices=GRADES, default="tactical",
+                   help="IMU noise model (gfins_fmi.sim.scenarios); overridden by --noise")
+    p.add_argument("--noise", type=vector(5, "ARW deg/sqrt(h), VRW ug/sqrt(Hz), GB deg/h, AB ug, TAU s"),
+                   default=None, metavar="ARW,VRW,GB,AB,TAU",
+                   help="IMU noise: ARW deg/sqrt(h), accelerometer noise ug/sqrt(Hz), gyro bias "
+                        "instability deg/h, accelerometer bias instability ug, correlation time s")
+    p.add_argument("--filter", choices=("ekf", "ukf"), default="ekf")
+    p.add_argument("--smooth", action="store_true", help="also run the RTS smoother (its solution is "
+                   "written to OUT.smoothed.csv)")
+    p.add_argument("--propagation-interval", type=real("s", at_least=0.0), default=0.1,
+                   help="covariance propagation interval, s (0: every IMU sample)")
+    p.add_argument("--subsamples", type=int, choices=(1, 2, 3, 4), default=1,
+                   help="IMU increments per navigation update between measurement and propagation "
+                        "instants (multi-sample coning/sculling; one output row per update; a rate "
+                        "record is turned into increments by the trapezoid); 2 makes the filter ~1.5x "
+                        "faster on a 200 Hz IMU")
+    p.add_argument("--static", type=real("s", above=0.0), default=None, metavar="SECONDS",
+                   help="the record starts at rest for SECONDS: level (and gyrocompass if the gyros "
+                        "allow; otherwise heading from GNSS velocity); default when no --initial")
+    p.add_argument("--initial", type=_INITIAL, default=None, metavar="LAT,LON,H,HEADING,PITCH,ROLL",
+                   help="initial state (deg, deg, m, deg, deg, deg) at the first IMU time, at rest")
+    p.add_argument("--lever-arm", type=vector(3, "X,Y,Z in m"), default=(0.0, 0.0, 0.0),
+                   metavar="X,Y,Z", help="IMU -> GNSS antenna, body right, front, up, m")
+    p.add_argument("--outages", type=vector(3, "DURATION,PERIOD,FIRST in s"), default=None,
+                   metavar="DURATION,PERIOD,FIRST",
+                   help="simulate GNSS outages of DURATION s every PERIOD s from FIRST s after the "
+                        "first epoch, and score the drift (needs --truth or scores against GNSS)")
+    p.add_argument("--zupt", action="store_true", help="zero-velocity updates at detected standstill")
+    p.add_argument("--nhc", action="store_true", help="non-holonomic constraints (ground vehicles)")
+    p.add_argument("--plot", type=pathlib.Path, default=None, help="folder for figures")
+    p.add_argument("--progress", action="store_true", help="progress bar")
+    _command(p, "integrate")
+    return p
+
+
+def _calibrate(sub) -> argparse.ArgumentParser:
+    p = sub.add_parser("calibrate", help="system-level calibration (seed 001's 36-state filter) of a "
+                       "raw multi-position record", description=CALIBRATE_DESCRIPTION,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("imu", type=pathlib.Path, help="raw IMU record (IMU frame), starting at rest")
+    p.add_argument("--format", choices=("csv", "kfgins"), default="csv",
+                   help="csv: gfins_fmi.io ImuRecord CSV (increments or rates); kfgins: KF-GINS IMU file")
+    p.add_argument("--lat", type=real("deg", above=-89.0, below=89.0), required=True,
+                   help="site latitude, deg")
+    p.add_argument("--lon", type=real("deg"), default=0.0, help="site longitude, deg (default 0)")
+    p.add_argument("--height", type=real("m"), required=True, help="site ellipsoidal height, m")
+    p.add_argument("--arw", type=real("deg/sqrt(h)", at_least=0.0), default=0.002,
+                   help="gyro angle random walk, deg/sqrt(h) (default 0.002: seed 001's laser gyros)")
+    p.add_argument("--vrw", type=real("ug/sqrt(Hz)", at_least=0.0), default=10.0,
+                   help="accelerometer white noise, ug/sqrt(Hz) (default 10)")
+    p.add_argument("--vel-std", type=real("m/s", at_least=0.0), default=1e-3,
+                   help="std of the zero-velocity measurement (base sway), m/s (default 0.001)")
+    p.add_argument("--delay", action="store_true",
+                   help="estimate the accelerometer sample delay (37th state)")
+    p.add_argument("--passes", type=int, default=2, choices=range(1, 11), metavar="N",
+                   help="filter passes, each linearised about the previous estimates, the prior kept (default 2)")
+    p.add_argument("--prior", type=prior_setting, action="append", default=[], metavar="NAME=VALUE",
+                   help="prior 1-sigma (calibration.syscal_filter.Prior field, its unit), e.g. "
+                        "gyro_bias_deg_h=0.05")
+    p.add_argument("--report", type=pathlib.Path, help="write the report (markdown) here")
+    p.add_argument("--json", type=pathlib.Path, help="write estimates, stds and FMU parameters here")
+    p.add_argument("--plot", type=pathlib.Path, help="folder for the convergence and residual figures")
+    p.add_argument("--simulate", choices=("seed001", "turntable19"),
+                   help="first write a simulated record of this path to IMU (random errors at the "
+                        "prior's level, the noise of --arw/--vrw)")
+    p.add_argument("--sim-seed", type=int, default=0, help="seed of --simulate (default 0)")
+    _command(p, "calibrate")
+    return p
+
+
+def _align(sub) -> argparse.ArgumentParser:
+    p = sub.add_parser("align", help="initial alignment: static (levelling + gyrocompassing, fine "
+                       "alignment) or in motion with a speed sensor and forward-backward passes",
+                       description="Initial alignment of recorded files (docs/alignment.md).")
+    p.add_argument("mode", choices=("static", "motion"))
+    p.add_argument("imu", type=pathlib.Path, help="IMU file (ImuRecord CSV / npz / parquet)")
+    p.add_argument("speed", type=pathlib.Path, nargs="?", default=None,
+                   help="motion: speed record (OdometerRecord: t_s, speed_m_s, std_m_s)")
+    p.add_argument("--position", type=vector(3, "LAT,LON,H in deg, deg, m"), default=None,
+                   metavar="LAT,LON,H", help="static: position (deg, deg, m)")
+    p.add_argument("--window", type=vector(2, "T0,T1 in s"), default=None, metavar="T0,T1",
+                   help="static: the window at rest for the coarse alignment, s (default: the first 60 s)")
+    p.add_argument("--fine", action="store_true", help="static: fine alignment over the record after it")
+    p.add_argument("--disturbed", action="store_true",
+                   help="static on a swaying base (a moored ship, an idling vehicle): the inertial-frame "
+                        "coarse alignment; the attitude is that at the window's end (default window: the "
+                        "first 300 s)")
+    p.add_argument("--initial", type=_INITIAL, default=None, metavar="LAT,LON,H,HEADING,PITCH,ROLL",
+                   help="motion: coarse start at the record's start (deg, deg, m, deg, deg, deg); the "
+                        "velocity is the first speed along the heading")
+    p.add_argument("--depth", type=pathlib.Path, default=None,
+                   help="motion: height record (BaroRecord CSV, h_m = -depth)")
+    p.add_argument("--passes", type=count(0), default=5, help="motion: forward-backward passes (default 5)")
+    p.add_argument("--heading-std", type=real("deg", above=0.0), default=5.0,
+                   help="motion: 1-sigma of the coarse heading, deg (default 5)")
+    p.add_argument("--tilt-std", type=real("deg", above=0.0), default=0.5,
+                   help="motion: 1-sigma of the coarse pitch/roll, deg (default 0.5)")
+    p.add_argument("--gyro-bias", type=real("deg/h", at_least=0.0), default=None,
+                   help="1-sigma turn-on gyro bias, deg/h (default: the grade's bias instability)")
+    p.add_argument("--accel-bias", type=real("ug", at_least=0.0), default=None,
+                   help="1-sigma turn-on accelerometer bias, ug (default: the grade's)")
+    p.add_argument("--grade", choices=GRADES, default="navigation", help="IMU noise model")
+    p.add_argument("--output", type=pathlib.Path, default=None,
+                   help="motion: CSV of the state after each pass")
+    p.add_argument("--progress", action="store_true", help="report the passes as they run")
+    _command(p, "align", check=_check_align)
+    return p
+
+
+def build_parser() -> tuple[argparse.ArgumentParser, dict]:
+    """The ``gfins`` parser and its subcommands' parsers by name."""
+    seconds = real("s", above=0.0)
+    lever_arm = real("m", at_least=MIN_LEVER_ARM_M)
+    parser = argparse.ArgumentParser(
+        prog="gfins",
+        description="gfins_fmi: gyro-free and strapdown inertial navigation — C core, "
+                    "cffi, FMI co-simulation FMUs, error analysis.")
+    sub = parser.add_subparsers(dest="command", required=True)
+    parsers = {}
+
+    p = parsers["demo"] = sub.add_parser(
+        "demo", help="the main job: motion -> accelerometer array -> solve via cffi and via the "
+        "FMUs (fmpy) -> agreement, errors, analysis, plot")
+    p.add_argument("--out", type=pathlib.Path, default=pathlib.Path("gfins_demo"),
+                   help="folder for the figure (default: ./gfins_demo)")
+    p.add_argument("--duration", type=seconds, default=60.0, help="record length, s (default 60)")
+    p.add_argument("--dt", type=seconds, default=0.01, help="sampling interval, s (default 0.01)")
+    p.add_argument("--lever-arm", type=lever_arm, default=0.1, help="lever arm l, m (default 0.1)")
+    p.add_argument("--noise", type=real("m/s^2", at_least=0.0), default=1e-4,
+                   help="white noise per accelerometer, m/s^2 (default 1e-4)")
+    _command(p, "demo", check=_check_demo)
+
+    p = parsers["solve9"] = sub.add_parser(
+        "solve9", help="solve a record of 9 accelerometer outputs (m/s^2; optional "
+        "leading time column) and write the solution (CSV, Parquet or npz)")
+    record_arguments(p, "accelerometer outputs A1..A9 (m/s^2), optionally after a time column (s)")
+    p.add_argument("--dt", type=seconds, default=None,
+                   help="sampling interval, s (default: from the time column, which it must "
+                        "agree with when both are given)")
+    p.add_argument("--lever-arm", type=lever_arm, required=True, help="lever arm l, m")
+    p.add_argument("--omega-init", type=vector(3, "x,y,z in rad/s"), default=[0.0, 0.0, 0.0],
+                   help="rate at the first sample, rad/s, as x,y,z: the first signs and the start "
+                        "of the omega_dot integral that gives the later signs")
+    _command(p, "solve9")
+
+    p = parsers["navigate"] = sub.add_parser(
+        "navigate", help="strapdown navigation of a record (t, gyro x y z, accel x y z "
+        "[, h_ext]) -> solution (CSV, Parquet or npz)")
+    record_arguments(p, "t (s), gyro x y z, accel x y z [, h_ext (m)]")
+    p.add_argument("--input-kind", choices=["increments", "rates"], default="increments",
+                   help="increments: rad and m/s over (t_(k-1), t_k]; rates: rad/s and m/s^2 at t_k")
+    state_arguments(p)
+    p.add_argument("--t0", type=real("s"), default=None,
+                   help="time of the initial state, s (default: one interval before the first "
+                        "increment, or the first rate sample)")
+    p.add_argument("--no-coning", action="store_true", help="one-sample algorithm")
+    p.add_argument("--subsamples", type=int, choices=[1, 2, 3, 4], default=1, metavar="N",
+                   help="increments per navigation update, 1..4 (default 1); N > 1 writes one "
+                        "row per update (every N-th increment's time; the last row takes the "
+                        "increments left)")
+    _command(p, "navigate")
+
+    p = parsers["gfnav"] = sub.add_parser(
+        "gfnav", help="gyro-free navigation of a record of accelerometer-array outputs "
+        "(t, A1..AN [, h_ext]) at a fixed interval -> solution (CSV, Parquet or npz)")
+    record_arguments(p, "t (s), A1..AN (m/s^2) [, h_ext (m)]")
+    p.add_argument("--layout", choices=["cube6", "qin9", "12"], required=True)
+    p.add_argument("--lever-arm", type=lever_arm, required=True, help="lever arm l, m")
+    p.add_argument("--strategy", choices=["integrate", "sqrt", "eigen", "fused"],
+                   default="integrate", help="angular-rate strategy (default integrate)")
+    p.add_argument("--accel-noise", type=real("m/s^2", above=0.0), default=1e-4,
+                   help="accelerometer white-noise std, m/s^2 (fused strategy)")
+    p.add_argument("--omega-init", type=vector(3, "x,y,z in rad/s"), default=[0.0, 0.0, 0.0],
+                   help="rate at the first sample, rad/s, x,y,z (write --omega-init=-1,0,0 "
+                        "when it starts with -)")
+    state_arguments(p)
+    _command(p, "gfnav")
+
+    p = parsers["reproduce"] = sub.add_parser(
+        "reproduce", help="reproduce a published experiment (qin: the 6- vs 9-accelerometer "
+        "comparison of seed 000, as a Monte Carlo)")
+    p.add_argument("experiment", choices=["qin", "seed001"],
+                   help="qin: seed 000; seed001: the vehicle test of seed 001 (rotating INS, "
+                        "calibration with and without K_a2 and lever arms)")
+    p.add_argument("--runs", type=count(1), default=None,
+                   help="Monte-Carlo runs (default: qin 100, seed001 3 calibrations)")
+    p.add_argument("--seed", type=count(0), default=2008, help="random seed (default 2008)")
+    p.add_argument("--drift-signs", choices=["random", "equal"], default="random",
+                   help="signs of the 1.5e-5 m/s^2 drifts (default: random per sensor and run)")
+    p.add_argument("--gravity", type=real("m/s^2", at_least=0.0), default=9.8,
+                   help="gravity of the fixed frame, m/s^2 (default 9.8; 0: gravity-free)")
+    p.add_argument("--out", type=pathlib.Path, default=pathlib.Path("gfins_reproduce"),
+                   help="folder for the figure and the table")
+    executor_arguments(p)
+    _command(p, "reproduce")
+
+    p = parsers["analyze"] = sub.add_parser(
+        "analyze", help="error growth: python-control predictions against a Monte Carlo of "
+        "the C core, as a markdown report with figures")
+    p.add_argument("--config", action="append", choices=list(ANALYZE_CONFIGS),
+                   help="configuration (repeatable; default: all); see gfins_fmi.analysis.error_report")
+    p.add_argument("--runs", type=count(2), default=1000,
+                   help="Monte-Carlo runs per configuration (default 1000; a standard deviation "
+                        "needs 2)")
+    p.add_argument("--seed", type=count(0), default=0, help="random seed (default 0)")
+    p.add_argument("--out", type=pathlib.Path, default=pathlib.Path("gfins_analysis"),
+                   help="folder for report.md and the figures")
+    p.add_argument("--quiet", action="store_true", help="no progress bars")
+    executor_arguments(p)
+    _command(p, "analyze")
+
+    p = parsers["cosim"] = sub.add_parser(
+        "cosim", help="vehicle FMU + navigator FMU co-simulation (seed 001's run): Python "
+        "master, SSP file and container FMU, each checked against cffi (ins_gnss: against "
+        "the batch API, with GNSS, barometer and odometer)")
+    p.add_argument("--navigator", choices=["gfnav_qin9", "gfnav_cube6", "gfnav_12", "sins",
+                                           "ins_gnss"], default="gfnav_qin9")
+    p.add_argument("--seconds", type=seconds, default=600.0, help="stop time, s (default 600)")
+    p.add_argument("--step", type=seconds, default=0.01, help="communication step, s (default 0.01)")
+    p.add_argument("--align", type=seconds, default=60.0, help="rest before the run, s (default 60)")
+    p.add_argument("--fmi", type=int, choices=[2, 3], default=3, help="FMI version of the master run")
+    p.add_argument("--out", type=pathlib.Path, default=pathlib.Path("gfins_cosim"),
+                   help="folder for the SSP, the container FMU and the error CSV")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    _command(p, "cosim", check=_check_cosim)
+
+    parsers["integrate"] = _integrate(sub)
+    parsers["calibrate"] = _calibrate(sub)
+    parsers["align"] = _align(sub)
+
+    p = parsers["validate"] = sub.add_parser("validate", help="run fmpy's validation on every shipped FMU")
+    _command(p, "validate")
+    p = parsers["info"] = sub.add_parser("info", help="version and paths of the shipped FMUs")
+    _command(p, "validate", "info")
+    return parser, parsers

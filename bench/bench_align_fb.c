@@ -89,7 +89,7 @@ int main(int argc, char **argv)
     gf_ins_config_default(&cfg);
     cfg.noise.gyro_arw_rad_sqrt_s = 1e-6;
     cfg.noise.accel_vrw_m_s_sqrt_s = 1e-4;
-    cfg.gate_prob = 0.9999;
+    cfg.gate_probability = 0.9999;
     double P0[15 * 15] = {0};
     const double d[15] = {0.1, 0.1, 0.1, 1e-6, 1e-6, 1, 1e-3, 1e-3, 0.1, 1e-7, 1e-7, 1e-7, 1e-4, 1e-4, 1e-4};
     for (int i = 0; i < 15; ++i)

@@ -10,6 +10,7 @@
 #include "base/gf_math.h"
 #include "est/gf_ins_internal.h"
 #include "est/gf_kalman.h"
+#include "nav/gf_earth.h"
 #include "nav/gf_sins.h"
 
 gf_status gf_ins_config_default(gf_ins_config *cfg)
@@ -20,7 +21,7 @@ gf_status gf_ins_config_default(gf_ins_config *cfg)
     cfg->input = GF_SINS_INPUT_INCREMENTS;
     cfg->coning = 1;
     cfg->filter = GF_INS_EKF;
-    cfg->prop_interval_s = 0.1;
+    cfg->propagation_interval_s = 0.1;
     cfg->max_imu_gap_s = 0.5;
     cfg->max_rate_rad_s = 50.0;
     cfg->max_specific_force_m_s2 = 1000.0;
@@ -33,9 +34,9 @@ gf_status gf_ins_config_default(gf_ins_config *cfg)
     cfg->nhc_interval_s = 0.1;
     cfg->zupt_std_m_s = 0.01;
     cfg->zupt_interval_s = 0.1;
-    cfg->still_window_s = 0.5;
-    cfg->still_accel_std_m_s2 = 0.05;
-    cfg->still_gyro_rad_s = 0.01;
+    cfg->standstill_window_s = 0.5;
+    cfg->standstill_accel_std_m_s2 = 0.05;
+    cfg->standstill_gyro_rad_s = 0.01;
     cfg->speed_min_m_s = 0.5;
     cfg->subsamples = 1;
     return GF_OK;
@@ -51,69 +52,291 @@ static int nonneg_finite(double x)
     return isfinite(x) && x >= 0.0;
 }
 
-/* 0 when valid, else the number of the first bad field (documented in the Python layer:
- * gfins_fmi.estimation._CONFIG_FIELDS) */
-static int config_check(const gf_ins_config *c)
+/* Every field gf_ins_init checks, by its member name; a refused configuration is reported
+ * as the 1-based position of its first bad field here (gf_ins_init's *bad), which
+ * gf_ins_config_field turns back into the name. The layers above look the name up in the
+ * settings table (gfins_fmi/estimation/settings.py) for the Python name, the FMU parameter,
+ * the unit and the bounds; a test checks that every row of that table is here and the
+ * other way round. */
+static const char *const kFields[] = {
+    "input", "coning", "filter", "scale_factors", "baro_bias", "odometer_scale",
+    "odometer_mount", "propagation_interval_s", "max_imu_gap_s", "max_rate_rad_s",
+    "max_specific_force_m_s2", "ukf_alpha", "ukf_beta", "ukf_kappa",
+    "noise.gyro_arw_rad_sqrt_s", "noise.accel_vrw_m_s_sqrt_s", "noise.gyro_bias_std_rad_s",
+    "noise.gyro_bias_tau_s", "noise.accel_bias_std_m_s2", "noise.accel_bias_tau_s",
+    "noise.gyro_scale_std", "noise.gyro_scale_tau_s", "noise.accel_scale_std",
+    "noise.accel_scale_tau_s", "noise.baro_bias_std_m", "noise.baro_bias_tau_s",
+    "noise.odometer_scale_std", "noise.odometer_scale_tau_s", "noise.odometer_mount_std_rad",
+    "noise.odometer_mount_tau_s", "gnss_lever_arm_m", "odometer_lever_arm_m",
+    "gate_probability", "gate_reset_count", "nhc", "nhc_std_m_s", "nhc_interval_s", "zupt",
+    "zupt_std_m_s", "zaru_std_rad_s", "zupt_interval_s", "standstill_window_s",
+    "standstill_accel_std_m_s2", "standstill_gyro_rad_s", "max_latency_s", "speed_min_m_s",
+    "odometer_mount_rad", "subsamples"};
+#define N_FIELDS ((int32_t)(sizeof kFields / sizeof kFields[0]))
+
+const char *gf_ins_config_field(int32_t code)
 {
-    const gf_ins_noise *q = &c->noise;
+    return code >= 1 && code <= N_FIELDS ? kFields[code - 1] : NULL;
+}
+
+static int32_t field_code(const char *member)
+{
+    for (int32_t i = 0; i < N_FIELDS; ++i)
+        if (strcmp(kFields[i], member) == 0)
+            return i + 1;
+    return -1; /* a check naming a field missing from kFields: test_ins_gnss.c finds it */
+}
+
+/* the code of a member of gf_ins_config c (the member must exist: it is compiled) */
+#define BAD(member) ((void)sizeof(c->member), field_code(#member))
+
+static int flag_ok(int32_t v)
+{
+    return v == 0 || v == 1;
+}
+
+/* 0 when valid, else the code of the first bad field (see kFields) */
+static int32_t config_check(const gf_ins_config *c)
+{
     if (c->input != GF_SINS_INPUT_INCREMENTS && c->input != GF_SINS_INPUT_RATES)
-        return 1;
-    if (c->coning != 0 && c->coning != 1)
-        return 2;
+        return BAD(input);
+    if (!flag_ok(c->coning))
+        return BAD(coning);
     if (c->filter != GF_INS_EKF && c->filter != GF_INS_UKF)
-        return 3;
-    if ((c->scale_states | c->baro_state | c->odo_state | c->odo_mount_state) & ~1)
-        return 4;
-    if (!nonneg_finite(c->prop_interval_s))
-        return 5;
+        return BAD(filter);
+    if (!flag_ok(c->scale_factors))
+        return BAD(scale_factors);
+    if (!flag_ok(c->baro_bias))
+        return BAD(baro_bias);
+    if (!flag_ok(c->odometer_scale))
+        return BAD(odometer_scale);
+    if (!flag_ok(c->odometer_mount))
+        return BAD(odometer_mount);
+    if (!nonneg_finite(c->propagation_interval_s))
+        return BAD(propagation_interval_s);
     if (!pos_finite(c->max_imu_gap_s))
-        return 6;
-    if (!pos_finite(c->max_rate_rad_s) || !pos_finite(c->max_specific_force_m_s2))
-        return 7;
-    if (!pos_finite(c->ukf_alpha) || !isfinite(c->ukf_beta) || !isfinite(c->ukf_kappa))
-        return 8;
-    const double noise[] = {q->gyro_arw_rad_sqrt_s, q->accel_vrw_m_s_sqrt_s,
-                            q->gyro_bias_std_rad_s, q->gyro_bias_tau_s,
-                            q->accel_bias_std_m_s2, q->accel_bias_tau_s, q->gyro_scale_std,
-                            q->gyro_scale_tau_s, q->accel_scale_std, q->accel_scale_tau_s,
-                            q->baro_bias_std_m, q->baro_bias_tau_s, q->odo_scale_std,
-                            q->odo_scale_tau_s, q->odo_mount_std_rad, q->odo_mount_tau_s};
-    for (size_t i = 0; i < sizeof noise / sizeof noise[0]; ++i)
-        if (!nonneg_finite(noise[i]))
-            return 10 + (int)i;
-    if (!gf_all_finite(c->gnss_lever_m, 3) || !gf_all_finite(c->odo_lever_m, 3))
-        return 30;
-    if (!(c->gate_prob == 0.0 || (c->gate_prob > 0.0 && c->gate_prob < 1.0)) || c->gate_reset_count < 0)
-        return 31;
-    if ((c->nhc & ~1) || (c->nhc && (!pos_finite(c->nhc_std_m_s) || !nonneg_finite(c->nhc_interval_s))))
-        return 32;
-    if ((c->zupt & ~1) || (c->zupt && (!pos_finite(c->zupt_std_m_s) ||
-                                       !nonneg_finite(c->zaru_std_rad_s) ||
-                                       !nonneg_finite(c->zupt_interval_s))))
-        return 33;
-    if (!pos_finite(c->still_window_s) || !pos_finite(c->still_accel_std_m_s2) ||
-        !pos_finite(c->still_gyro_rad_s))
-        return 34;
+        return BAD(max_imu_gap_s);
+    if (!pos_finite(c->max_rate_rad_s))
+        return BAD(max_rate_rad_s);
+    if (!pos_finite(c->max_specific_force_m_s2))
+        return BAD(max_specific_force_m_s2);
+    if (!pos_finite(c->ukf_alpha))
+        return BAD(ukf_alpha);
+    if (!isfinite(c->ukf_beta))
+        return BAD(ukf_beta);
+    if (!isfinite(c->ukf_kappa))
+        return BAD(ukf_kappa);
+    const gf_ins_noise *q = &c->noise;
+    if (!nonneg_finite(q->gyro_arw_rad_sqrt_s))
+        return BAD(noise.gyro_arw_rad_sqrt_s);
+    if (!nonneg_finite(q->accel_vrw_m_s_sqrt_s))
+        return BAD(noise.accel_vrw_m_s_sqrt_s);
+    if (!nonneg_finite(q->gyro_bias_std_rad_s))
+        return BAD(noise.gyro_bias_std_rad_s);
+    if (!nonneg_finite(q->gyro_bias_tau_s))
+        return BAD(noise.gyro_bias_tau_s);
+    if (!nonneg_finite(q->accel_bias_std_m_s2))
+        return BAD(noise.accel_bias_std_m_s2);
+    if (!nonneg_finite(q->accel_bias_tau_s))
+        return BAD(noise.accel_bias_tau_s);
+    if (!nonneg_finite(q->gyro_scale_std))
+        return BAD(noise.gyro_scale_std);
+    if (!nonneg_finite(q->gyro_scale_tau_s))
+        return BAD(noise.gyro_scale_tau_s);
+    if (!nonneg_finite(q->accel_scale_std))
+        return BAD(noise.accel_scale_std);
+    if (!nonneg_finite(q->accel_scale_tau_s))
+        return BAD(noise.accel_scale_tau_s);
+    if (!nonneg_finite(q->baro_bias_std_m))
+        return BAD(noise.baro_bias_std_m);
+    if (!nonneg_finite(q->baro_bias_tau_s))
+        return BAD(noise.baro_bias_tau_s);
+    if (!nonneg_finite(q->odometer_scale_std))
+        return BAD(noise.odometer_scale_std);
+    if (!nonneg_finite(q->odometer_scale_tau_s))
+        return BAD(noise.odometer_scale_tau_s);
+    if (!nonneg_finite(q->odometer_mount_std_rad))
+        return BAD(noise.odometer_mount_std_rad);
+    if (!nonneg_finite(q->odometer_mount_tau_s))
+        return BAD(noise.odometer_mount_tau_s);
+    if (!gf_all_finite(c->gnss_lever_arm_m, 3))
+        return BAD(gnss_lever_arm_m);
+    if (!gf_all_finite(c->odometer_lever_arm_m, 3))
+        return BAD(odometer_lever_arm_m);
+    if (!(c->gate_probability == 0.0 || (c->gate_probability > 0.0 && c->gate_probability < 1.0)))
+        return BAD(gate_probability);
+    if (c->gate_reset_count < 0)
+        return BAD(gate_reset_count);
+    if (!flag_ok(c->nhc))
+        return BAD(nhc);
+    if (c->nhc && !pos_finite(c->nhc_std_m_s))
+        return BAD(nhc_std_m_s);
+    if (c->nhc && !nonneg_finite(c->nhc_interval_s))
+        return BAD(nhc_interval_s);
+    if (!flag_ok(c->zupt))
+        return BAD(zupt);
+    if (c->zupt && !pos_finite(c->zupt_std_m_s))
+        return BAD(zupt_std_m_s);
+    if (c->zupt && !nonneg_finite(c->zaru_std_rad_s))
+        return BAD(zaru_std_rad_s);
+    if (c->zupt && !nonneg_finite(c->zupt_interval_s))
+        return BAD(zupt_interval_s);
+    if (!pos_finite(c->standstill_window_s))
+        return BAD(standstill_window_s);
+    if (!pos_finite(c->standstill_accel_std_m_s2))
+        return BAD(standstill_accel_std_m_s2);
+    if (!pos_finite(c->standstill_gyro_rad_s))
+        return BAD(standstill_gyro_rad_s);
     if (!nonneg_finite(c->max_latency_s))
-        return 35;
+        return BAD(max_latency_s);
     if (!nonneg_finite(c->speed_min_m_s))
-        return 36;
-    if (!(fabs(c->odo_mount_rad[0]) < GF_HALF_PI) || !(fabs(c->odo_mount_rad[1]) < GF_HALF_PI))
-        return 37;
+        return BAD(speed_min_m_s);
+    if (!(fabs(c->odometer_mount_rad[0]) < GF_HALF_PI) || !(fabs(c->odometer_mount_rad[1]) < GF_HALF_PI))
+        return BAD(odometer_mount_rad);
     if (c->subsamples < 0 || c->subsamples > GF_SINS_MAX_SUBSAMPLES ||
         (c->subsamples > 1 && c->input != GF_SINS_INPUT_INCREMENTS))
-        return 38;
+        return BAD(subsamples);
     return 0;
+}
+
+gf_status gf_ins_config_check(const gf_ins_config *cfg, int32_t *bad)
+{
+    if (bad)
+        *bad = 0;
+    if (!cfg)
+        return GF_ERR_NULL_POINTER;
+    const int32_t code = config_check(cfg);
+    if (bad)
+        *bad = code;
+    return code ? GF_ERR_BAD_PARAMETER : GF_OK;
+}
+
+/* The layout of a checked configuration: the optional blocks after the 15 base states in
+ * the order of gf_ins_gnss.h (scale factors, barometer bias, odometer scale, boresight). */
+static void layout_of(const gf_ins_config *cfg, gf_ins_layout *l)
+{
+    int32_t next = GF_INS_BASE_STATES;
+    l->idx_vel = GF_INS_IDX_VEL;
+    l->idx_pos = GF_INS_IDX_POS;
+    l->idx_att = GF_INS_IDX_ATT;
+    l->idx_bg = GF_INS_IDX_BG;
+    l->idx_ba = GF_INS_IDX_BA;
+    l->idx_sg = l->idx_sa = l->idx_baro = l->idx_odo = l->idx_mount = -1;
+    if (cfg->scale_factors) {
+        l->idx_sg = next;
+        l->idx_sa = next + 3;
+        next += 6;
+    }
+    if (cfg->baro_bias)
+        l->idx_baro = next++;
+    if (cfg->odometer_scale)
+        l->idx_odo = next++;
+    if (cfg->odometer_mount) {
+        l->idx_mount = next;
+        next += 2;
+    }
+    l->n_states = next;
+}
+
+gf_status gf_ins_state_layout(const gf_ins_config *cfg, gf_ins_layout *layout)
+{
+    if (!cfg || !layout)
+        return GF_ERR_NULL_POINTER;
+    if (config_check(cfg))
+        return GF_ERR_BAD_PARAMETER;
+    layout_of(cfg, layout);
+    return GF_OK;
 }
 
 gf_status gf_ins_state_count(const gf_ins_config *cfg, int32_t *n_states)
 {
-    if (!cfg || !n_states)
+    if (!n_states)
         return GF_ERR_NULL_POINTER;
-    if (config_check(cfg))
-        return GF_ERR_BAD_PARAMETER;
-    *n_states = GF_INS_BASE_STATES + 6 * cfg->scale_states + cfg->baro_state + cfg->odo_state +
-                2 * cfg->odo_mount_state;
+    gf_ins_layout l;
+    const gf_status st = gf_ins_state_layout(cfg, &l);
+    if (st == GF_OK)
+        *n_states = l.n_states;
+    return st;
+}
+
+/* ---- initial covariance ----------------------------------------------------------------- */
+
+/* The blocks of gf_ins_initial_std, in its order: the 1-based position of the first bad
+ * one is gf_ins_initial_covariance's *bad (gf_ins_initial_std_field names it). */
+static const char *const kStdFields[] = {
+    "velocity_std_m_s", "position_std_m", "attitude_std_rad", "gyro_bias_std_rad_s",
+    "accel_bias_std_m_s2", "gyro_scale_std", "accel_scale_std", "baro_bias_std_m",
+    "odometer_scale_std", "odometer_mount_std_rad"};
+
+const char *gf_ins_initial_std_field(int32_t code)
+{
+    return code >= 1 && code <= (int32_t)(sizeof kStdFields / sizeof kStdFields[0])
+               ? kStdFields[code - 1]
+               : NULL;
+}
+
+static int all_positive(const double *x, int n)
+{
+    for (int i = 0; i < n; ++i)
+        if (!(isfinite(x[i]) && x[i] > 0.0))
+            return 0;
+    return 1;
+}
+
+gf_status gf_ins_initial_covariance(const gf_ins_config *cfg, double lat_rad, double h_m,
+                                    const gf_ins_initial_std *std, double *P0, int32_t *bad)
+{
+    if (bad)
+        *bad = 0;
+    if (!cfg || !std || !P0)
+        return GF_ERR_NULL_POINTER;
+    gf_ins_layout l;
+    gf_status st = gf_ins_state_layout(cfg, &l);
+    if (st != GF_OK)
+        return st;
+    /* near a pole the ENU error model (dlon, transport rate ~ tan L) is singular */
+    if (!(fabs(lat_rad) < GF_INS_MAX_LAT_RAD) || !isfinite(h_m))
+        return GF_ERR_OUT_OF_RANGE;
+    const struct {
+        const double *x;
+        int n, used;
+    } blocks[] = {
+        {std->velocity_std_m_s, 3, 1},
+        {std->position_std_m, 3, 1},
+        {std->attitude_std_rad, 3, 1},
+        {std->gyro_bias_std_rad_s, 3, 1},
+        {std->accel_bias_std_m_s2, 3, 1},
+        {std->gyro_scale_std, 3, cfg->scale_factors},
+        {std->accel_scale_std, 3, cfg->scale_factors},
+        {&std->baro_bias_std_m, 1, cfg->baro_bias},
+        {&std->odometer_scale_std, 1, cfg->odometer_scale},
+        {std->odometer_mount_std_rad, 2, cfg->odometer_mount},
+    };
+    double sd[GF_INS_MAX_STATES];
+    int k = 0;
+    for (int b = 0; b < (int)(sizeof blocks / sizeof blocks[0]); ++b) {
+        if (!blocks[b].used)
+            continue;
+        if (!all_positive(blocks[b].x, blocks[b].n)) {
+            if (bad)
+                *bad = b + 1;
+            return GF_ERR_BAD_PARAMETER;
+        }
+        for (int i = 0; i < blocks[b].n; ++i)
+            sd[k++] = blocks[b].x[i];
+    }
+    gf_earth e;
+    st = gf_earth_update(&e, lat_rad, h_m, NULL, 1.0);
+    if (st != GF_OK)
+        return st;
+    /* position std east, north, up (m) -> dlat, dlon (rad), dh (m) */
+    const double east = sd[GF_INS_IDX_POS], north = sd[GF_INS_IDX_POS + 1];
+    sd[GF_INS_IDX_POS] = north / (e.R_M_m + h_m);
+    sd[GF_INS_IDX_POS + 1] = east / ((e.R_N_m + h_m) * e.cos_lat);
+    const int n = l.n_states;
+    memset(P0, 0, (size_t)(n * n) * sizeof *P0);
+    for (int i = 0; i < n; ++i)
+        P0[i * n + i] = sd[i] * sd[i];
     return GF_OK;
 }
 
@@ -128,7 +351,7 @@ gf_status gf_ins_init(gf_ins_filter *f, const gf_ins_config *cfg, double t0_s,
         *bad = 0;
     if (!f || !cfg || !q_bn || !v_n_m_s || !P0)
         return GF_ERR_NULL_POINTER;
-    const int check = config_check(cfg);
+    const int32_t check = config_check(cfg);
     if (check) {
         if (bad)
             *bad = check;
@@ -137,9 +360,9 @@ gf_status gf_ins_init(gf_ins_filter *f, const gf_ins_config *cfg, double t0_s,
     if (!isfinite(t0_s) || (sensors0 && !gf_all_finite(sensors0, GF_INS_N_SENSORS)))
         return GF_ERR_NONFINITE_INPUT;
     for (int i = 0; sensors0 && i < 2; ++i)
-        if (!(fabs(cfg->odo_mount_rad[i] + sensors0[S_MOUNT + i]) < GF_HALF_PI)) {
-            if (bad)
-                *bad = 37;   /* the boresight angles used: odo_mount_rad + the correction */
+        if (!(fabs(cfg->odometer_mount_rad[i] + sensors0[S_MOUNT + i]) < GF_HALF_PI)) {
+            if (bad)   /* the boresight angles used: odometer_mount_rad + the correction */
+                *bad = field_code("odometer_mount_rad");
             return GF_ERR_BAD_PARAMETER;
         }
     gf_sins_config sc;
@@ -153,10 +376,9 @@ gf_status gf_ins_init(gf_ins_filter *f, const gf_ins_config *cfg, double t0_s,
     gf_status st = gf_sins_init(&nav, &sc, q_bn, v_n_m_s, lat_rad, lon_rad, h_m, t0_s);
     if (st != GF_OK)
         return st;
-    int32_t n;
-    st = gf_ins_state_count(cfg, &n);
-    if (st != GF_OK)
-        return st;
+    gf_ins_layout lay;
+    layout_of(cfg, &lay);
+    const int32_t n = lay.n_states;
     /* P0 must be symmetric positive definite */
     double L[GF_KF_MAX_N * GF_KF_MAX_N];
     for (int i = 0; i < n * n; ++i)
@@ -174,21 +396,11 @@ gf_status gf_ins_init(gf_ins_filter *f, const gf_ins_config *cfg, double t0_s,
     memset(f, 0, sizeof *f);
     f->cfg = *cfg;
     f->n_states = n;
-    int next = GF_INS_BASE_STATES;
-    f->idx_sg = f->idx_sa = f->idx_baro = f->idx_odo = f->idx_mount = -1;
-    if (cfg->scale_states) {
-        f->idx_sg = next;
-        f->idx_sa = next + 3;
-        next += 6;
-    }
-    if (cfg->baro_state)
-        f->idx_baro = next++;
-    if (cfg->odo_state)
-        f->idx_odo = next++;
-    if (cfg->odo_mount_state) {
-        f->idx_mount = next;
-        next += 2;
-    }
+    f->idx_sg = lay.idx_sg;
+    f->idx_sa = lay.idx_sa;
+    f->idx_baro = lay.idx_baro;
+    f->idx_odo = lay.idx_odo;
+    f->idx_mount = lay.idx_mount;
     f->nav = nav;
     if (sensors0)
         memcpy(f->sensors, sensors0, sizeof f->sensors);
@@ -199,7 +411,7 @@ gf_status gf_ins_init(gf_ins_filter *f, const gf_ins_config *cfg, double t0_s,
     st = gf_ukf_weights_init(&f->ukf_w, (size_t)n, cfg->ukf_alpha, cfg->ukf_beta, cfg->ukf_kappa);
     if (st != GF_OK) {
         if (bad)
-            *bad = 8;
+            *bad = field_code("ukf_kappa");   /* n_states + ukf_kappa must be > 0 */
         return GF_ERR_BAD_PARAMETER;
     }
     f->t_s = t0_s;
@@ -231,18 +443,14 @@ gf_status gf_ins_filter_check(const gf_ins_filter *f)
 {
     if (!f)
         return GF_ERR_NULL_POINTER;
-    int32_t n = 0;
-    if (config_check(&f->cfg) || gf_ins_state_count(&f->cfg, &n) != GF_OK || f->n_states != n ||
-        !ins_layout_is_valid(f))
+    if (config_check(&f->cfg))
         return GF_ERR_BAD_SIZE;
-    int32_t next = GF_INS_BASE_STATES;
-    const int32_t sg = f->cfg.scale_states ? next : -1;
-    next += f->cfg.scale_states ? 6 : 0;
-    const int32_t baro = f->cfg.baro_state ? next++ : -1;
-    const int32_t odo = f->cfg.odo_state ? next++ : -1;
-    const int32_t mount = f->cfg.odo_mount_state ? next : -1;
-    if (f->idx_sg != sg || f->idx_sa != (sg < 0 ? -1 : sg + 3) || f->idx_baro != baro ||
-        f->idx_odo != odo || f->idx_mount != mount)
+    gf_ins_layout l;
+    layout_of(&f->cfg, &l);
+    const int32_t n = l.n_states;
+    if (f->n_states != n || !ins_layout_is_valid(f) || f->idx_sg != l.idx_sg ||
+        f->idx_sa != l.idx_sa || f->idx_baro != l.idx_baro || f->idx_odo != l.idx_odo ||
+        f->idx_mount != l.idx_mount)
         return GF_ERR_BAD_SIZE;
     if ((f->have_sample & ~1) || (f->standstill & ~1))
         return GF_ERR_BAD_PARAMETER;

@@ -14,7 +14,7 @@
  *           (dimensionless: measured = (1 + s) true + b), 15 + 6 = 21 states (issue 11);
  *   dbb (1) barometer bias b_true - b_estimated, m;  dko (1) odometer scale error;
  *   dmo (2) odometer boresight error (pitch, heading of the odometer axes in the body
- *           frame, true - estimated, rad; the nominal angles are cfg.odo_mount_rad +
+ *           frame, true - estimated, rad; the nominal angles are cfg.odometer_mount_rad +
  *           the sensors[] correction, fed back like the other sensor estimates).
  * Sensor errors are first-order Gauss-Markov processes (seed 004: "first-order Markov
  * drifts"), x' = -x / tau + w, E[w w] = 2 sigma^2 / tau; tau = 0 makes a random constant.
@@ -64,8 +64,8 @@
  *   GNSS velocity: v_ant = v + C_b^n (w_eb^b x l),  w_eb^b = w_ib^b - C_n^b w_ie^n.
  *   barometer: h + b_baro.  odometer: (1 + k) [C_b^m (C_n^b v + w_eb^b x l_odo)]_y
  *   (forward), C_m^b = Rz(-heading_m) Rx(pitch_m) the odometer's mounting (boresight,
- *   odo_mount_rad + the estimated correction; identity by default).  non-holonomic:
- *   [C_b^m (C_n^b v + w_eb^b x l_odo)]_x,z = 0.  With odo_mount_state the rows of both
+ *   odometer_mount_rad + the estimated correction; identity by default).  non-holonomic:
+ *   [C_b^m (C_n^b v + w_eb^b x l_odo)]_x,z = 0.  With odometer_mount the rows of both
  *   take d/dpitch_m and d/dheading_m of C_b^m (exact derivatives of its entries, see
  *   gf_ins_meas.c).  ZUPT: v = 0.
  *   ZARU: w_ib^b - C_n^b w_ie^n = 0 (mean over the standstill detector's window).
@@ -148,7 +148,7 @@ extern "C" {
 /* Sensor-error estimates, in this order in every array of them ("sensors"):
  * gyro bias (3, rad/s), accelerometer bias (3, m/s^2), gyro scale (3), accelerometer
  * scale (3), barometer bias (m), odometer scale, odometer boresight correction (pitch,
- * heading, rad: added to cfg.odo_mount_rad). */
+ * heading, rad: added to cfg.odometer_mount_rad). */
 #define GF_INS_N_SENSORS 16
 
 /* Measurement types */
@@ -174,66 +174,70 @@ extern "C" {
 #define GF_INS_REJECTED_LOW_SPEED 5 /* speed update refused: INS horizontal speed below
                                       speed_min_m_s (direction of v_h undefined) */
 
+/* The filter's settings. Every field is one row of the settings table
+ * (gfins_fmi/estimation/settings.py): the same name in C, in Python's FilterConfig and as
+ * the gfins_ins_gnss FMU parameter, with its unit, bounds and meaning; gf_ins_init checks
+ * them and names a refused one (gf_ins_config_field). Process noise in SI. */
 typedef struct gf_ins_noise {
-    double gyro_arw_rad_sqrt_s;     /* gyro white noise (angle random walk), rad/sqrt(s) */
-    double accel_vrw_m_s_sqrt_s;    /* accelerometer white noise (velocity r.w.), m/s/sqrt(s) */
-    double gyro_bias_std_rad_s;     /* Gauss-Markov steady-state std */
-    double gyro_bias_tau_s;         /* correlation time, s; 0 = random constant */
+    double gyro_arw_rad_sqrt_s;        /* gyro white noise (angle random walk), rad/sqrt(s) */
+    double accel_vrw_m_s_sqrt_s;       /* accelerometer white noise (velocity r.w.), m/s/sqrt(s) */
+    double gyro_bias_std_rad_s;        /* Gauss-Markov steady-state std */
+    double gyro_bias_tau_s;            /* correlation time, s; 0 = random constant */
     double accel_bias_std_m_s2;
     double accel_bias_tau_s;
-    double gyro_scale_std;          /* dimensionless */
+    double gyro_scale_std;             /* dimensionless */
     double gyro_scale_tau_s;
     double accel_scale_std;
     double accel_scale_tau_s;
     double baro_bias_std_m;
     double baro_bias_tau_s;
-    double odo_scale_std;
-    double odo_scale_tau_s;
-    double odo_mount_std_rad;       /* odometer boresight (pitch and heading) */
-    double odo_mount_tau_s;
+    double odometer_scale_std;
+    double odometer_scale_tau_s;
+    double odometer_mount_std_rad;     /* odometer boresight (pitch and heading) */
+    double odometer_mount_tau_s;
 } gf_ins_noise;
 
 typedef struct gf_ins_config {
-    int32_t input;                  /* GF_SINS_INPUT_INCREMENTS or GF_SINS_INPUT_RATES */
-    int32_t coning;                 /* 1: coning/sculling corrections in the mechanization */
-    int32_t filter;                 /* GF_INS_EKF or GF_INS_UKF */
-    int32_t scale_states;           /* 1: gyro and accelerometer scale factors (21 states) */
-    int32_t baro_state;             /* 1: barometer bias state */
-    int32_t odo_state;              /* 1: odometer scale-factor state */
-    int32_t odo_mount_state;        /* 1: odometer boresight states (pitch, heading) */
-    double prop_interval_s;         /* covariance propagation interval, s; 0: every sample */
-    double max_imu_gap_s;           /* a longer IMU interval is an error (GF_ERR_BAD_TIME) */
-    double max_rate_rad_s;          /* absurd-sample limits of the mechanization */
+    int32_t input;                     /* GF_SINS_INPUT_INCREMENTS or GF_SINS_INPUT_RATES */
+    int32_t coning;                    /* 1: coning/sculling corrections in the mechanization */
+    int32_t filter;                    /* GF_INS_EKF or GF_INS_UKF */
+    int32_t scale_factors;             /* 1: gyro and accelerometer scale-factor states (21) */
+    int32_t baro_bias;                 /* 1: barometer bias state */
+    int32_t odometer_scale;            /* 1: odometer scale-factor state */
+    int32_t odometer_mount;            /* 1: odometer boresight states (pitch, heading) */
+    double propagation_interval_s;     /* covariance propagation interval, s; 0: every sample */
+    double max_imu_gap_s;              /* a longer IMU interval is an error (GF_ERR_BAD_TIME) */
+    double max_rate_rad_s;             /* absurd-sample limits of the mechanization */
     double max_specific_force_m_s2;
     double ukf_alpha, ukf_beta, ukf_kappa;   /* seed 004: alpha small, beta 2, kappa 0 */
     gf_ins_noise noise;
-    double gnss_lever_m[3];         /* IMU -> GNSS antenna, body axes, m */
-    double odo_lever_m[3];          /* IMU -> odometer wheel contact point, body axes, m */
-    double gate_prob;               /* NIS gate probability in (0, 1); 0: no gate */
-    int32_t gate_reset_count;       /* > 0: after this many consecutive gate rejections of
-                                       one kind the next is applied (GF_INS_FORCED); 0: never */
-    int32_t nhc;                    /* 1: non-holonomic constraint updates */
+    double gnss_lever_arm_m[3];        /* IMU -> GNSS antenna, body axes, m */
+    double odometer_lever_arm_m[3];    /* IMU -> odometer wheel contact point, body axes, m */
+    double gate_probability;           /* NIS gate probability in (0, 1); 0: no gate */
+    int32_t gate_reset_count;          /* > 0: after this many consecutive gate rejections of
+                                          one kind the next is applied (GF_INS_FORCED); 0: never */
+    int32_t nhc;                       /* 1: non-holonomic constraint updates */
     double nhc_std_m_s;
-    double nhc_interval_s;          /* at most one NHC update per interval */
-    int32_t zupt;                   /* 1: zero-velocity updates at detected standstill */
+    double nhc_interval_s;             /* at most one NHC update per interval */
+    int32_t zupt;                      /* 1: zero-velocity updates at detected standstill */
     double zupt_std_m_s;
-    double zaru_std_rad_s;          /* > 0: also zero-angular-rate updates */
+    double zaru_std_rad_s;             /* > 0: also zero-angular-rate updates */
     double zupt_interval_s;
-    double still_window_s;          /* standstill detector averaging time, s */
-    double still_accel_std_m_s2;    /* standstill: std of |f| over the window below this */
-    double still_gyro_rad_s;        /* ... and mean |w| over the window below this */
-    double max_latency_s;           /* > 0: measurements valid up to this long before the
-                                       current sample are used (delayed update, see above);
-                                       older ones, and all past ones with 0, are stale */
-    double speed_min_m_s;           /* GF_INS_MEAS_SPEED refused at or below this INS
-                                       horizontal speed, m/s (>= 0; default 0.5) */
-    double odo_mount_rad[2];        /* odometer boresight: pitch (nose-up +) and heading
-                                       (clockwise +) of its measuring axes in the body
-                                       frame, rad, |.| < pi/2; 0, 0: body axes. The angles
-                                       used are these + the sensors[] boresight correction
-                                       (estimated with odo_mount_state) */
-    int32_t subsamples;             /* 1..4 IMU samples per navigation update in gf_ins_run
-                                       (increments only; see gf_ins_run); 0 or 1: one */
+    double standstill_window_s;        /* standstill detector averaging time, s */
+    double standstill_accel_std_m_s2;  /* standstill: std of |f| over the window below this */
+    double standstill_gyro_rad_s;      /* ... and mean |w| over the window below this */
+    double max_latency_s;              /* > 0: measurements valid up to this long before the
+                                          current sample are used (delayed update, see above);
+                                          older ones, and all past ones with 0, are stale */
+    double speed_min_m_s;              /* GF_INS_MEAS_SPEED refused at or below this INS
+                                          horizontal speed, m/s (>= 0; default 0.5) */
+    double odometer_mount_rad[2];      /* odometer boresight: pitch (nose-up +) and heading
+                                          (clockwise +) of its measuring axes in the body
+                                          frame, rad, |.| < pi/2; 0, 0: body axes. The angles
+                                          used are these + the sensors[] boresight correction
+                                          (estimated with odometer_mount) */
+    int32_t subsamples;                /* 1..4 IMU samples per navigation update in gf_ins_run
+                                          (increments only; see gf_ins_run); 0 or 1: one */
 } gf_ins_config;
 
 typedef struct gf_ins_meas {
@@ -329,11 +333,63 @@ typedef struct gf_ins_filter {
 } gf_ins_filter;
 
 /* Defaults: increments with coning, EKF, 15 states, propagation every 0.1 s, IMU gap
- * limit 0.5 s, UKF alpha 1e-3... see gf_ins_config.c; noise all zero (set it). */
+ * limit 0.5 s, UKF alpha 0.5, beta 2, kappa 0... see gf_ins_config.c; noise all zero
+ * (set it). */
 gf_status gf_ins_config_default(gf_ins_config *cfg);
+
+/* Checks every field; *bad (may be NULL) = 0 when valid, else the code of the first bad
+ * field, which gf_ins_config_field names. Errors: GF_ERR_BAD_PARAMETER. */
+gf_status gf_ins_config_check(const gf_ins_config *cfg, int32_t *bad);
+
+/* The member name of gf_ins_config behind a field code of gf_ins_config_check or
+ * gf_ins_init ("propagation_interval_s", "noise.gyro_arw_rad_sqrt_s", ...); NULL for a
+ * code that names no field. The codes run 1 .. the number of fields. */
+const char *gf_ins_config_field(int32_t code);
+
+/* Where each error-state block starts (gf_ins_gnss.h's order; -1: not in this
+ * configuration) and the number of states. */
+typedef struct gf_ins_layout {
+    int32_t n_states;
+    int32_t idx_vel, idx_pos, idx_att, idx_bg, idx_ba;   /* 3 states each */
+    int32_t idx_sg, idx_sa;                              /* 3 each (scale_factors) */
+    int32_t idx_baro, idx_odo;                           /* 1 each */
+    int32_t idx_mount;                                   /* 2 (odometer_mount) */
+} gf_ins_layout;
+
+/* The state layout of a configuration. Errors: GF_ERR_BAD_PARAMETER (configuration). */
+gf_status gf_ins_state_layout(const gf_ins_config *cfg, gf_ins_layout *layout);
 
 /* Number of states of a configuration (15 .. 25). Errors: GF_ERR_BAD_PARAMETER. */
 gf_status gf_ins_state_count(const gf_ins_config *cfg, int32_t *n_states);
+
+/* The initial 1-sigma of each error block; the blocks a configuration has no states for
+ * are not read. */
+typedef struct gf_ins_initial_std {
+    double velocity_std_m_s[3];        /* east, north, up */
+    double position_std_m[3];          /* east, north, up */
+    double attitude_std_rad[3];        /* east, north tilt; up: heading */
+    double gyro_bias_std_rad_s[3];
+    double accel_bias_std_m_s2[3];
+    double gyro_scale_std[3];          /* dimensionless */
+    double accel_scale_std[3];
+    double baro_bias_std_m;
+    double odometer_scale_std;
+    double odometer_mount_std_rad[2];  /* pitch, heading */
+} gf_ins_initial_std;
+
+/* P0 (n x n, diagonal) of a configuration starting at lat_rad, h_m: the squares of the
+ * stds in the filter's states (position east, north, up in m -> dlat, dlon in rad with the
+ * WGS-84 radii at the start, dh in m) — the one P0 of the batch API, the smoother and the
+ * FMU. Errors: GF_ERR_BAD_PARAMETER (configuration, or a std of a used block not finite
+ * and > 0: *bad, if given, its 1-based block in gf_ins_initial_std's order, named by
+ * gf_ins_initial_std_field), GF_ERR_OUT_OF_RANGE (|lat| at or beyond the limit, h not
+ * finite; the limit is 89 deg: near a pole the ENU error
+ * model, with dlon and a transport rate ~ tan L, is singular), or gf_earth_update's error for an absurd height. */
+gf_status gf_ins_initial_covariance(const gf_ins_config *cfg, double lat_rad, double h_m,
+                                    const gf_ins_initial_std *std, double *P0, int32_t *bad);
+
+/* The gf_ins_initial_std member behind a block code of gf_ins_initial_covariance. */
+const char *gf_ins_initial_std_field(int32_t code);
 
 /* Starts the filter at t0_s with the nominal attitude q_bn, ENU velocity, position, the
  * sensor-error estimates sensors0 (GF_INS_N_SENSORS; NULL = 0) and the error covariance
@@ -382,7 +438,7 @@ gf_status gf_ins_step(gf_ins_filter *f, double t_s, const double *gyro, const do
  * max_latency_s): samples k .. k+m-1 make one navigation update (gf_sins_step_group's
  * m-sample coning and sculling) when the filter's sample count is a multiple of m at k,
  * no measurement is valid before the end of sample k+m-1, no propagation instant of the
- * regular grid falls on samples k .. k+m-2 (so choose prop_interval_s a multiple of m
+ * regular grid falls on samples k .. k+m-2 (so choose propagation_interval_s a multiple of m
  * samples), the intervals are equal within 1 % and every sample passes the checks;
  * otherwise the samples are processed one by one as above. The outputs then have one row
  * per navigation update (a group's end or a single sample), out->n_rows of them; a

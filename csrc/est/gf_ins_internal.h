@@ -27,6 +27,8 @@
 #include "nav/gf_sins.h"
 
 #define NMAX GF_INS_MAX_STATES
+/* the initial latitude must be inside +-89 deg (gf_ins_initial_covariance) */
+#define GF_INS_MAX_LAT_RAD (89.0 * GF_PI / 180.0)
 #define IV GF_INS_IDX_VEL
 #define IP GF_INS_IDX_POS
 #define IA GF_INS_IDX_ATT

@@ -67,7 +67,7 @@ static void gnss_pos_predict(const ins_meas_ctx *c, const nav_hyp *hy, double *y
     const gf_ins_filter *f = c->f;
     const local_frame *lf = c->lf;
     double cl[3];
-    gf_m3_mul_v3(&hy->C, f->cfg.gnss_lever_m, cl);
+    gf_m3_mul_v3(&hy->C, f->cfg.gnss_lever_arm_m, cl);
     double p[3];
     to_local(lf, hy->lat, hy->lon, hy->h, p);
     /* p_ant = p + C l (the lever arm is metres in ENU directly) */
@@ -80,7 +80,7 @@ static void gnss_pos_jacobian(const ins_meas_ctx *c, const nav_hyp *nom, double 
     const local_frame *lf = c->lf;
     const int n = f->n_states;
     double cl[3], S[3][3];
-    gf_m3_mul_v3(&nom->C, f->cfg.gnss_lever_m, cl);
+    gf_m3_mul_v3(&nom->C, f->cfg.gnss_lever_arm_m, cl);
     skew_rows(cl, S);                                  /* [(C l) x] phi */
     HH(0, IP + 1) = lf->kE;
     HH(1, IP + 0) = lf->kN;
@@ -110,7 +110,7 @@ static void gnss_vel_predict(const ins_meas_ctx *c, const nav_hyp *hy, double *y
     const double *w_comp = c->w_comp;
     double w_ib[3], w_eb[3], wl[3], cwl[3];
     hyp_rate(f, hy, w_comp, w_ib, w_eb);
-    gf_v3_cross(w_eb, f->cfg.gnss_lever_m, wl);
+    gf_v3_cross(w_eb, f->cfg.gnss_lever_arm_m, wl);
     gf_m3_mul_v3(&hy->C, wl, cwl);
     gf_v3_add(hy->v, cwl, y);
 }
@@ -122,10 +122,10 @@ static void gnss_vel_jacobian(const ins_meas_ctx *c, const nav_hyp *nom, double 
     const int n = f->n_states;
     double w_ib[3], w_eb[3], wl[3], cwl[3], S[3][3], Lx[3][3];
     hyp_rate(f, nom, w, w_ib, w_eb);
-    gf_v3_cross(w_eb, f->cfg.gnss_lever_m, wl);
+    gf_v3_cross(w_eb, f->cfg.gnss_lever_arm_m, wl);
     gf_m3_mul_v3(&nom->C, wl, cwl);
     skew_rows(cwl, S);
-    skew_rows(f->cfg.gnss_lever_m, Lx);
+    skew_rows(f->cfg.gnss_lever_arm_m, Lx);
     for (int i = 0; i < 3; ++i) {
         HH(i, IV + i) = 1.0;
         for (int j = 0; j < 3; ++j) {
@@ -161,16 +161,16 @@ static void baro_jacobian(const ins_meas_ctx *c, const nav_hyp *nom, double *H)
 /* ---- the odometer point: velocity in the odometer's axes (odometer, NHC) ------------- */
 
 /* C_b^m of the odometer's mounting: the transpose of C_m^b = Rz(-heading_m) Rx(pitch_m)
- * (the Euler convention of gf_sins.h without roll) at pitch_m = cfg.odo_mount_rad[0] +
- * s[S_MOUNT], heading_m = cfg.odo_mount_rad[1] + s[S_MOUNT + 1] (s: the hypothesis'
+ * (the Euler convention of gf_sins.h without roll) at pitch_m = cfg.odometer_mount_rad[0] +
+ * s[S_MOUNT], heading_m = cfg.odometer_mount_rad[1] + s[S_MOUNT + 1] (s: the hypothesis'
  * sensor estimates); identity for zero angles (exactly: cos 0 = 1, sin 0 = 0, so the
  * products below keep their bits). dMp, dMh (may be NULL) receive dM/dpitch_m and
  * dM/dheading_m, entry by entry (rad^-1). */
 static void odo_mount(const gf_ins_filter *f, const double *s, double M[3][3], double dMp[3][3],
                       double dMh[3][3])
 {
-    const double p = f->cfg.odo_mount_rad[0] + s[S_MOUNT];
-    const double hd = f->cfg.odo_mount_rad[1] + s[S_MOUNT + 1];
+    const double p = f->cfg.odometer_mount_rad[0] + s[S_MOUNT];
+    const double hd = f->cfg.odometer_mount_rad[1] + s[S_MOUNT + 1];
     const double sp = sin(p), cp = cos(p), sh = sin(hd), ch = cos(hd);
     /* rows of C_b^m = columns of C_m^b: the odometer's x, y (forward), z axes in body */
     M[0][0] = ch;       M[0][1] = -sh;      M[0][2] = 0.0;
@@ -195,7 +195,7 @@ static void odo_body_velocity(const gf_ins_filter *f, const nav_hyp *hy, const d
     double w_ib[3], w_eb[3], vb[3], wl[3];
     hyp_rate(f, hy, w_comp, w_ib, w_eb);
     gf_m3t_mul_v3(&hy->C, hy->v, vb);
-    gf_v3_cross(w_eb, f->cfg.odo_lever_m, wl);
+    gf_v3_cross(w_eb, f->cfg.odometer_lever_arm_m, wl);
     gf_v3_add(vb, wl, ub);
 }
 
@@ -226,7 +226,7 @@ static void odo_point_jacobian(const ins_meas_ctx *c, const nav_hyp *nom, int32_
      * before (dv, phi, dw are computed - true). */
     double Vx[3][3], Lx[3][3], CtV[3][3], M[3][3], MCt[3][3], MCtV[3][3], MLx[3][3];
     skew_rows(nom->v, Vx);
-    skew_rows(f->cfg.odo_lever_m, Lx);
+    skew_rows(f->cfg.odometer_lever_arm_m, Lx);
     for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j) {
             double acc = 0.0;

@@ -48,9 +48,9 @@ static void process_noise(const gf_ins_filter *f, double *q_diag)
     if (f->idx_baro >= 0)
         q_diag[f->idx_baro] = gm_intensity(nz->baro_bias_std_m, nz->baro_bias_tau_s);
     if (f->idx_odo >= 0)
-        q_diag[f->idx_odo] = gm_intensity(nz->odo_scale_std, nz->odo_scale_tau_s);
+        q_diag[f->idx_odo] = gm_intensity(nz->odometer_scale_std, nz->odometer_scale_tau_s);
     for (int i = 0; f->idx_mount >= 0 && i < 2; ++i)
-        q_diag[f->idx_mount + i] = gm_intensity(nz->odo_mount_std_rad, nz->odo_mount_tau_s);
+        q_diag[f->idx_mount + i] = gm_intensity(nz->odometer_mount_std_rad, nz->odometer_mount_tau_s);
 }
 
 _Static_assert(GF_INS_MAX_STATES <= 64, "row masks of F are 64 bits");
@@ -95,10 +95,10 @@ static void error_model(const gf_ins_filter *f, const gf_mat3 *C, const double v
     }
     if (f->idx_baro >= 0 && nz->baro_bias_tau_s > 0.0)
         FF(f->idx_baro, f->idx_baro) = gm_rate(nz->baro_bias_tau_s);
-    if (f->idx_odo >= 0 && nz->odo_scale_tau_s > 0.0)
-        FF(f->idx_odo, f->idx_odo) = gm_rate(nz->odo_scale_tau_s);
-    for (int i = 0; f->idx_mount >= 0 && nz->odo_mount_tau_s > 0.0 && i < 2; ++i)
-        FF(f->idx_mount + i, f->idx_mount + i) = gm_rate(nz->odo_mount_tau_s);
+    if (f->idx_odo >= 0 && nz->odometer_scale_tau_s > 0.0)
+        FF(f->idx_odo, f->idx_odo) = gm_rate(nz->odometer_scale_tau_s);
+    for (int i = 0; f->idx_mount >= 0 && nz->odometer_mount_tau_s > 0.0 && i < 2; ++i)
+        FF(f->idx_mount + i, f->idx_mount + i) = gm_rate(nz->odometer_mount_tau_s);
 #undef FF
     if (q_diag)
         process_noise(f, q_diag);
@@ -310,9 +310,9 @@ static gf_status propagate_ukf(gf_ins_filter *f, gf_ins_epochs *ep)
     if (f->idx_baro >= 0)
         decay[f->idx_baro] = gm_decay(nz->baro_bias_tau_s, T);
     if (f->idx_odo >= 0)
-        decay[f->idx_odo] = gm_decay(nz->odo_scale_tau_s, T);
+        decay[f->idx_odo] = gm_decay(nz->odometer_scale_tau_s, T);
     for (int i = 0; f->idx_mount >= 0 && i < 2; ++i)
-        decay[f->idx_mount + i] = gm_decay(nz->odo_mount_tau_s, T);
+        decay[f->idx_mount + i] = gm_decay(nz->odometer_mount_tau_s, T);
     for (int p = 0; p < np; ++p) {
         nav_hyp h0, h1;
         ins_hyp_from_state(f, &f->nav0, f->sensors0, X + p * n, &h0);

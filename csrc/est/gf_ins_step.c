@@ -62,7 +62,7 @@ static void standstill_update(gf_ins_filter *f, double T)
         f->still_fn2 = fn * fn;
         f->still_wn = wn;
     }
-    const double a = fmin(1.0, T / f->cfg.still_window_s);   /* exponential average */
+    const double a = fmin(1.0, T / f->cfg.standstill_window_s);   /* exponential average */
     for (int i = 0; i < 3; ++i) {
         f->still_f[i] += a * (fb[i] - f->still_f[i]);
         f->still_w[i] += a * (w[i] - f->still_w[i]);
@@ -71,10 +71,10 @@ static void standstill_update(gf_ins_filter *f, double T)
     f->still_fn2 += a * (fn * fn - f->still_fn2);
     f->still_wn += a * (wn - f->still_wn);
     const double sd = sqrt(fmax(0.0, f->still_fn2 - f->still_fn * f->still_fn));
-    const double ta = f->cfg.still_accel_std_m_s2, tg = f->cfg.still_gyro_rad_s;
+    const double ta = f->cfg.standstill_accel_std_m_s2, tg = f->cfg.standstill_gyro_rad_s;
     const int quiet = sd < ta && f->still_wn < tg && wn < 3.0 * tg && fabs(fn - f->still_fn) < 3.0 * ta;
     f->still_time_s = quiet ? f->still_time_s + T : 0.0;
-    f->standstill = f->still_time_s >= f->cfg.still_window_s;
+    f->standstill = f->still_time_s >= f->cfg.standstill_window_s;
 }
 
 /* A sample within the absurd-sample limits: |gyro| <= max_rate k, |accel| <= max_f k
@@ -92,7 +92,7 @@ static inline int within_limits(const gf_ins_config *c, const double g[3], const
 static gf_status regular_updates(gf_ins_filter *f, gf_ins_epochs *epochs, gf_ins_log *log)
 {
     const double dir = dir_of(f), t_s = f->t_s;
-    if (!(dir * (t_s - f->last_regular_t_s) >= f->cfg.prop_interval_s - GF_INS_TIME_EPS_S))
+    if (!(dir * (t_s - f->last_regular_t_s) >= f->cfg.propagation_interval_s - GF_INS_TIME_EPS_S))
         return GF_OK;
     f->last_regular_t_s = t_s;
     gf_status st = ins_propagate(f, epochs);
@@ -261,7 +261,7 @@ static gf_status group_step(gf_ins_filter *f, int m, const double *t_s, const do
     *applied = 0;
     const gf_ins_config *c = &f->cfg;
     if (!(t_meas - t_s[m - 1] > GF_INS_TIME_EPS_S) ||
-        !(t_s[m - 2] - f->last_regular_t_s < c->prop_interval_s - GF_INS_TIME_EPS_S))
+        !(t_s[m - 2] - f->last_regular_t_s < c->propagation_interval_s - GF_INS_TIME_EPS_S))
         return GF_OK;
     if (epochs && (epochs->count > epochs->capacity || epochs->capacity - epochs->count < 2))
         return GF_OK;

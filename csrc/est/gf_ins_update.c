@@ -69,8 +69,8 @@ gf_status ins_update_at(gf_ins_filter *f, int32_t type, const gf_ins_meas *ms, d
     }
     double gate = 0.0;
     int forced = 0;
-    if (f->cfg.gate_prob > 0.0) {
-        gf_chi2_quantile(m, f->cfg.gate_prob, &gate);
+    if (f->cfg.gate_probability > 0.0) {
+        gf_chi2_quantile(m, f->cfg.gate_probability, &gate);
         if (f->cfg.gate_reset_count > 0 && f->gate_run[type] >= f->cfg.gate_reset_count) {
             gate = 0.0;          /* the gate has rejected too many in a row: apply this one */
             forced = 1;

@@ -20,14 +20,14 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     gf_ins_config_default(&c);
     c.input = fz_u8(d) & 1 ? GF_SINS_INPUT_RATES : GF_SINS_INPUT_INCREMENTS;
     c.filter = fz_u8(d) % 4 == 0;                 /* mostly the EKF */
-    c.prop_interval_s = fz_u8(d) & 1 ? 0.0 : fz_pos(d, 0.05);
-    c.odo_state = fz_u8(d) & 1;
-    c.baro_state = fz_u8(d) & 1;
-    c.scale_states = fz_u8(d) % 4 == 0;
+    c.propagation_interval_s = fz_u8(d) & 1 ? 0.0 : fz_pos(d, 0.05);
+    c.odometer_scale = fz_u8(d) & 1;
+    c.baro_bias = fz_u8(d) & 1;
+    c.scale_factors = fz_u8(d) % 4 == 0;
     c.zupt = fz_u8(d) & 1;
     c.nhc = fz_u8(d) % 4 == 0;
     c.subsamples = c.input == GF_SINS_INPUT_INCREMENTS ? 1 + fz_u8(d) % 4 : 1;
-    c.odo_mount_state = fz_u8(d) % 4 == 0;        /* odometer boresight states (25 at most) */
+    c.odometer_mount = fz_u8(d) % 4 == 0;        /* odometer boresight states (25 at most) */
     int32_t n_states = 0;
     if (gf_ins_state_count(&c, &n_states) != GF_OK)
         return 0;

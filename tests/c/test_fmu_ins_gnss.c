@@ -127,10 +127,10 @@ static void core_config(gf_ins_config *c, int filter)
 {
     gf_ins_config_default(c);
     c->filter = filter;
-    c->baro_state = 1;
-    c->odo_state = 1;
+    c->baro_bias = 1;
+    c->odometer_scale = 1;
     c->nhc = 1;
-    c->gate_prob = 0.9999;
+    c->gate_probability = 0.9999;
     c->gate_reset_count = 5;          /* the FMU's default (FilterConfig's) */
     c->noise.gyro_arw_rad_sqrt_s = 1e-4;
     c->noise.accel_vrw_m_s_sqrt_s = 1e-3;
@@ -140,7 +140,7 @@ static void core_config(gf_ins_config *c, int filter)
     c->noise.accel_bias_tau_s = 3600.0;
     c->noise.baro_bias_std_m = 1.0;
     c->noise.baro_bias_tau_s = 3600.0;
-    c->noise.odo_scale_std = 0.01;
+    c->noise.odometer_scale_std = 0.01;
     c->noise.gyro_scale_std = 1e-3;   /* unused (no scale states), set as the FMU's default */
     c->noise.accel_scale_std = 1e-3;
 }
@@ -152,20 +152,20 @@ static fmi2Component open_ready(int filter, int skip)
     fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0);
     fmi2EnterInitializationMode(c);
     set_int(c, "filter", filter);
-    set_int(c, "baro_state", 1);
-    set_int(c, "odo_state", 1);
+    set_int(c, "baro_bias", 1);
+    set_int(c, "odometer_scale", 1);
     set_int(c, "nhc", 1);
-    set_real(c, "gate_prob", 0.9999);
-    set_real(c, "gyro_arw", 1e-4);
-    set_real(c, "accel_vrw", 1e-3);
-    set_real(c, "gyro_bias_std", 1e-5);
-    set_real(c, "gyro_bias_tau", 3600.0);
-    set_real(c, "accel_bias_std", 1e-3);
-    set_real(c, "accel_bias_tau", 3600.0);
-    set_real(c, "baro_bias_std", 1.0);
-    set_real(c, "baro_bias_tau", 3600.0);
-    set_real(c, "odo_scale_std", 0.01);
-    set_real(c, "odo_scale_tau", 0.0);
+    set_real(c, "gate_probability", 0.9999);
+    set_real(c, "gyro_arw_rad_sqrt_s", 1e-4);
+    set_real(c, "accel_vrw_m_s_sqrt_s", 1e-3);
+    set_real(c, "gyro_bias_std_rad_s", 1e-5);
+    set_real(c, "gyro_bias_tau_s", 3600.0);
+    set_real(c, "accel_bias_std_m_s2", 1e-3);
+    set_real(c, "accel_bias_tau_s", 3600.0);
+    set_real(c, "baro_bias_std_m", 1.0);
+    set_real(c, "baro_bias_tau_s", 3600.0);
+    set_real(c, "odometer_scale_std", 0.01);
+    set_real(c, "odometer_scale_tau_s", 0.0);
     set_vec(c, "q0", x0->q_bn, 4);
     set_vec(c, "v0", x0->v_n_m_s, 3);
     set_real(c, "lat0", x0->lat_rad);
@@ -379,16 +379,21 @@ static void expect_refused(const char *what, const char *param, double value, in
 
 static void test_refusals(void)
 {
-    expect_refused("filter", "filter", 5, 1, "parameter filter = 5 must be 0 (EKF) or 1 (UKF)");
-    expect_refused("gate", "gate_prob", 1.0, 0, "parameter gate_prob = 1 must be 0");
-    expect_refused("gate_reset_count", "gate_reset_count", -1, 1, "gate_reset_count = -1 must be >= 0");
-    expect_refused("max_latency", "max_latency", -0.1, 0, "parameter max_latency = -0.1 s");
-    expect_refused("noise", "accel_bias_tau", -2.0, 0, "parameter accel_bias_tau = -2");
+    expect_refused("filter", "filter", 5, 1, "parameter filter = 5 refused: must be 0 (ekf) or 1 (ukf)");
+    expect_refused("gate", "gate_probability", 1.0, 0,
+                   "parameter gate_probability = 1 refused: must be 0 (no gate) or in (0, 1)");
+    expect_refused("gate_reset_count", "gate_reset_count", -1, 1,
+                   "parameter gate_reset_count = -1 refused: must be an integer >= 0");
+    expect_refused("max_latency_s", "max_latency_s", -0.1, 0,
+                   "parameter max_latency_s = -0.1 s refused: must be finite and >= 0");
+    expect_refused("noise", "accel_bias_tau_s", -2.0, 0,
+                   "parameter accel_bias_tau_s = -2 s refused: must be finite and >= 0");
     expect_refused("std0_pos", "std0_pos[2]", 0.0, 0, "parameter std0_pos = [1, 0, 3] m");
     expect_refused("std0_odo_scale", "std0_odo_scale", NAN, 0, "std0_odo_scale = nan");
     expect_refused("lat0", "lat0", 1.56, 0, "parameter lat0 = 1.56 rad");
     expect_refused("skip_steps", "skip_steps", -1, 1, "skip_steps = -1 must be >= 0");
-    expect_refused("odo_mount", "odo_mount[2]", 2.0, 0, "parameter odo_mount = [0, 2] rad");
+    expect_refused("odometer_mount_rad", "odometer_mount_rad[2]", 2.0, 0,
+                   "parameter odometer_mount_rad = [0, 2] rad refused: must be finite and inside");
 
     /* a measurement valid after the sample it came with; then a non-finite GNSS input:
      * errors, the outputs keep the last good sample */

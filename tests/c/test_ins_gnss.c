@@ -38,7 +38,7 @@ static gf_ins_config base_config(void)
     gf_ins_config_default(&c);
     c.noise.gyro_arw_rad_sqrt_s = 1e-6;
     c.noise.accel_vrw_m_s_sqrt_s = 1e-5;
-    c.gate_prob = 0.9999;
+    c.gate_probability = 0.9999;
     c.gate_reset_count = 0;
     return c;
 }
@@ -87,7 +87,7 @@ static void test_speed_update(void)
 {
     for (int with_scale = 0; with_scale <= 1; ++with_scale) {
         gf_ins_config c = base_config();
-        c.odo_state = with_scale;
+        c.odometer_scale = with_scale;
         gf_ins_filter f;
         const double v[3] = {3.0, 4.0, 0.1};
         CHECK(start(&f, &c, v, 0.0) == GF_OK, "init");
@@ -148,7 +148,8 @@ static void test_speed_update(void)
         double P[15 * 15];
         diag_P(15, kStd, P);
         const double q[4] = {1, 0, 0, 0};
-        CHECK(gf_ins_init(&f, &c, 0.0, q, v, 0.5, 1.0, 0.0, NULL, P, &bad) == GF_ERR_BAD_PARAMETER && bad == 36,
+        CHECK(gf_ins_init(&f, &c, 0.0, q, v, 0.5, 1.0, 0.0, NULL, P, &bad) == GF_ERR_BAD_PARAMETER &&
+                  strcmp(gf_ins_config_field(bad), "speed_min_m_s") == 0,
               "speed_min_m_s < 0 refused (bad %d)", bad);
     }
 }
@@ -164,11 +165,11 @@ static void test_odometer_mounting(void)
 {
     const double tm = 1.5 * DEG, hm = -2.0 * DEG, V = 5.0;
     gf_ins_config c = base_config();
-    c.odo_mount_rad[0] = tm;
-    c.odo_mount_rad[1] = hm;
+    c.odometer_mount_rad[0] = tm;
+    c.odometer_mount_rad[1] = hm;
     c.nhc = 1;
     c.nhc_std_m_s = 0.05;
-    c.gate_prob = 0.0;
+    c.gate_probability = 0.0;
     gf_ins_filter f;
     int32_t bad;
     double P[15 * 15];
@@ -200,12 +201,13 @@ static void test_odometer_mounting(void)
     CHECK_CLOSE(e[0].r[0], -V * sin(hm), 2e-3, "NHC lateral with boresight");
     CHECK_CLOSE(e[0].r[1], -V * sin(tm) * cos(hm), 2e-3, "NHC vertical with boresight");
     CHECK(fabs(e[0].r[0]) > 0.1 && fabs(e[0].r[1]) > 0.1, "boresight seen by the NHC");
-    c.odo_mount_rad[1] = 1.6;
-    CHECK(gf_ins_init(&f, &c, 0.0, q, v, 0.5, 1.0, 0.0, NULL, P, &bad) == GF_ERR_BAD_PARAMETER && bad == 37,
+    c.odometer_mount_rad[1] = 1.6;
+    CHECK(gf_ins_init(&f, &c, 0.0, q, v, 0.5, 1.0, 0.0, NULL, P, &bad) == GF_ERR_BAD_PARAMETER &&
+              strcmp(gf_ins_config_field(bad), "odometer_mount_rad") == 0,
           "mounting angle beyond 90 deg refused");
 }
 
-/* The boresight states' columns of H (odo_mount_state): the update they make equals the
+/* The boresight states' columns of H (odometer_mount): the update they make equals the
  * one computed here from central differences of the filter's own measurement prediction
  * with respect to the mounting angles (r = prediction - measurement, so dr/dtheta = dy/
  * dtheta), with only the two boresight states uncertain (the others at 1e-9: their part
@@ -217,15 +219,15 @@ static void mount_run(double dp, double dh, int type, int with_state, double r[2
                       double sens[2], double s_std[2])
 {
     gf_ins_config c = base_config();
-    c.odo_mount_rad[0] = 0.02 + dp;
-    c.odo_mount_rad[1] = -0.03 + dh;
-    c.odo_lever_m[0] = -0.7;
-    c.odo_lever_m[1] = 1.1;
-    c.odo_lever_m[2] = -0.4;
-    c.odo_mount_state = with_state;
+    c.odometer_mount_rad[0] = 0.02 + dp;
+    c.odometer_mount_rad[1] = -0.03 + dh;
+    c.odometer_lever_arm_m[0] = -0.7;
+    c.odometer_lever_arm_m[1] = 1.1;
+    c.odometer_lever_arm_m[2] = -0.4;
+    c.odometer_mount = with_state;
     c.nhc = type == GF_INS_MEAS_NHC;
     c.nhc_std_m_s = 0.05;
-    c.gate_prob = 0.0;
+    c.gate_probability = 0.0;
     const int n = 15 + 2 * with_state;
     double sd[17], P[17 * 17];
     for (int i = 0; i < n; ++i)
@@ -388,9 +390,9 @@ static void test_level_align_and_rotate(void)
 static void test_reverse_signs(void)
 {
     gf_ins_config c = base_config();
-    c.scale_states = 1;
-    c.odo_state = 1;
-    c.odo_mount_state = 1;         /* 25 states: the boresight angles keep their sign */
+    c.scale_factors = 1;
+    c.odometer_scale = 1;
+    c.odometer_mount = 1;         /* 25 states: the boresight angles keep their sign */
     gf_ins_filter f;
     const double v[3] = {5.0, -3.0, 0.2};
     CHECK(start(&f, &c, v, 0.0) == GF_OK, "init");
@@ -507,7 +509,7 @@ static void test_round_trip(void)
     for (int r = 0; r < 2; ++r) {
         gf_ins_config c0 = c;
         c0.noise.gyro_arw_rad_sqrt_s = c0.noise.accel_vrw_m_s_sqrt_s = 0.0;
-        c0.prop_interval_s = r == 0 ? 0.1 : 0.05;
+        c0.propagation_interval_s = r == 0 ? 0.1 : 0.05;
         CHECK(start(&f, &c0, v, 0.0) == GF_OK, "init");
         const gf_ins_filter fs = f;
         const int n = f.n_states;

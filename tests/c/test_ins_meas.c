@@ -101,15 +101,15 @@ static void random_filter(test_rng *rng, int reversed, gf_ins_filter *f)
 {
     gf_ins_config c;
     gf_ins_config_default(&c);
-    c.scale_states = c.baro_state = c.odo_state = c.odo_mount_state = 1;
+    c.scale_factors = c.baro_bias = c.odometer_scale = c.odometer_mount = 1;
     c.noise.gyro_arw_rad_sqrt_s = 1e-4;
     c.noise.accel_vrw_m_s_sqrt_s = 1e-3;
     for (int i = 0; i < 3; ++i) {
-        c.gnss_lever_m[i] = test_rng_uniform(rng, -1.5, 1.5);
-        c.odo_lever_m[i] = test_rng_uniform(rng, -2.0, 2.0);
+        c.gnss_lever_arm_m[i] = test_rng_uniform(rng, -1.5, 1.5);
+        c.odometer_lever_arm_m[i] = test_rng_uniform(rng, -2.0, 2.0);
     }
-    c.odo_mount_rad[0] = test_rng_uniform(rng, -0.05, 0.05);
-    c.odo_mount_rad[1] = test_rng_uniform(rng, -0.05, 0.05);
+    c.odometer_mount_rad[0] = test_rng_uniform(rng, -0.05, 0.05);
+    c.odometer_mount_rad[1] = test_rng_uniform(rng, -0.05, 0.05);
     int32_t n = 0;
     CHECK(gf_ins_state_count(&c, &n) == GF_OK && n == GF_INS_MAX_STATES, "25 states: %d", n);
     const double e[3] = {test_rng_uniform(rng, -PI, PI), test_rng_uniform(rng, -0.5, 0.5),
@@ -169,7 +169,7 @@ static double step_of(const gf_ins_filter *f, int j)
 static double neglected(const gf_ins_filter *f, int32_t kind, int j)
 {
     const int att = j >= GF_INS_IDX_ATT && j < GF_INS_IDX_ATT + 3, lat = j == GF_INS_IDX_POS;
-    const double *lg = f->cfg.gnss_lever_m, *lo = f->cfg.odo_lever_m;
+    const double *lg = f->cfg.gnss_lever_arm_m, *lo = f->cfg.odometer_lever_arm_m;
     const double k1 = 1.0 + fabs(f->sensors[13]);
     switch (kind) {
     case GF_INS_MEAS_GNSS_VEL:

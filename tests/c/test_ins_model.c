@@ -111,7 +111,7 @@ static void test_filter_uses_the_blocks(void)
     test_rng r = {0x2468aceu};
     gf_ins_config cfg;
     gf_ins_config_default(&cfg);
-    cfg.prop_interval_s = 0.0;
+    cfg.propagation_interval_s = 0.0;
     double P0[15 * 15] = {0.0};
     for (int i = 0; i < 15; ++i)
         P0[i * 15 + i] = 1e-6;

@@ -19,12 +19,14 @@
  * With the same samples, times and measurements the FMU makes the gf_ins_step calls that
  * gf_ins_run makes, so it computes bit for bit what IntegratedNavigator.run computes. */
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "fmu_model.h"
 #include "base/gf_math.h"
 #include "nav/gf_earth.h"
 #include "model.h"
+#include "model_extra.h"   /* kInsSettings: generated from the settings table */
 #include "skip_steps.h"
 
 #define N_MEAS_MAX 4   /* GNSS position, GNSS velocity, barometer, odometer */
@@ -74,104 +76,40 @@ static int all_positive(const double *x, int n)
     return 1;
 }
 
-/* The configuration refused by the core: *bad (gf_ins_init) names the field. */
-static void log_bad_config(FmuInstance *instance, const gf_ins_config *c, int32_t bad)
+/* The configuration refused by the core: gf_ins_config_field(bad) names the member, the
+ * settings table (kInsSettings, generated from gfins_fmi/estimation/settings.py) its
+ * parameter, unit and bounds. */
+static void log_bad_config(FmuInstance *instance, const ModelData *d, int32_t bad)
 {
-    static const char *const noise_names[] = {
-        "gyro_arw", "accel_vrw", "gyro_bias_std", "gyro_bias_tau", "accel_bias_std",
-        "accel_bias_tau", "gyro_scale_std", "gyro_scale_tau", "accel_scale_std",
-        "accel_scale_tau", "baro_bias_std", "baro_bias_tau", "odo_scale_std", "odo_scale_tau",
-        "odo_mount_std", "odo_mount_tau"};
-    const gf_ins_noise *q = &c->noise;
-    const double noise[] = {q->gyro_arw_rad_sqrt_s, q->accel_vrw_m_s_sqrt_s,
-                            q->gyro_bias_std_rad_s, q->gyro_bias_tau_s,
-                            q->accel_bias_std_m_s2, q->accel_bias_tau_s, q->gyro_scale_std,
-                            q->gyro_scale_tau_s, q->accel_scale_std, q->accel_scale_tau_s,
-                            q->baro_bias_std_m, q->baro_bias_tau_s, q->odo_scale_std,
-                            q->odo_scale_tau_s, q->odo_mount_std_rad, q->odo_mount_tau_s};
-    if (bad >= 10 && bad < 10 + (int32_t)(sizeof noise / sizeof noise[0])) {
-        fmu_log_error(instance, "parameter %s = %g must be finite and >= 0",
-                      noise_names[bad - 10], noise[bad - 10]);
+    const char *member = gf_ins_config_field(bad);
+    for (size_t i = 0; member && i < sizeof kInsSettings / sizeof kInsSettings[0]; ++i) {
+        const InsSetting *st = &kInsSettings[i];
+        if (strcmp(st->member, member) != 0)
+            continue;
+        const char *base = (const char *)d + st->offset;
+        char value[160];
+        int used = 0;
+        for (int k = 0; k < st->count && used < (int)sizeof value - 32; ++k) {
+            used += snprintf(value + used, sizeof value - (size_t)used, "%s",
+                             k == 0 ? (st->count > 1 ? "[" : "") : ", ");
+            if (st->is_int) {
+                int32_t v;
+                memcpy(&v, base + (size_t)k * sizeof v, sizeof v);
+                used += snprintf(value + used, sizeof value - (size_t)used, "%d", (int)v);
+            } else {
+                double v;
+                memcpy(&v, base + (size_t)k * sizeof v, sizeof v);
+                used += snprintf(value + used, sizeof value - (size_t)used, "%g", v);
+            }
+        }
+        if (st->count > 1)
+            snprintf(value + used, sizeof value - (size_t)used, "]");
+        fmu_log_error(instance, "parameter %s = %s%s%s refused: must be %s", st->parameter,
+                      value, st->unit[0] ? " " : "", st->unit, st->bounds);
         return;
     }
-    switch (bad) {
-    case 1:
-        fmu_log_error(instance, "parameter input_mode = %d must be 0 (increments) or 1 (rates)",
-                      (int)c->input);
-        break;
-    case 2:
-        fmu_log_error(instance, "parameter coning = %d must be 0 or 1", (int)c->coning);
-        break;
-    case 3:
-        fmu_log_error(instance, "parameter filter = %d must be 0 (EKF) or 1 (UKF)",
-                      (int)c->filter);
-        break;
-    case 4:
-        fmu_log_error(instance, "parameters scale_states = %d, baro_state = %d, odo_state = %d, "
-                      "odo_mount_state = %d must each be 0 or 1", (int)c->scale_states,
-                      (int)c->baro_state, (int)c->odo_state, (int)c->odo_mount_state);
-        break;
-    case 5:
-        fmu_log_error(instance, "parameter propagation_interval = %g s must be finite and >= 0",
-                      c->prop_interval_s);
-        break;
-    case 6:
-        fmu_log_error(instance, "parameter max_imu_gap = %g s must be finite and > 0",
-                      c->max_imu_gap_s);
-        break;
-    case 7:
-        fmu_log_error(instance, "parameters max_rate = %g rad/s and max_specific_force = %g "
-                      "m/s2 must be finite and > 0", c->max_rate_rad_s,
-                      c->max_specific_force_m_s2);
-        break;
-    case 8:
-        fmu_log_error(instance, "parameters ukf_alpha = %g (> 0), ukf_beta = %g, ukf_kappa = %g "
-                      "(finite, number of states + ukf_kappa > 0) are not usable",
-                      c->ukf_alpha, c->ukf_beta, c->ukf_kappa);
-        break;
-    case 30:
-        fmu_log_error(instance, "parameters gnss_lever_arm = [%g, %g, %g] m and odo_lever_arm "
-                      "= [%g, %g, %g] m must be finite", c->gnss_lever_m[0], c->gnss_lever_m[1],
-                      c->gnss_lever_m[2], c->odo_lever_m[0], c->odo_lever_m[1], c->odo_lever_m[2]);
-        break;
-    case 31:
-        if (c->gate_reset_count < 0)
-            fmu_log_error(instance, "parameter gate_reset_count = %d must be >= 0 (0: never "
-                          "force an update)", (int)c->gate_reset_count);
-        else
-            fmu_log_error(instance, "parameter gate_prob = %g must be 0 (no gate) or in (0, 1)",
-                          c->gate_prob);
-        break;
-    case 32:
-        fmu_log_error(instance, "parameters nhc = %d (0 or 1), nhc_std = %g m/s (> 0) and "
-                      "nhc_interval = %g s (>= 0) are not usable", (int)c->nhc, c->nhc_std_m_s,
-                      c->nhc_interval_s);
-        break;
-    case 33:
-        fmu_log_error(instance, "parameters zupt = %d (0 or 1), zupt_std = %g m/s (> 0), "
-                      "zaru_std = %g rad/s (>= 0) and zupt_interval = %g s (>= 0) are not "
-                      "usable", (int)c->zupt, c->zupt_std_m_s, c->zaru_std_rad_s,
-                      c->zupt_interval_s);
-        break;
-    case 35:
-        fmu_log_error(instance, "parameter max_latency = %g s must be finite and >= 0",
-                      c->max_latency_s);
-        break;
-    case 37:
-        fmu_log_error(instance, "parameter odo_mount = [%g, %g] rad: each angle must be "
-                      "finite and below pi/2 in magnitude", c->odo_mount_rad[0],
-                      c->odo_mount_rad[1]);
-        break;
-    case 34:
-        fmu_log_error(instance, "parameters still_window = %g s, still_accel_std = %g m/s2 and "
-                      "still_gyro = %g rad/s must be finite and > 0", c->still_window_s,
-                      c->still_accel_std_m_s2, c->still_gyro_rad_s);
-        break;
-    default:
-        fmu_log_error(instance, "filter configuration refused (field code %d of gf_ins_init)",
-                      (int)bad);
-        break;
-    }
+    fmu_log_error(instance, "filter configuration refused (field %s)",
+                  member ? member : "unknown");
 }
 
 /* Where the filter starts: attitude, velocity, position, sensor-error estimates and the
@@ -185,13 +123,8 @@ typedef struct {
  * radii of gf_earth at the start position s, as gfins_fmi.estimation.InitialState.covariance;
  * the heading std is s->heading_std_rad unless NaN. */
 static int initial_covariance(FmuInstance *instance, const ModelData *d, const StartPoint *s,
-                              int32_t n, double *P0)
+                              double *P0)
 {
-    if (!(fabs(d->lat0_rad) < GF_HALF_PI * (89.0 / 90.0))) {
-        fmu_log_error(instance, "parameter lat0 = %g rad: |lat0| must be below 89 deg (the ENU "
-                      "error model is singular near the poles)", d->lat0_rad);
-        return 0;
-    }
     if (!isfinite(d->lon0_rad) || !isfinite(d->h0_m) || !gf_all_finite(d->v0_m_s, 3) ||
         !gf_all_finite(d->q0, 4)) {
         fmu_log_error(instance, "parameters q0, v0, lon0 and h0 must be finite");
@@ -201,62 +134,61 @@ static int initial_covariance(FmuInstance *instance, const ModelData *d, const S
         fmu_log_error(instance, "parameter sensors0 must be finite");
         return 0;
     }
+    /* the parameters of gf_ins_initial_std's blocks, in its order */
     const struct {
         const char *name, *unit;
         const double *x;
-        int n, used;
+        int n;
     } blocks[] = {
-        {"std0_vel", "m/s", d->std0_vel_m_s, 3, 1},
-        {"std0_pos", "m", d->std0_pos_m, 3, 1},
-        {"std0_att", "rad", d->std0_att_rad, 3, 1},
-        {"std0_gyro_bias", "rad/s", d->std0_gyro_bias_rad_s, 3, 1},
-        {"std0_accel_bias", "m/s2", d->std0_accel_bias_m_s2, 3, 1},
-        {"std0_gyro_scale", "", d->std0_gyro_scale, 3, d->cfg.scale_states},
-        {"std0_accel_scale", "", d->std0_accel_scale, 3, d->cfg.scale_states},
-        {"std0_baro_bias", "m", &d->std0_baro_bias_m, 1, d->cfg.baro_state},
-        {"std0_odo_scale", "", &d->std0_odo_scale, 1, d->cfg.odo_state},
-        {"std0_odo_mount", "rad", d->std0_odo_mount_rad, 2, d->cfg.odo_mount_state},
+        {"std0_vel", "m/s", d->std0_vel_m_s, 3},
+        {"std0_pos", "m", d->std0_pos_m, 3},
+        {"std0_att", "rad", d->std0_att_rad, 3},
+        {"std0_gyro_bias", "rad/s", d->std0_gyro_bias_rad_s, 3},
+        {"std0_accel_bias", "m/s2", d->std0_accel_bias_m_s2, 3},
+        {"std0_gyro_scale", "", d->std0_gyro_scale, 3},
+        {"std0_accel_scale", "", d->std0_accel_scale, 3},
+        {"std0_baro_bias", "m", &d->std0_baro_bias_m, 1},
+        {"std0_odo_scale", "", &d->std0_odo_scale, 1},
+        {"std0_odo_mount", "rad", d->std0_odo_mount_rad, 2},
     };
-    double sd[GF_INS_MAX_STATES];
-    int k = 0;
-    for (size_t b = 0; b < sizeof blocks / sizeof blocks[0]; ++b) {
-        if (!blocks[b].used)
-            continue;
-        const double *x = blocks[b].x;
-        if (!all_positive(x, blocks[b].n)) {
-            if (blocks[b].n == 3)
-                fmu_log_error(instance, "parameter %s = [%g, %g, %g] %s: every element must be "
-                              "finite and > 0", blocks[b].name, x[0], x[1], x[2], blocks[b].unit);
-            else if (blocks[b].n == 2)
-                fmu_log_error(instance, "parameter %s = [%g, %g] %s: every element must be "
-                              "finite and > 0", blocks[b].name, x[0], x[1], blocks[b].unit);
-            else
-                fmu_log_error(instance, "parameter %s = %g %s must be finite and > 0",
-                              blocks[b].name, x[0], blocks[b].unit);
-            return 0;
-        }
-        for (int i = 0; i < blocks[b].n; ++i)
-            sd[k++] = x[i];
-    }
-    if (k != n) { /* the flags were checked by the core: cannot happen */
-        fmu_log_error(instance, "internal: %d initial std for %d states", k, (int)n);
-        return 0;
-    }
-    gf_earth e;
-    if (gf_earth_update(&e, s->lat_rad, s->h_m, NULL, 1.0) != GF_OK) {
+    gf_ins_initial_std sd;
+    memcpy(sd.velocity_std_m_s, d->std0_vel_m_s, sizeof sd.velocity_std_m_s);
+    memcpy(sd.position_std_m, d->std0_pos_m, sizeof sd.position_std_m);
+    memcpy(sd.attitude_std_rad, d->std0_att_rad, sizeof sd.attitude_std_rad);
+    memcpy(sd.gyro_bias_std_rad_s, d->std0_gyro_bias_rad_s, sizeof sd.gyro_bias_std_rad_s);
+    memcpy(sd.accel_bias_std_m_s2, d->std0_accel_bias_m_s2, sizeof sd.accel_bias_std_m_s2);
+    memcpy(sd.gyro_scale_std, d->std0_gyro_scale, sizeof sd.gyro_scale_std);
+    memcpy(sd.accel_scale_std, d->std0_accel_scale, sizeof sd.accel_scale_std);
+    sd.baro_bias_std_m = d->std0_baro_bias_m;
+    sd.odometer_scale_std = d->std0_odo_scale;
+    memcpy(sd.odometer_mount_std_rad, d->std0_odo_mount_rad, sizeof sd.odometer_mount_std_rad);
+    if (!isnan(s->heading_std_rad))   /* an alignment's heading sigma */
+        sd.attitude_std_rad[2] = s->heading_std_rad;
+    int32_t bad = 0;
+    const gf_status st = gf_ins_initial_covariance(&d->cfg, s->lat_rad, s->h_m, &sd, P0, &bad);
+    if (st == GF_OK)
+        return 1;
+    if (bad >= 1 && bad <= (int32_t)(sizeof blocks / sizeof blocks[0])) {
+        const double *x = blocks[bad - 1].x;
+        if (blocks[bad - 1].n == 3)
+            fmu_log_error(instance, "parameter %s = [%g, %g, %g] %s: every element must be "
+                          "finite and > 0", blocks[bad - 1].name, x[0], x[1], x[2],
+                          blocks[bad - 1].unit);
+        else if (blocks[bad - 1].n == 2)
+            fmu_log_error(instance, "parameter %s = [%g, %g] %s: every element must be "
+                          "finite and > 0", blocks[bad - 1].name, x[0], x[1], blocks[bad - 1].unit);
+        else
+            fmu_log_error(instance, "parameter %s = %g %s must be finite and > 0",
+                          blocks[bad - 1].name, x[0], blocks[bad - 1].unit);
+    } else if (st == GF_ERR_OUT_OF_RANGE) {
+        fmu_log_error(instance, "parameter lat0 = %g rad (start latitude %g rad): it must be "
+                      "within +-89 deg (the ENU error model is singular near the poles)",
+                      d->lat0_rad, s->lat_rad);
+    } else {
         fmu_log_error(instance, "start height %g m is absurd (parameter h0 or the GNSS height)",
                       s->h_m);
-        return 0;
     }
-    const double east = sd[GF_INS_IDX_POS], north = sd[GF_INS_IDX_POS + 1];
-    sd[GF_INS_IDX_POS] = north / (e.R_M_m + s->h_m);                           /* dlat */
-    sd[GF_INS_IDX_POS + 1] = east / ((e.R_N_m + s->h_m) * e.cos_lat);          /* dlon */
-    if (!isnan(s->heading_std_rad))
-        sd[GF_INS_IDX_ATT + 2] = s->heading_std_rad;
-    memset(P0, 0, (size_t)(n * n) * sizeof *P0);
-    for (int i = 0; i < n; ++i)
-        P0[i * n + i] = sd[i] * sd[i];
-    return 1;
+    return 0;
 }
 
 static void reset_monitor(ModelData *d)
@@ -289,22 +221,18 @@ static FmuStatus start_filter_at(FmuInstance *instance, ModelData *d, double t0_
                                  const StartPoint *s)
 {
     double P0[GF_INS_MAX_STATES * GF_INS_MAX_STATES];
-    int32_t n = 0, bad = 0;
-    if (gf_ins_state_count(&d->cfg, &n) != GF_OK) {
-        /* the core's check names the field; the filter is not touched */
-        memset(P0, 0, sizeof P0);
-        gf_ins_init(&d->filter, &d->cfg, t0_s, s->q_bn, s->v_n_m_s, s->lat_rad, s->lon_rad,
-                    s->h_m, s->sensors, P0, &bad);
-        log_bad_config(instance, &d->cfg, bad);
+    int32_t bad = 0;
+    if (gf_ins_config_check(&d->cfg, &bad) != GF_OK) {   /* names the field */
+        log_bad_config(instance, d, bad);
         return FMU_ERROR;
     }
-    if (!initial_covariance(instance, d, s, n, P0))
+    if (!initial_covariance(instance, d, s, P0))
         return FMU_ERROR;
     const gf_status st = gf_ins_init(&d->filter, &d->cfg, t0_s, s->q_bn, s->v_n_m_s, s->lat_rad,
                                      s->lon_rad, s->h_m, s->sensors, P0, &bad);
     if (st != GF_OK) {
         if (bad)
-            log_bad_config(instance, &d->cfg, bad);
+            log_bad_config(instance, d, bad);
         else
             fmu_log_error(instance, "initial state refused (%s): q0 must be a finite, non-zero "
                           "quaternion", gf_status_string(st));
@@ -557,7 +485,7 @@ static FmuStatus travel_end(FmuInstance *instance, ModelData *d, double t_s,
     s.heading_std_rad = hypot(d->align_travel_std_rad, s_dir);
     memcpy(s.v_n_m_s, vel->z, sizeof s.v_n_m_s);
     memcpy(s.sensors, f->sensors, sizeof s.sensors);
-    gf_q_rotate(s.q_bn, d->cfg.gnss_lever_m, lever_n);
+    gf_q_rotate(s.q_bn, d->cfg.gnss_lever_arm_m, lever_n);
     const double dt = t_s - pos->t_s;
     double dp[3];   /* IMU position - antenna position at t_m, then moved on to t (m, ENU) */
     for (int i = 0; i < 3; ++i)
@@ -802,16 +730,16 @@ const char *ins_gnss_state_problem(const ModelData *d)
     if (f->n_states != n)
         return "filter n_states does not match its configuration";
     int32_t next = GF_INS_BASE_STATES, idx_sg = -1, idx_sa = -1, idx_baro = -1, idx_odo = -1;
-    if (f->cfg.scale_states) {
+    if (f->cfg.scale_factors) {
         idx_sg = next;
         idx_sa = next + 3;
         next += 6;
     }
-    if (f->cfg.baro_state)
+    if (f->cfg.baro_bias)
         idx_baro = next++;
-    if (f->cfg.odo_state)
+    if (f->cfg.odometer_scale)
         idx_odo = next++;
-    const int32_t idx_mount = f->cfg.odo_mount_state ? next : -1;
+    const int32_t idx_mount = f->cfg.odometer_mount ? next : -1;
     if (f->idx_sg != idx_sg || f->idx_sa != idx_sa || f->idx_baro != idx_baro ||
         f->idx_odo != idx_odo || f->idx_mount != idx_mount)
         return "filter idx_* do not match its configuration";

@@ -11,15 +11,15 @@ import pathlib
 import runpy
 
 _COMMON = runpy.run_path(str(pathlib.Path(__file__).resolve().parent.parent / "common" / "nav_params.py"))
+# the filter's settings table, read by path (the build runs without the package)
+_SETTINGS = runpy.run_path(str(pathlib.Path(__file__).resolve().parents[3] / "gfins_fmi" /
+                               "estimation" / "settings.py"))
 
 DEG = math.pi / 180.0
-# default IMU: gyro ARW 0.3 deg/sqrt(h), bias 10 deg/h over 1 h; accelerometer noise
-# density 100 ug/sqrt(Hz), bias 100 ug over 1 h (noise in SI as gf_ins_noise takes it:
-# FilterConfig.noise_si() of that ImuNoise)
-_GYRO_ARW = 0.3 * DEG / 60.0
-_ACCEL_VRW = 100 * 9.80665e-6 / math.sqrt(2.0)
-_GYRO_BIAS = 10.0 * DEG / 3600.0
-_ACCEL_BIAS = 100 * 9.80665e-6
+# the default IMU of the FMU's noise parameters (settings.FMU_IMU_NOISE), also the default
+# initial bias uncertainty
+_GYRO_BIAS = _SETTINGS["FMU_IMU_NOISE"]["gyro_bias_std_rad_s"]
+_ACCEL_BIAS = _SETTINGS["FMU_IMU_NOISE"]["accel_bias_std_m_s2"]
 
 #: measurement kinds of the per-kind monitoring outputs, index = GF_INS_MEAS_* - 1
 KINDS = "gnss_pos, gnss_vel, baro, odometer, nhc, zupt, zaru"
@@ -54,103 +54,40 @@ _NAN = float("nan")
 
 
 def _filter_parameters():
-    c, q = "cfg.", "cfg.noise."
-    return [
-        _p("filter", None, 0, c + "filter", "0: extended Kalman filter; 1: unscented (sigma "
-           "points through the mechanization and the nonlinear measurement models)", "Int32"),
-        _p("input_mode", None, 0, c + "input", "0: increments (dtheta, dv); 1: rates "
-           "(gyro_rate, specific_force)", "Int32"),
-        _p("coning", None, 1, c + "coning", "1: two-sample coning and sculling corrections "
-           "in the mechanization; 0: none", "Int32"),
-        _p("propagation_interval", "s", 0.1, c + "prop_interval_s", "Covariance "
-           "propagation interval, >= 0 (0: every IMU sample); measurements propagate to "
-           "their own instant in any case"),
-        _p("max_imu_gap", "s", 0.5, c + "max_imu_gap_s", "A longer IMU interval is "
-           "refused (error), > 0"),
-        _p("max_rate", "rad/s", 50.0, c + "max_rate_rad_s",
-           "Samples with a larger angular rate are refused as absurd"),
-        _p("max_specific_force", "m/s2", 1000.0, c + "max_specific_force_m_s2",
-           "Samples with a larger specific force are refused as absurd"),
-        _p("scale_states", None, 0, c + "scale_states", "1: gyro and accelerometer "
-           "scale-factor states (21 states)", "Int32"),
-        _p("baro_state", None, 0, c + "baro_state", "1: barometer bias state", "Int32"),
-        _p("odo_state", None, 0, c + "odo_state", "1: odometer scale-factor state", "Int32"),
-        _p("odo_mount_state", None, 0, c + "odo_mount_state", "1: odometer boresight states "
-           "(pitch, heading of its axes in the body frame)", "Int32"),
-        _p("ukf_alpha", None, 0.5, c + "ukf_alpha", "UKF sigma-point spread alpha, > 0 "
-           "(seed 004: small; 0.5 keeps the points within ~2 sigma)"),
-        _p("ukf_beta", None, 2.0, c + "ukf_beta", "UKF beta (2: Gaussian)"),
-        _p("ukf_kappa", None, 0.0, c + "ukf_kappa", "UKF kappa (N + kappa > 0)"),
-        _p("gyro_arw", None, _GYRO_ARW, q + "gyro_arw_rad_sqrt_s",
-           "Gyro white noise (angle random walk), rad/sqrt(s), >= 0"),
-        _p("accel_vrw", None, _ACCEL_VRW, q + "accel_vrw_m_s_sqrt_s",
-           "Accelerometer white noise (velocity random walk), m/s/sqrt(s), >= 0"),
-        _p("gyro_bias_std", "rad/s", _GYRO_BIAS, q + "gyro_bias_std_rad_s",
-           "Gyro bias, first-order Gauss-Markov: steady-state std, >= 0"),
-        _p("gyro_bias_tau", "s", 3600.0, q + "gyro_bias_tau_s",
-           "Gyro bias correlation time, >= 0 (0: random constant)"),
-        _p("accel_bias_std", "m/s2", _ACCEL_BIAS, q + "accel_bias_std_m_s2",
-           "Accelerometer bias, Gauss-Markov steady-state std, >= 0"),
-        _p("accel_bias_tau", "s", 3600.0, q + "accel_bias_tau_s",
-           "Accelerometer bias correlation time, >= 0 (0: random constant)"),
-        _p("gyro_scale_std", None, 1e-3, q + "gyro_scale_std",
-           "Gyro scale-factor error, Gauss-Markov std (dimensionless), >= 0"),
-        _p("gyro_scale_tau", "s", 0.0, q + "gyro_scale_tau_s",
-           "Gyro scale-factor correlation time, >= 0 (0: random constant)"),
-        _p("accel_scale_std", None, 1e-3, q + "accel_scale_std",
-           "Accelerometer scale-factor error, Gauss-Markov std, >= 0"),
-        _p("accel_scale_tau", "s", 0.0, q + "accel_scale_tau_s",
-           "Accelerometer scale-factor correlation time, >= 0"),
-        _p("baro_bias_std", "m", 1.0, q + "baro_bias_std_m",
-           "Barometer bias, Gauss-Markov std, >= 0"),
-        _p("baro_bias_tau", "s", 3600.0, q + "baro_bias_tau_s",
-           "Barometer bias correlation time, >= 0"),
-        _p("odo_scale_std", None, 0.01, q + "odo_scale_std",
-           "Odometer scale-factor error, Gauss-Markov std, >= 0"),
-        _p("odo_scale_tau", "s", 0.0, q + "odo_scale_tau_s",
-           "Odometer scale-factor correlation time, >= 0"),
-        _p("odo_mount_std", "rad", 0.035, q + "odo_mount_std_rad",
-           "Odometer boresight (pitch, heading), Gauss-Markov std, >= 0"),
-        _p("odo_mount_tau", "s", 0.0, q + "odo_mount_tau_s",
-           "Odometer boresight correlation time, >= 0 (0: random constant)"),
-        _p("gnss_lever_arm", "m", 0.0, c + "gnss_lever_m",
-           "GNSS antenna phase centre from the IMU, body right-front-up", shape=(3,)),
-        _p("odo_lever_arm", "m", 0.0, c + "odo_lever_m",
-           "Odometer wheel contact point from the IMU, body right-front-up", shape=(3,)),
-        _p("odo_mount", "rad", 0.0, c + "odo_mount_rad",
-           "Odometer boresight: pitch (nose-up +) and heading (clockwise +) of its measuring "
-           "axes in the body frame, each |.| < pi/2; the odometer and NHC act along those "
-           "axes (with odo_mount_state the filter estimates a correction to them)", shape=(2,)),
-        _p("gate_prob", None, 0.9999, c + "gate_prob", "Innovation gate: a measurement "
-           "whose NIS exceeds the chi-square quantile of this probability is rejected; "
-           "0: no gate, else in (0, 1)"),
-        _p("gate_reset_count", None, 5, c + "gate_reset_count", "After this many consecutive "
-           "gate rejections of one measurement kind the next one is applied (logged as "
-           "forced, update_status 4), so that a filter that drifted away recovers; 0: never",
-           "Int32"),
-        _p("max_latency", "s", 0.0, c + "max_latency_s", "Measurements delivered after "
-           "their time of validity (a receiver's latency) are used up to this late, >= 0: "
-           "predicted from the nominal state kept at their time of validity (the last 128 "
-           "IMU samples) and applied to the current state; 0: they are stale"),
-        _p("nhc", None, 0, c + "nhc", "1: non-holonomic constraint updates (lateral and "
-           "vertical velocity of the wheel point 0)", "Int32"),
-        _p("nhc_std", "m/s", 0.1, c + "nhc_std_m_s", "NHC measurement std, > 0"),
-        _p("nhc_interval", "s", 0.1, c + "nhc_interval_s",
-           "At most one NHC update per interval, >= 0"),
-        _p("zupt", None, 0, c + "zupt", "1: zero-velocity updates when the standstill "
-           "detector says the IMU is still", "Int32"),
-        _p("zupt_std", "m/s", 0.01, c + "zupt_std_m_s", "ZUPT measurement std, > 0"),
-        _p("zaru_std", "rad/s", 0.0, c + "zaru_std_rad_s",
-           "> 0: also zero-angular-rate updates at standstill, with this std"),
-        _p("zupt_interval", "s", 0.1, c + "zupt_interval_s",
-           "At most one ZUPT (and ZARU) per interval, >= 0"),
-        _p("still_window", "s", 0.5, c + "still_window_s",
-           "Standstill detector: averaging time, > 0"),
-        _p("still_accel_std", "m/s2", 0.05, c + "still_accel_std_m_s2",
-           "Standstill detector: std of |f| over the window below this, > 0"),
-        _p("still_gyro", "rad/s", 0.01, c + "still_gyro_rad_s",
-           "Standstill detector: mean |w| over the window below this, > 0"),
-    ]
+    """One parameter per row of the settings table that the FMU can use, named as in C
+    and Python, pointing at the member of ModelData.cfg."""
+    out = []
+    for st in _SETTINGS["fmu_settings"]():
+        type_ = "Float64" if st.kind in ("float", "vector") else "Int32"
+        text = st.meaning[0].upper() + st.meaning[1:]
+        if st.kind == "enum":
+            text += " (" + ", ".join(f"{v}: {k}" for k, v in st.choices.items()) + ")"
+        elif st.kind != "flag":
+            text += f"; {st.describe_bounds()}"
+        out.append(_p(st.short, st.unit or None, st.fmu_start, "cfg." + st.member, text, type_,
+                      shape=(st.size,) if st.kind == "vector" else ()))
+    return out
+
+
+def _refusal_table():
+    """C: the FMU parameter, unit and bounds of each configuration field the core can
+    refuse, by its member name (gf_ins_config_field), for model.c's refusal message."""
+    rows = []
+    for st in _SETTINGS["fmu_settings"]():
+        is_int = 0 if st.kind in ("float", "vector") else 1
+        bounds = " or ".join(f"{v} ({k})" for k, v in st.choices.items()) if st.choices \
+            else st.describe_bounds()
+        rows.append(f'    {{"{st.member}", "{st.short}", offsetof(ModelData, cfg.{st.member}), '
+                    f'{is_int}, {st.size}, "{st.unit or ""}", "{bounds}"}},')
+    return "\n".join([
+        "/* the filter settings the FMU exposes (gfins_fmi/estimation/settings.py) */",
+        "typedef struct InsSetting {",
+        "    const char *member, *parameter;",
+        "    size_t offset;",
+        "    int is_int, count;",
+        "    const char *unit, *bounds;",
+        "} InsSetting;",
+        "static const InsSetting kInsSettings[] = {", *rows, "};", ""])
 
 
 def _initial_uncertainty():
@@ -170,16 +107,16 @@ def _initial_uncertainty():
         _p("std0_accel_bias", "m/s2", _ACCEL_BIAS, "std0_accel_bias_m_s2",
            "Initial 1-sigma of the accelerometer biases, > 0", shape=(3,)),
         _p("std0_gyro_scale", None, 1e-3, "std0_gyro_scale",
-           "Initial 1-sigma of the gyro scale factors (scale_states = 1), > 0", shape=(3,)),
+           "Initial 1-sigma of the gyro scale factors (scale_factors = 1), > 0", shape=(3,)),
         _p("std0_accel_scale", None, 1e-3, "std0_accel_scale",
-           "Initial 1-sigma of the accelerometer scale factors (scale_states = 1), > 0",
+           "Initial 1-sigma of the accelerometer scale factors (scale_factors = 1), > 0",
            shape=(3,)),
         _p("std0_baro_bias", "m", 1.0, "std0_baro_bias_m",
-           "Initial 1-sigma of the barometer bias (baro_state = 1), > 0"),
+           "Initial 1-sigma of the barometer bias (baro_bias = 1), > 0"),
         _p("std0_odo_scale", None, 0.01, "std0_odo_scale",
-           "Initial 1-sigma of the odometer scale factor (odo_state = 1), > 0"),
+           "Initial 1-sigma of the odometer scale factor (odometer_scale = 1), > 0"),
         _p("std0_odo_mount", "rad", 0.035, "std0_odo_mount_rad",
-           "Initial 1-sigma of the odometer boresight pitch and heading (odo_mount_state "
+           "Initial 1-sigma of the odometer boresight pitch and heading (odometer_mount "
            "= 1), > 0", shape=(2,)),
     ]
 
@@ -306,4 +243,5 @@ MODEL = dict(
         *_measurement_inputs(),
         *_outputs(),
     ],
+    c_extra=_refusal_table(),
 )

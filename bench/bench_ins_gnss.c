@@ -65,6 +65,8 @@ int main(int argc, char **argv)
     cfg.noise.gyro_bias_std_rad_s = 5e-6; cfg.noise.gyro_bias_tau_s = 3600;
     cfg.noise.accel_bias_std_m_s2 = 1e-3; cfg.noise.accel_bias_tau_s = 3600;
     cfg.gnss_lever_arm_m[0] = 0.2; cfg.gnss_lever_arm_m[1] = -0.6; cfg.gnss_lever_arm_m[2] = 1.1;
+    cfg.gate_probability = 0.0;   /* no gate, as in the figures of docs/benchmarks.md */
+    cfg.gate_reset_count = 0;
     double P0[15 * 15] = {0};
     const double d[15] = {0.01, 0.01, 0.01, 1e-14, 1e-14, 1, 1e-4, 1e-4, 1e-3, 1e-11, 1e-11, 1e-11, 1e-6, 1e-6, 1e-6};
     for (int i = 0; i < 15; ++i)

@@ -30,6 +30,8 @@ gf_status gf_ins_config_default(gf_ins_config *cfg)
     cfg->ukf_alpha = 0.5;
     cfg->ukf_beta = 2.0;
     cfg->ukf_kappa = 0.0;
+    cfg->gate_probability = 0.9999;
+    cfg->gate_reset_count = 5;
     cfg->nhc_std_m_s = 0.1;
     cfg->nhc_interval_s = 0.1;
     cfg->zupt_std_m_s = 0.01;
@@ -39,6 +41,13 @@ gf_status gf_ins_config_default(gf_ins_config *cfg)
     cfg->standstill_gyro_rad_s = 0.01;
     cfg->speed_min_m_s = 0.5;
     cfg->subsamples = 1;
+    /* the optional states' models (the IMU's noise stays 0: set it from the datasheet) */
+    cfg->noise.gyro_scale_std = 1e-3;
+    cfg->noise.accel_scale_std = 1e-3;
+    cfg->noise.baro_bias_std_m = 1.0;
+    cfg->noise.baro_bias_tau_s = 3600.0;
+    cfg->noise.odometer_scale_std = 0.01;
+    cfg->noise.odometer_mount_std_rad = 0.035;
     return GF_OK;
 }
 

@@ -333,8 +333,8 @@ typedef struct gf_ins_filter {
 } gf_ins_filter;
 
 /* Defaults: increments with coning, EKF, 15 states, propagation every 0.1 s, IMU gap
- * limit 0.5 s, UKF alpha 0.5, beta 2, kappa 0... see gf_ins_config.c; noise all zero
- * (set it). */
+ * limit 0.5 s, UKF alpha 0.5, beta 2, kappa 0... see gf_ins_config.c (= the settings
+ * table's defaults); the IMU's noise zero (set it). */
 gf_status gf_ins_config_default(gf_ins_config *cfg);
 
 /* Checks every field; *bad (may be NULL) = 0 when valid, else the code of the first bad

@@ -7,13 +7,15 @@ block), the names of measurement kinds, update outcomes and sensor estimates, an
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, fields
+import textwrap
+from dataclasses import dataclass, field, make_dataclass
 from typing import Optional
 
 import numpy as np
 
-from gfins_fmi._lib import GfinsError, check_status, ffi, lib
+from gfins_fmi._lib import GfinsError, check_status, ffi, lib, ptr, status_text
 from gfins_fmi.estimation.error_model import ins_state_names
+from gfins_fmi.estimation.settings import SETTINGS, Setting, by_member, python_settings
 from gfins_fmi.nav.earth import deg
 from gfins_fmi.nav.imu_errors import DEG_H, ImuNoise
 from gfins_fmi.nav.strapdown import NavState
@@ -70,150 +72,94 @@ def vector3(name, value, unit):
     return arr
 
 
-@dataclass
-class FilterConfig:
-    """Configuration of the integrated-navigation filter (units in the names).
+def _show(value) -> str:
+    """A value as a message shows it: plain numbers (no numpy reprs), lists for arrays."""
+    if isinstance(value, (np.ndarray, list, tuple)):
+        return "[" + ", ".join(_show(v) for v in np.asarray(value, dtype=object).ravel()) + "]"
+    if isinstance(value, (bool, np.bool_)):
+        return str(bool(value))
+    if isinstance(value, (int, np.integer)):
+        return str(int(value))
+    if isinstance(value, (float, np.floating)):
+        return repr(float(value))
+    return repr(value)
 
-    Parameters
-    ----------
-    imu : ImuNoise
-        The IMU's random errors in datasheet units: angle/velocity random walk become the
-        white process noise, bias instability and correlation time the first-order
-        Gauss–Markov bias model (a rate random walk adds to its driving noise).
-    filter : {"ekf", "ukf"}
-    input : {"increments", "rates"}
-        What the IMU record holds (rad and m/s per interval, or rad/s and m/s² at the
-        sample times).
-    coning : two-sample coning/sculling corrections in the mechanization.
-    propagation_interval_s : covariance propagation interval (0: every IMU sample);
-        measurements propagate to their own instant in any case.
-    scale_factors : gyro and accelerometer scale-factor states (21 states), with
-        Gauss–Markov std/correlation time ``*_scale_std``/``*_scale_tau_s``
-        (dimensionless; tau 0 = random constant).
-    baro_bias, odometer_scale : bias state of the barometer (m) and scale-factor state of
-        the odometer, with their std/tau.
-    gnss_lever_arm_m, odometer_lever_arm_m : IMU -> antenna and IMU -> wheel contact point,
-        body axes (right, front, up), m.
-    odometer_mount_rad : (pitch, heading) of the odometer's measuring axes in the body
-        frame (boresight, fixed parameters; nose-up and clockwise positive, |.| < 90 deg):
-        the odometer and the non-holonomic constraints then act along those axes.
-    odometer_mount, odometer_mount_std_rad, odometer_mount_tau_s : estimate the odometer
-        boresight: two states (pitch, heading corrections to ``odometer_mount_rad``, rad,
-        Gauss-Markov std/tau, tau 0 = random constant), observed through the odometer and
-        NHC updates while the vehicle moves; the estimated correction is the output
-        ``sensors`` columns ``odo_pitch_rad``, ``odo_heading_rad`` (the angles used are
-        ``odometer_mount_rad`` + those).
-    gate_probability : NIS gate (chi-square probability; None: no gate).
-    gate_reset_count : after this many consecutive gate rejections of one measurement kind
-        the next one is applied anyway (logged as "forced"), so that a filter that has
-        drifted away recovers; 0: never.
-    nhc, nhc_std_m_s, nhc_interval_s : non-holonomic constraint (lateral and vertical
-        velocity of the odometer point = 0) for ground vehicles.
-    zupt, zupt_std_m_s, zaru_std_rad_s, zupt_interval_s : zero-velocity (and, with
-        zaru_std_rad_s > 0, zero-angular-rate) updates when the standstill detector
-        (``standstill_*``: window, std of |f|, mean |w|) says the IMU is still. The
-        detector cannot tell standstill from constant velocity on a perfectly smooth
-        path; the NIS gate rejects a wrong zero-velocity update.
-    ukf_alpha, ukf_beta, ukf_kappa : sigma-point parameters (seed 004: beta 2, kappa 0,
-        alpha small; 0.5 keeps the points within ~2 sigma).
-    max_imu_gap_s : a longer IMU interval stops the run with :class:`FilterError`.
-    max_latency_s : measurements handed in after their time of validity (the FMU, a
-        receiver with latency) are used up to this late (0: such measurements are stale);
-        see docs/estimation.md.
-    speed_min_m_s : tachometer speed updates (``speed=`` records, seed 003) are refused at
-        or below this INS horizontal speed (the direction of the velocity is undefined
-        there); logged as "low_speed".
-    subsamples : IMU samples per navigation update in :meth:`IntegratedNavigator.run`
-        (1..4; increments only): between measurement and propagation instants the
-        mechanization takes groups of this many samples with the matching multi-sample
-        coning and sculling corrections (``SinsConfig(subsamples=)``, docs/sins.md), the
-        usual way of processing a high-rate IMU; the solution then has one row per
-        navigation update (a group's end, or a sample processed alone next to a
-        measurement), not one per sample. Ignored with ZUPT or ``max_latency_s > 0``
-        (per-sample work) and by the FMU and the backward passes. 1: every sample.
-    """
 
-    imu: ImuNoise = field(default_factory=ImuNoise)
-    filter: str = "ekf"
-    input: str = "increments"
-    coning: bool = True
-    propagation_interval_s: float = 0.1
-    scale_factors: bool = False
-    gyro_scale_std: float = 1e-3
-    gyro_scale_tau_s: float = 0.0
-    accel_scale_std: float = 1e-3
-    accel_scale_tau_s: float = 0.0
-    baro_bias: bool = False
-    baro_bias_std_m: float = 1.0
-    baro_bias_tau_s: float = 3600.0
-    odometer_scale: bool = False
-    odometer_scale_std: float = 0.01
-    odometer_scale_tau_s: float = 0.0
-    gnss_lever_arm_m: tuple = (0.0, 0.0, 0.0)
-    odometer_lever_arm_m: tuple = (0.0, 0.0, 0.0)
-    odometer_mount_rad: tuple = (0.0, 0.0)
-    odometer_mount: bool = False
-    odometer_mount_std_rad: float = 0.035
-    odometer_mount_tau_s: float = 0.0
-    gate_probability: Optional[float] = 0.9999
-    gate_reset_count: int = 5
-    nhc: bool = False
-    nhc_std_m_s: float = 0.1
-    nhc_interval_s: float = 0.1
-    zupt: bool = False
-    zupt_std_m_s: float = 0.01
-    zaru_std_rad_s: float = 0.0
-    zupt_interval_s: float = 0.1
-    standstill_window_s: float = 0.5
-    standstill_accel_std_m_s2: float = 0.05
-    standstill_gyro_rad_s: float = 0.01
-    ukf_alpha: float = 0.5
-    ukf_beta: float = 2.0
-    ukf_kappa: float = 0.0
-    max_imu_gap_s: float = 0.5
-    max_latency_s: float = 0.0
-    max_rate_rad_s: float = 50.0
-    max_specific_force_m_s2: float = 1000.0
-    speed_min_m_s: float = 0.5
-    subsamples: int = 1
+def _refuse(st: Setting, value, why: str = "") -> ValueError:
+    unit = f" {st.unit}" if st.unit else ""
+    bounds = "None (no gate) or in (0, 1)" if st.bounds == "probability" else st.describe_bounds()
+    return ValueError(f"FilterConfig.{st.python_name} = {_show(value)}{unit}: must be {bounds}{why}")
+
+
+def _checked(st: Setting, value):
+    """A FilterConfig field's value in its Python form, checked against the row's kind and
+    bounds (the C core checks the same again, and names what it refuses)."""
+    if st.kind == "flag":
+        if not (isinstance(value, (bool, np.bool_)) or (isinstance(value, (int, np.integer))
+                                                       and value in (0, 1))):
+            raise _refuse(st, value, " (True or False)")
+        return bool(value)
+    if st.kind == "enum":
+        if not isinstance(value, str) or value not in st.choices:
+            raise _refuse(st, value)
+        return value
+    if st.kind == "int":
+        lowest = 1 if st.bounds == "subsamples" else 0
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) \
+                or value < lowest or (st.bounds == "subsamples" and value > 4):
+            raise _refuse(st, value)
+        return int(value)
+    if st.kind == "vector":
+        arr = np.asarray(value, dtype=float) if not isinstance(value, str) else np.array(np.nan)
+        if arr.shape != (st.size,) and not (st.size == 3 and arr.ndim == 0):
+            raise _refuse(st, value, f" ({st.size} values)")
+        arr = np.broadcast_to(arr, (st.size,))
+        ok = np.isfinite(arr) & ((np.abs(arr) < np.pi / 2) if st.bounds == "half_pi" else True)
+        if not np.all(ok):
+            raise _refuse(st, value)
+        return tuple(float(x) for x in arr)
+    # a float
+    if st.bounds == "probability" and value is None:
+        return None
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise _refuse(st, value) from None
+    ok = {"finite": math.isfinite(x), "nonneg": math.isfinite(x) and x >= 0,
+          "positive": math.isfinite(x) and x > 0,
+          "probability": 0 < x < 1}[st.bounds]
+    if not ok:
+        raise _refuse(st, value)
+    return value
+
+
+class _FilterConfigMethods:
+    """What FilterConfig does with its fields (the fields come from the settings table)."""
 
     def __post_init__(self):
         if not isinstance(self.imu, ImuNoise):
-            raise TypeError(f"imu must be an ImuNoise (datasheet units); got {type(self.imu).__name__}")
-        if self.filter not in ("ekf", "ukf"):
-            raise ValueError(f"filter must be 'ekf' or 'ukf'; got {self.filter!r}")
-        if self.input not in ("increments", "rates"):
-            raise ValueError(f"input must be 'increments' or 'rates'; got {self.input!r}")
-        if self.gate_probability is not None and not (0 < self.gate_probability < 1):
-            raise ValueError(f"gate_probability must be in (0, 1) or None; got {self.gate_probability!r}")
-        for f in fields(self):
-            v = getattr(self, f.name)
-            if isinstance(v, float) and not (np.isfinite(v) and v >= 0):
-                raise ValueError(f"{f.name} must be finite and >= 0; got {v!r}")
-        self.gnss_lever_arm_m = tuple(vector3("gnss_lever_arm_m", self.gnss_lever_arm_m, "m"))
-        self.odometer_lever_arm_m = tuple(vector3("odometer_lever_arm_m", self.odometer_lever_arm_m, "m"))
-        mount = np.asarray(self.odometer_mount_rad, dtype=float)
-        if mount.shape != (2,) or not np.all(np.abs(mount) < np.pi / 2):
-            raise ValueError(f"odometer_mount_rad must be (pitch, heading) in rad, each inside (-pi/2, pi/2); "
-                             f"got {self.odometer_mount_rad!r}")
-        self.odometer_mount_rad = tuple(float(x) for x in mount)
-        if isinstance(self.subsamples, bool) or not isinstance(self.subsamples, (int, np.integer)) \
-                or not 1 <= self.subsamples <= 4:
-            raise ValueError(f"subsamples must be an integer in 1..4; got {self.subsamples!r}")
-        if self.subsamples > 1 and self.input != "increments":
-            raise ValueError("subsamples > 1 needs input='increments' (the multi-sample coning "
-                             "and sculling corrections are formed from increments)")
-        self._c()   # the C checks, with messages naming the field
+            raise TypeError(f"FilterConfig.imu must be an ImuNoise (datasheet units); got "
+                            f"{type(self.imu).__name__}")
+        for st in python_settings():
+            setattr(self, st.python_name, _checked(st, getattr(self, st.python_name)))
+        self._c()   # the C checks, which name what they refuse
 
     @property
     def n_states(self) -> int:
-        return 15 + 6 * bool(self.scale_factors) + bool(self.baro_bias) + bool(self.odometer_scale) \
-            + 2 * bool(self.odometer_mount)
+        """Number of error states (15 .. 25), from the C core's layout."""
+        return int(self.layout().n_states)
+
+    def layout(self):
+        """The C core's state layout (``gf_ins_layout``: n_states, idx_* of every block,
+        -1 for blocks this configuration has not)."""
+        lay = ffi.new("gf_ins_layout *")
+        check_status(lib.gf_ins_state_layout(self._c(), lay), "gf_ins_state_layout")
+        return lay
 
     def noise_si(self) -> dict:
-        """The process noise in SI, as the C filter takes it (see :class:`ImuNoise` for
-        the datasheet conventions: a one-sided accelerometer noise density ASD has the
-        white-noise intensity ASD²/2)."""
+        """The process noise in SI, as the C filter takes it (``gf_ins_noise``, keyed by its
+        members; see :class:`ImuNoise` for the datasheet conventions: a one-sided
+        accelerometer noise density ASD has the white-noise intensity ASD²/2)."""
         m = self.imu
         gyro_tau = m.gyro_correlation_time_s if m.gyro_bias_instability_deg_h > 0 else 0.0
         accel_tau = m.accel_correlation_time_s if m.accel_bias_instability_ug > 0 else 0.0
@@ -229,57 +175,71 @@ class FilterConfig:
         if K_a > 0:
             accel_tau = accel_tau or 3600.0
             ab = math.sqrt(ab * ab + K_a * K_a * accel_tau / 2.0)
-        return dict(gyro_arw_rad_sqrt_s=m.gyro_arw_deg_sqrt_h * DEG / 60.0,
-                    accel_vrw_m_s_sqrt_s=m.accel_vrw_ug_sqrt_hz * UG / math.sqrt(2.0),
-                    gyro_bias_std_rad_s=gb, gyro_bias_tau_s=gyro_tau,
-                    accel_bias_std_m_s2=ab, accel_bias_tau_s=accel_tau,
-                    gyro_scale_std=self.gyro_scale_std, gyro_scale_tau_s=self.gyro_scale_tau_s,
-                    accel_scale_std=self.accel_scale_std, accel_scale_tau_s=self.accel_scale_tau_s,
-                    baro_bias_std_m=self.baro_bias_std_m, baro_bias_tau_s=self.baro_bias_tau_s,
-                    odo_scale_std=self.odometer_scale_std, odo_scale_tau_s=self.odometer_scale_tau_s,
-                    odo_mount_std_rad=self.odometer_mount_std_rad,
-                    odo_mount_tau_s=self.odometer_mount_tau_s)
+        out = dict(gyro_arw_rad_sqrt_s=m.gyro_arw_deg_sqrt_h * DEG / 60.0,
+                   accel_vrw_m_s_sqrt_s=m.accel_vrw_ug_sqrt_hz * UG / math.sqrt(2.0),
+                   gyro_bias_std_rad_s=gb, gyro_bias_tau_s=gyro_tau,
+                   accel_bias_std_m_s2=ab, accel_bias_tau_s=accel_tau)
+        for st in SETTINGS:   # the other noise members are FilterConfig fields
+            if st.member.startswith("noise.") and st.python_name:
+                out[st.short] = getattr(self, st.python_name)
+        return out
 
     def _c(self):
+        """The C struct (``gf_ins_config``), every member set from its table row; raises
+        ValueError naming the FilterConfig field (or the IMU noise) the core refuses."""
         cfg = ffi.new("gf_ins_config *")
         check_status(lib.gf_ins_config_default(cfg), "gf_ins_config_default")
-        cfg.input = lib.GF_SINS_INPUT_INCREMENTS if self.input == "increments" else lib.GF_SINS_INPUT_RATES
-        cfg.coning = int(bool(self.coning))
-        cfg.filter = lib.GF_INS_UKF if self.filter == "ukf" else lib.GF_INS_EKF
-        cfg.scale_states = int(bool(self.scale_factors))
-        cfg.baro_state = int(bool(self.baro_bias))
-        cfg.odo_state = int(bool(self.odometer_scale))
-        cfg.odo_mount_state = int(bool(self.odometer_mount))
-        cfg.prop_interval_s = float(self.propagation_interval_s)
-        cfg.max_imu_gap_s = float(self.max_imu_gap_s)
-        cfg.max_rate_rad_s = float(self.max_rate_rad_s)
-        cfg.max_specific_force_m_s2 = float(self.max_specific_force_m_s2)
-        cfg.ukf_alpha, cfg.ukf_beta, cfg.ukf_kappa = self.ukf_alpha, self.ukf_beta, self.ukf_kappa
-        for k, v in self.noise_si().items():
-            setattr(cfg.noise, k, float(v))
-        cfg.gnss_lever_m = list(self.gnss_lever_arm_m)
-        cfg.odo_lever_m = list(self.odometer_lever_arm_m)
-        cfg.odo_mount_rad = list(self.odometer_mount_rad)
-        cfg.gate_prob = float(self.gate_probability or 0.0)
-        if isinstance(self.gate_reset_count, bool) or not isinstance(self.gate_reset_count, (int, np.integer)) \
-                or self.gate_reset_count < 0:
-            raise ValueError(f"gate_reset_count must be an integer >= 0; got {self.gate_reset_count!r}")
-        cfg.gate_reset_count = int(self.gate_reset_count)
-        cfg.nhc, cfg.nhc_std_m_s, cfg.nhc_interval_s = int(bool(self.nhc)), self.nhc_std_m_s, self.nhc_interval_s
-        cfg.zupt, cfg.zupt_std_m_s = int(bool(self.zupt)), self.zupt_std_m_s
-        cfg.zaru_std_rad_s, cfg.zupt_interval_s = self.zaru_std_rad_s, self.zupt_interval_s
-        cfg.still_window_s = self.standstill_window_s
-        cfg.still_accel_std_m_s2 = self.standstill_accel_std_m_s2
-        cfg.still_gyro_rad_s = self.standstill_gyro_rad_s
-        cfg.max_latency_s = float(self.max_latency_s)
-        cfg.speed_min_m_s = float(self.speed_min_m_s)
-        cfg.subsamples = int(self.subsamples)
-        n = ffi.new("int32_t *")
-        st = lib.gf_ins_state_count(cfg, n)
-        if st != lib.GF_OK:
-            raise ValueError("FilterConfig rejected by the C core: check the positive "
-                             "parameters (std, intervals, windows, ukf_alpha > 0)")
+        noise = self.noise_si()
+        for st in SETTINGS:
+            owner, _, member = st.member.rpartition(".")
+            target = getattr(cfg, owner) if owner else cfg
+            value = noise[member] if owner == "noise" else st.c_value(getattr(self, st.python_name))
+            setattr(target, member, float(value) if owner == "noise" else value)
+        bad = ffi.new("int32_t *")
+        if lib.gf_ins_config_check(cfg, bad) != lib.GF_OK:
+            member = ffi.string(lib.gf_ins_config_field(bad[0])).decode()
+            st = by_member(member)
+            if not st.python_name:
+                raise ValueError(f"FilterConfig.imu gives {st.short} = {_show(noise[st.short])}: "
+                                 f"must be {st.describe_bounds()} (check the ImuNoise figures)")
+            raise _refuse(st, getattr(self, st.python_name))
         return cfg
+
+
+def _filter_config_doc() -> str:
+    lines = ["Configuration of the integrated-navigation filter (units in the names).", "",
+             "Every field but ``imu`` is a row of the settings table",
+             "(:mod:`gfins_fmi.estimation.settings`): the same name in C (``gf_ins_config``) and",
+             "as the ``gfins_ins_gnss`` FMU parameter.", "", "Parameters", "----------",
+             "imu : ImuNoise",
+             "    The IMU's random errors in datasheet units: angle/velocity random walk become",
+             "    the white process noise, bias instability and correlation time the first-order",
+             "    Gauss–Markov bias model (a rate random walk adds to its driving noise); in SI",
+             "    as the C filter takes them: :meth:`noise_si`."]
+    for st in python_settings():
+        kind = {"flag": "bool", "enum": " | ".join(repr(c) for c in st.choices) if st.choices else "str",
+                "int": "int", "float": "float", "vector": f"{st.size} floats"}[st.kind]
+        unit = f", {st.unit}" if st.unit else ""
+        lines.append(f"{st.python_name} : {kind}{unit}, default {st.default!r}")
+        text = f"{st.meaning[0].upper() + st.meaning[1:]}; {st.describe_bounds()}."
+        lines += textwrap.wrap(text, 84, initial_indent="    ", subsequent_indent="    ")
+    return "\n    ".join(lines) + "\n    "
+
+
+def _filter_config_fields() -> list:
+    out = [("imu", ImuNoise, field(default_factory=ImuNoise))]
+    types = {"flag": bool, "enum": str, "int": int, "float": float, "vector": tuple}
+    for st in python_settings():
+        typ = Optional[float] if st.bounds == "probability" else types[st.kind]
+        out.append((st.python_name, typ, field(default=st.default)))
+    return out
+
+
+#: The filter's configuration: a dataclass whose fields (but ``imu``) are the rows of the
+#: settings table, so that adding a setting is one row there
+FilterConfig = make_dataclass("FilterConfig", _filter_config_fields(), bases=(_FilterConfigMethods,),
+                              namespace={"__doc__": _filter_config_doc()})
+FilterConfig.__module__ = __name__
 
 
 @dataclass
@@ -303,41 +263,68 @@ class InitialState:
     odometer_mount_std_rad: Optional[object] = None   # (pitch, heading) or one for both, rad
     sensors: Optional[np.ndarray] = None      # initial estimates (SENSOR_NAMES order)
 
-    def covariance(self, config: FilterConfig) -> np.ndarray:
-        """P0 (n x n, diagonal) in the filter's states (position as dL, dlon rad, dh m)."""
+    def std_blocks(self, config: FilterConfig) -> dict:
+        """The 1-sigma of every error block as ``gf_ins_initial_std`` holds it (its member
+        names; lists for the 3- and 2-element blocks), the defaults filled in from the
+        configuration (the IMU's bias instability, the scale/bias/boresight stds)."""
         noise = config.noise_si()
+
+        def given(x, default):
+            return default if x is None else x
+
+        values = {
+            "velocity_std_m_s": self.velocity_std_m_s, "position_std_m": self.position_std_m,
+            "attitude_std_rad": self.attitude_std_rad,
+            "gyro_bias_std_rad_s": given(self.gyro_bias_std_rad_s, noise["gyro_bias_std_rad_s"]),
+            "accel_bias_std_m_s2": given(self.accel_bias_std_m_s2, noise["accel_bias_std_m_s2"]),
+            "gyro_scale_std": given(self.gyro_scale_std, config.gyro_scale_std),
+            "accel_scale_std": given(self.accel_scale_std, config.accel_scale_std),
+            "baro_bias_std_m": given(self.baro_bias_std_m, config.baro_bias_std_m),
+            "odometer_scale_std": given(self.odometer_scale_std, config.odometer_scale_std),
+            "odometer_mount_std_rad": given(self.odometer_mount_std_rad, config.odometer_mount_std_rad),
+        }
+        sizes = {"baro_bias_std_m": 0, "odometer_scale_std": 0, "odometer_mount_std_rad": 2}
+        out = {}
+        for name, value in values.items():
+            size = sizes.get(name, 3)
+            arr = np.asarray(value, dtype=float)
+            if size == 0:
+                if arr.shape != ():
+                    raise ValueError(f"InitialState.{name} must be one number; got {_show(value)}")
+                out[name] = float(arr)
+            else:
+                if arr.shape not in ((), (size,)):
+                    raise ValueError(f"InitialState.{name} must be one number or {size}; got "
+                                     f"{_show(value)}")
+                out[name] = np.broadcast_to(arr, (size,)).tolist()
+        return out
+
+    def covariance(self, config: FilterConfig) -> np.ndarray:
+        """P0 (n x n, diagonal) in the filter's states (position as dlat, dlon rad, dh m):
+        the C core's ``gf_ins_initial_covariance``, the one P0 of the batch API, the
+        smoother and the FMU."""
         nav = self.nav
-        # the radii of the C core's Earth model (gf_earth), so that the FMU, which converts
-        # its position stds in C, starts from the same numbers to the last bit
-        e = ffi.new("gf_earth *")
-        if lib.gf_earth_update(e, float(nav.lat_rad), float(nav.h_m), ffi.NULL, 1.0) != lib.GF_OK:
-            raise ValueError(f"initial.nav: latitude {nav.lat_rad!r} rad or height {nav.h_m!r} m "
-                             "is outside the Earth model (|lat| < 90 deg, h > -a/2)")
-        pos = vector3("position_std_m", self.position_std_m, "m")
-        d = [*vector3("velocity_std_m_s", self.velocity_std_m_s, "m/s"),
-             pos[1] / (e.R_M_m + nav.h_m), pos[0] / ((e.R_N_m + nav.h_m) * e.cos_lat), pos[2],
-             *vector3("attitude_std_rad", self.attitude_std_rad, "rad"),
-             *vector3("gyro_bias_std_rad_s", self.gyro_bias_std_rad_s if self.gyro_bias_std_rad_s
-                    is not None else noise["gyro_bias_std_rad_s"], "rad/s"),
-             *vector3("accel_bias_std_m_s2", self.accel_bias_std_m_s2 if self.accel_bias_std_m_s2
-                    is not None else noise["accel_bias_std_m_s2"], "m/s^2")]
-        if config.scale_factors:
-            d += [self.gyro_scale_std if self.gyro_scale_std is not None else config.gyro_scale_std] * 3
-            d += [self.accel_scale_std if self.accel_scale_std is not None else config.accel_scale_std] * 3
-        if config.baro_bias:
-            d.append(self.baro_bias_std_m if self.baro_bias_std_m is not None else config.baro_bias_std_m)
-        if config.odometer_scale:
-            d.append(self.odometer_scale_std if self.odometer_scale_std is not None
-                     else config.odometer_scale_std)
-        if config.odometer_mount:
-            m = self.odometer_mount_std_rad if self.odometer_mount_std_rad is not None \
-                else config.odometer_mount_std_rad
-            d += list(np.broadcast_to(np.asarray(m, dtype=float), (2,)))
-        d = np.asarray(d, float)
-        if not (np.all(np.isfinite(d)) and np.all(d > 0)):
-            names = state_names(config)
-            bad = [names[i] for i in np.flatnonzero(~(np.isfinite(d) & (d > 0)))]
-            raise ValueError(f"initial standard deviations must be finite and > 0; not so for "
-                             f"{bad} (an IMU model without bias instability needs explicit "
-                             "gyro_bias_std_rad_s / accel_bias_std_m_s2)")
-        return np.diag(d * d)
+        values = self.std_blocks(config)
+        std = ffi.new("gf_ins_initial_std *")
+        for name, value in values.items():
+            setattr(std, name, value)
+        n = config.n_states
+        P0 = np.empty((n, n))
+        bad = ffi.new("int32_t *")
+        st = lib.gf_ins_initial_covariance(config._c(), float(nav.lat_rad), float(nav.h_m), std,
+                                           ptr(P0, P0.size), bad)
+        if st == lib.GF_OK:
+            return P0
+        if bad[0]:
+            name = ffi.string(lib.gf_ins_initial_std_field(bad[0])).decode()
+            hint = ""
+            if name in ("gyro_bias_std_rad_s", "accel_bias_std_m_s2") and getattr(self, name) is None:
+                hint = (" (it defaults to the IMU model's bias instability, which is 0 here: give "
+                        f"InitialState.{name} explicitly)")
+            raise ValueError(f"InitialState.{name} = {_show(values[name])}: every element must be "
+                             f"finite and > 0{hint}")
+        if st == lib.GF_ERR_OUT_OF_RANGE:
+            raise ValueError(f"initial latitude {math.degrees(float(nav.lat_rad)):.6g} deg is beyond "
+                             "+-89 deg: the ENU error model is singular near the poles")
+        raise ValueError(f"initial.nav: height {float(nav.h_m)!r} m is outside the Earth model "
+                         f"({status_text(st)})")

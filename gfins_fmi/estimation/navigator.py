@@ -23,16 +23,6 @@ from gfins_fmi.estimation.solution import IntegratedSolution
 
 __all__ = ["IntegratedNavigator", "integrate"]
 
-# gf_ins_init's *bad codes -> the FilterConfig field to change
-_BAD_FIELD = {1: "input", 2: "coning", 3: "filter", 4: "scale_factors/baro_bias/odometer_scale/odometer_mount",
-              5: "propagation_interval_s", 6: "max_imu_gap_s",
-              7: "max_rate_rad_s/max_specific_force_m_s2", 8: "ukf_alpha/ukf_beta/ukf_kappa",
-              30: "gnss_lever_arm_m/odometer_lever_arm_m", 31: "gate_probability",
-              32: "nhc_std_m_s/nhc_interval_s", 33: "zupt_std_m_s/zaru_std_rad_s/zupt_interval_s",
-              34: "standstill_window_s/standstill_accel_std_m_s2/standstill_gyro_rad_s",
-              35: "max_latency_s", 36: "speed_min_m_s", 37: "odometer_mount_rad (+ the initial correction in sensors)", 38: "subsamples"}
-
-
 class _Epochs:
     """Storage of the smoother's epochs: numpy arrays (or memory-mapped files beyond
     ``spill_bytes``) behind a gf_ins_epochs struct."""
@@ -99,9 +89,6 @@ class IntegratedNavigator:
         for name in ("lat_rad", "lon_rad", "h_m", "t_s"):
             if not np.isfinite(getattr(nav, name)):
                 raise ValueError(f"initial.nav.{name} = {getattr(nav, name)!r} must be finite")
-        if abs(nav.lat_rad) >= np.pi / 2 * (89.0 / 90.0):
-            raise ValueError(f"initial latitude {np.degrees(nav.lat_rad):.6g} deg is beyond +-89 deg: "
-                             "the ENU error model is singular near the poles")
         P0 = np.ascontiguousarray(initial.covariance(config))
         sens = np.zeros(N_SENSORS) if initial.sensors is None else np.ascontiguousarray(initial.sensors, float)
         if sens.shape != (N_SENSORS,) or not np.all(np.isfinite(sens)):
@@ -112,7 +99,12 @@ class IntegratedNavigator:
         st = lib.gf_ins_init(self._f, self._cfg, float(nav.t_s), ptr(q, 4), ptr(v, 3), float(nav.lat_rad),
                              float(nav.lon_rad), float(nav.h_m), ptr(sens, N_SENSORS), ptr(P0, P0.size), bad)
         if st != lib.GF_OK:
-            hint = f" (field {_BAD_FIELD.get(int(bad[0]), bad[0])})" if bad[0] else ""
+            field = ffi.string(lib.gf_ins_config_field(bad[0])).decode() if bad[0] else ""
+            if field == "odometer_mount_rad":   # the angles used: configured + initial correction
+                raise ValueError("FilterConfig.odometer_mount_rad + the initial boresight correction "
+                                 "(InitialState.sensors odo_pitch_rad, odo_heading_rad) must stay "
+                                 "inside (-pi/2, pi/2)")
+            hint = f" (field {field})" if field else ""
             raise ValueError(f"gf_ins_init: {status_text(st)}{hint}")
         self.n_states = int(self._f.n_states)
         self._epochs_started = False

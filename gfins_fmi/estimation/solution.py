@@ -110,22 +110,15 @@ def smooth(sol: IntegratedSolution, progress: bool = False) -> SmoothedSolution:
     q, v = sol.q_bn.copy(), sol.v_n_m_s.copy()
     pos = np.c_[sol.lat_rad, sol.lon_rad, sol.h_m]
     sens = sol.sensors.copy()
-    f = ffi.new("gf_ins_filter *")
-    f.n_states = n
+    # gf_ins_smooth_apply reads the state layout of a filter: the C core's for this config
     cfg = sol.config
-    f.idx_sg = f.idx_sa = f.idx_baro = f.idx_odo = f.idx_mount = -1
-    nxt = 15
-    if cfg.scale_factors:
-        f.idx_sg, f.idx_sa = nxt, nxt + 3
-        nxt += 6
-    if cfg.baro_bias:
-        f.idx_baro = nxt
-        nxt += 1
-    if cfg.odometer_scale:
-        f.idx_odo = nxt
-        nxt += 1
-    if cfg.odometer_mount:
-        f.idx_mount = nxt
+    lay = cfg.layout()
+    if lay.n_states != n:
+        raise ValueError(f"the solution's epochs hold {n} states, its configuration {lay.n_states}")
+    f = ffi.new("gf_ins_filter *")
+    f.n_states = lay.n_states
+    f.idx_sg, f.idx_sa, f.idx_baro = lay.idx_sg, lay.idx_sa, lay.idx_baro
+    f.idx_odo, f.idx_mount = lay.idx_odo, lay.idx_mount
     et = np.ascontiguousarray(ep["t_s"])
     dx = np.ascontiguousarray(ep["dx"])
     t_rows = np.ascontiguousarray(sol.t_s)

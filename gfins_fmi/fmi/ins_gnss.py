@@ -13,36 +13,21 @@ import numpy as np
 from gfins_fmi._lib import as_rows
 from gfins_fmi.estimation.config import FilterConfig, InitialState
 from gfins_fmi.estimation.measurements import INNOVATION_DTYPE, gather_measurements
+from gfins_fmi.estimation.settings import fmu_settings
 from gfins_fmi.estimation.solution import IntegratedSolution
 from gfins_fmi.fmi.paths import FmuRunError, fmu_path
 from gfins_fmi.fmi.runner import FmuLog, FmuSlave
 
-__all__ = ["INS_CONFIG_FIELDS", "ins_gnss_fmu_parameters", "monitor_innovations", "InsGnssDriver",
+__all__ = ["INITIAL_STD_PARAMETERS", "ins_gnss_fmu_parameters", "monitor_innovations", "InsGnssDriver",
            "run_ins_gnss_fmu"]
 
-#: FMU parameter -> gf_ins_config field (fmu/models/ins_gnss/model_spec.py maps the same)
-INS_CONFIG_FIELDS = {
-    "filter": "filter", "input_mode": "input", "coning": "coning",
-    "propagation_interval": "prop_interval_s", "max_imu_gap": "max_imu_gap_s",
-    "max_rate": "max_rate_rad_s", "max_specific_force": "max_specific_force_m_s2",
-    "scale_states": "scale_states", "baro_state": "baro_state", "odo_state": "odo_state",
-    "odo_mount_state": "odo_mount_state",
-    "ukf_alpha": "ukf_alpha", "ukf_beta": "ukf_beta", "ukf_kappa": "ukf_kappa",
-    "gyro_arw": "noise.gyro_arw_rad_sqrt_s", "accel_vrw": "noise.accel_vrw_m_s_sqrt_s",
-    "gyro_bias_std": "noise.gyro_bias_std_rad_s", "gyro_bias_tau": "noise.gyro_bias_tau_s",
-    "accel_bias_std": "noise.accel_bias_std_m_s2", "accel_bias_tau": "noise.accel_bias_tau_s",
-    "gyro_scale_std": "noise.gyro_scale_std", "gyro_scale_tau": "noise.gyro_scale_tau_s",
-    "accel_scale_std": "noise.accel_scale_std", "accel_scale_tau": "noise.accel_scale_tau_s",
-    "baro_bias_std": "noise.baro_bias_std_m", "baro_bias_tau": "noise.baro_bias_tau_s",
-    "odo_scale_std": "noise.odo_scale_std", "odo_scale_tau": "noise.odo_scale_tau_s",
-    "odo_mount_std": "noise.odo_mount_std_rad", "odo_mount_tau": "noise.odo_mount_tau_s",
-    "gnss_lever_arm": "gnss_lever_m", "odo_lever_arm": "odo_lever_m", "odo_mount": "odo_mount_rad",
-    "gate_prob": "gate_prob",
-    "gate_reset_count": "gate_reset_count", "max_latency": "max_latency_s",
-    "nhc": "nhc", "nhc_std": "nhc_std_m_s", "nhc_interval": "nhc_interval_s", "zupt": "zupt",
-    "zupt_std": "zupt_std_m_s", "zaru_std": "zaru_std_rad_s", "zupt_interval": "zupt_interval_s",
-    "still_window": "still_window_s", "still_accel_std": "still_accel_std_m_s2",
-    "still_gyro": "still_gyro_rad_s"}
+#: InitialState's std blocks (gf_ins_initial_std's members) -> the FMU's std0_* parameters
+INITIAL_STD_PARAMETERS = {
+    "velocity_std_m_s": "std0_vel", "position_std_m": "std0_pos", "attitude_std_rad": "std0_att",
+    "gyro_bias_std_rad_s": "std0_gyro_bias", "accel_bias_std_m_s2": "std0_accel_bias",
+    "gyro_scale_std": "std0_gyro_scale", "accel_scale_std": "std0_accel_scale",
+    "baro_bias_std_m": "std0_baro_bias", "odometer_scale_std": "std0_odo_scale",
+    "odometer_mount_std_rad": "std0_odo_mount"}
 
 
 def ins_gnss_fmu_parameters(config, initial) -> dict:
@@ -67,36 +52,17 @@ def ins_gnss_fmu_parameters(config, initial) -> dict:
     initial.covariance(config)            # the batch API's checks of the initial stds
     c = config._c()
     params = {}
-    for name, path in INS_CONFIG_FIELDS.items():
-        value = c
-        for part in path.split("."):
-            value = getattr(value, part)
-        params[name] = [float(x) for x in value] if name.endswith(("lever_arm", "mount")) else value
+    for st in fmu_settings():               # every FMU parameter of the settings table
+        owner, _, member = st.member.rpartition(".")
+        value = getattr(getattr(c, owner) if owner else c, member)
+        params[st.short] = [float(x) for x in value] if st.kind == "vector" else value
     nav = initial.nav
-    noise = config.noise_si()
-
-    def vec(x):
-        return np.broadcast_to(np.asarray(x, dtype=float), (3,)).tolist()
-
-    def given(x, default):
-        return default if x is None else x
-
     sensors = np.zeros(16) if initial.sensors is None else np.asarray(initial.sensors, float)
+    params.update({INITIAL_STD_PARAMETERS[k]: v for k, v in initial.std_blocks(config).items()})
     params.update(
         q0=np.asarray(nav.q_bn, float).tolist(), v0=np.asarray(nav.v_n_m_s, float).tolist(),
         lat0=float(nav.lat_rad), lon0=float(nav.lon_rad), h0=float(nav.h_m),
         sensors0=sensors.tolist(),
-        std0_vel=vec(initial.velocity_std_m_s), std0_pos=vec(initial.position_std_m),
-        std0_att=vec(initial.attitude_std_rad),
-        std0_gyro_bias=vec(given(initial.gyro_bias_std_rad_s, noise["gyro_bias_std_rad_s"])),
-        std0_accel_bias=vec(given(initial.accel_bias_std_m_s2, noise["accel_bias_std_m_s2"])),
-        std0_gyro_scale=vec(given(initial.gyro_scale_std, config.gyro_scale_std)),
-        std0_accel_scale=vec(given(initial.accel_scale_std, config.accel_scale_std)),
-        std0_baro_bias=float(given(initial.baro_bias_std_m, config.baro_bias_std_m)),
-        std0_odo_scale=float(given(initial.odometer_scale_std, config.odometer_scale_std)),
-        std0_odo_mount=np.broadcast_to(np.asarray(given(initial.odometer_mount_std_rad,
-                                                        config.odometer_mount_std_rad), float),
-                                       (2,)).tolist(),
         # the batch API starts from the given attitude (no alignment phase); the alignment
         # parameters at their spec defaults
         align_time=0.0, align_heading=0, align_min_speed=1.0, align_travel_std=float(np.radians(10.0)))

@@ -120,9 +120,9 @@ def test_subsample_groups_exact_drive(exact_drive, m):
 
 
 def test_subsamples_config_is_checked():
-    with pytest.raises(ValueError, match="subsamples must be an integer in 1..4"):
+    with pytest.raises(ValueError, match="FilterConfig.subsamples = 5: must be an integer in 1..4"):
         quiet_config(subsamples=5)
-    with pytest.raises(ValueError, match="needs input='increments'"):
+    with pytest.raises(ValueError, match="more than 1 only with input 'increments'"):
         quiet_config(subsamples=2, input="rates")
 
 

@@ -94,9 +94,9 @@ def test_builder_wires_increments_and_aiding_epochs():
     cfg = SYSTEM.sources["config"]
     assert cfg.gnss_lever_arm_m == GNSS.lever_arm_m and cfg.odometer_lever_arm_m == ODO.lever_arm_m
     params = SYSTEM.components["navigator"][1]
-    assert params["gnss_lever_arm"] == list(GNSS.lever_arm_m)
-    assert params["odo_lever_arm"] == list(ODO.lever_arm_m)
-    assert params["max_latency"] == 0.2 and params["gate_reset_count"] == CONFIG.gate_reset_count
+    assert params["gnss_lever_arm_m"] == list(GNSS.lever_arm_m)
+    assert params["odometer_lever_arm_m"] == list(ODO.lever_arm_m)
+    assert params["max_latency_s"] == 0.2 and params["gate_reset_count"] == CONFIG.gate_reset_count
     veh_params = SYSTEM.components["vehicle"][1]
     assert veh_params["gnss_lever_arm"] == list(GNSS.lever_arm_m) and veh_params["noise_seed"] == SEED
     assert veh_params["noise"] == 1 and veh_params["gyro_arw"] == TACTICAL.fmu_parameters()["gyro_arw"]

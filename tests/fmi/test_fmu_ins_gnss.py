@@ -22,7 +22,7 @@ from gfins_fmi._lib import lib
 from gfins_fmi.estimation import FilterConfig, InitialState, IntegratedNavigator
 from gfins_fmi.fmi.paths import FmuRunError
 from gfins_fmi.fmi.ins_gnss import InsGnssDriver, ins_gnss_fmu_parameters, run_ins_gnss_fmu
-from gfins_fmi.fmi.ins_gnss import INS_CONFIG_FIELDS
+from gfins_fmi.estimation.settings import fmu_settings
 from support.drives import Rec, drive, gnss_record, quiet_config
 
 LEVER = np.array([0.4, 1.2, 1.6])
@@ -55,7 +55,7 @@ CASES = {
     "ekf": dict(),
     "ukf": dict(filter="ukf"),
     # every measurement kind, every optional state, NHC, propagation at every sample, a
-    # configured odometer boresight (FMU parameter odo_mount)
+    # configured odometer boresight (FMU parameter odometer_mount_rad)
     "ekf-aided-25": dict(scale_factors=True, baro_bias=True, odometer_scale=True, nhc=True,
                          odometer_mount=True, propagation_interval_s=0.0,
                          odometer_mount_rad=(0.01, -0.02)),
@@ -109,7 +109,7 @@ def test_fmu_defaults_are_the_batch_defaults():
     for name, value in params.items():
         # the spec writes the SI noise with repr(): equal to the last bit
         assert np.array_equal(np.asarray(start[name], float), np.asarray(value, float)), name
-    assert set(INS_CONFIG_FIELDS) <= set(start)
+    assert {st.short for st in fmu_settings()} <= set(start)
 
 
 def _reference(cfg, imu, gnss, baro, odo, initial):
@@ -199,31 +199,45 @@ def test_fmu_state_restore_reproduces_the_run(rec, version, serialize):
     assert np.array_equal(sol.lat_rad, ref.lat_rad) and np.array_equal(sol.q_bn, ref.q_bn)
 
 
+def bad_value(st):
+    """A value outside a setting's bounds (C form), and the flag it needs to be checked."""
+    bad = {"flag": 2, "enum": 7, "count": -1, "subsamples": 9, "nonneg": -1.0, "positive": 0.0,
+           "finite": float("nan"), "probability": 1.5}.get(st.bounds)
+    if st.kind == "vector":
+        bad = [0.0] * st.size
+        bad[-1] = 2.0 if st.bounds == "half_pi" else float("nan")
+    return bad, ({st.when: 1} if st.when else {})
+
+
+SETTINGS_REFUSED = [s for s in fmu_settings()]
+
+
+@pytest.mark.parametrize("st", SETTINGS_REFUSED, ids=[s.short for s in SETTINGS_REFUSED])
+def test_every_bad_setting_is_refused_naming_its_parameter(rec, st):
+    """Every FMU parameter of the settings table, set outside its bounds, is refused with a
+    message naming the parameter, its value, unit and bounds (the FMU's table is generated
+    from the same rows)."""
+    cfg, imu, gnss, _, _ = _case(rec, "ekf")
+    value, extra = bad_value(st)
+    extra[st.short] = value
+    version = 3 if st.kind == "vector" else 2        # both glues: the same model code
+    with pytest.raises(FmuRunError, match="refused its parameters") as exc:
+        run_ins_gnss_fmu(Rec(t_s=imu.t_s[:5], gyro=imu.gyro[:5], accel=imu.accel[:5],
+                             kind="increments"), config=cfg, initial=_initial(rec[0]),
+                         parameters=extra, fmi_version=version)
+    unit = f" {st.unit}" if st.unit else ""
+    want = f"parameter {st.short} = .*{re.escape(unit)} refused: must be "
+    assert any(re.search(want, m) for m in exc.value.messages), (want, exc.value.messages)
+
+
 REFUSED = [
-    ("filter", 2, "parameter filter = 2 must be 0"),
-    ("input_mode", 3, "parameter input_mode = 3"),
-    ("coning", -1, "parameter coning = -1"),
-    ("scale_states", 2, "scale_states = 2"),
-    ("propagation_interval", -0.1, "propagation_interval = -0.1 s"),
-    ("max_imu_gap", 0.0, "max_imu_gap = 0 s"),
-    ("max_rate", float("nan"), "max_rate = nan rad/s"),
-    ("gyro_bias_tau", -1.0, "parameter gyro_bias_tau = -1 must be finite and >= 0"),
-    ("accel_vrw", float("inf"), "parameter accel_vrw = inf"),
-    ("odo_scale_tau", -3.0, "parameter odo_scale_tau = -3"),
-    ("gnss_lever_arm", [0.0, float("nan"), 0.0], "gnss_lever_arm = \\[0, nan, 0\\] m"),
-    ("gate_prob", 1.5, "gate_prob = 1.5 must be 0"),
-    ("gate_reset_count", -2, "gate_reset_count = -2 must be >= 0"),
-    ("max_latency", float("nan"), "max_latency = nan s must be finite and >= 0"),
-    ("nhc", 1, None),                                      # with nhc_std = 0 below
-    ("zupt", 2, "zupt = 2"),
-    ("still_window", 0.0, "still_window = 0 s"),
-    ("ukf_kappa", -100.0, "ukf_kappa = -100"),             # with filter = 1 below
-    ("lat0", 1.56, "parameter lat0 = 1.56 rad: \\|lat0\\| must be below 89 deg"),
+    ("lat0", 1.56, "parameter lat0 = 1.56 rad \\(start latitude 1.56 rad\\): it must be within "
+                   "\\+-89 deg"),
     ("h0", float("nan"), "q0, v0, lon0 and h0 must be finite"),
     ("sensors0", [0.0] * 15 + [float("nan")], "sensors0 must be finite"),
     ("std0_pos", [1.0, 0.0, 1.0], "parameter std0_pos = \\[1, 0, 1\\] m: every element"),
     ("std0_att", [1e-3, 1e-3, -1.0], "std0_att"),
-    ("std0_baro_bias", 0.0, "std0_baro_bias = 0 m"),       # with baro_state = 1 below
+    ("std0_baro_bias", 0.0, "std0_baro_bias = 0 m"),       # with baro_bias = 1 below
     ("skip_steps", -1, "skip_steps = -1 must be >= 0"),
 ]
 
@@ -232,14 +246,9 @@ REFUSED = [
 def test_bad_parameters_are_refused_naming_the_parameter(rec, name, value, match):
     cfg, imu, gnss, _, _ = _case(rec, "ekf")
     extra = {name: value}
-    if name == "nhc":
-        extra["nhc_std"] = 0.0
-        match = "nhc = 1 \\(0 or 1\\), nhc_std = 0 m/s"
-    if name == "ukf_kappa":
-        extra["filter"] = 1
     if name == "std0_baro_bias":
-        extra["baro_state"] = 1
-    version = 3 if name in ("filter", "lat0", "std0_pos") else 2   # both glues: same model
+        extra["baro_bias"] = 1
+    version = 3 if name in ("lat0", "std0_pos") else 2   # both glues: same model
     with pytest.raises(FmuRunError, match="refused its parameters") as exc:
         run_ins_gnss_fmu(Rec(t_s=imu.t_s[:5], gyro=imu.gyro[:5], accel=imu.accel[:5],
                              kind="increments"), config=cfg, initial=_initial(rec[0]),

@@ -1,0 +1,159 @@
+"""The filter's settings table (gfins_fmi/estimation/settings.py) against the C core, the
+Python configuration and the state layout: every setting said once, every layer derived
+from it. Truth: the C core's own enumeration of its checked fields and defaults (the table
+must agree with it row by row), bad values made from each row's bounds, and numpy for P0.
+"""
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+import pytest
+
+from gfins_fmi._lib import ffi, lib
+from gfins_fmi.estimation import FilterConfig, InitialState
+from gfins_fmi.estimation.error_model import ins_state_names
+from gfins_fmi.estimation.settings import SETTINGS, by_member, fmu_settings, python_settings
+from gfins_fmi.nav.earth import radii
+from gfins_fmi.nav.strapdown import NavState
+
+
+def c_fields() -> list:
+    """The members gf_ins_config_check can name, by code 1, 2, ... until NULL."""
+    out, code = [], 1
+    while (name := lib.gf_ins_config_field(code)) != ffi.NULL:
+        out.append(ffi.string(name).decode())
+        code += 1
+    return out
+
+
+def test_the_table_is_the_c_core_s_list_of_fields():
+    """Each member the C check names has one row, and each row is a member C checks: a
+    setting added on one side only fails here."""
+    names = c_fields()
+    assert len(names) == len(set(names))
+    assert sorted(names) == sorted(st.member for st in SETTINGS)
+    assert lib.gf_ins_config_field(0) == ffi.NULL and lib.gf_ins_config_field(-1) == ffi.NULL
+
+
+def _member(cfg, st):
+    owner, _, member = st.member.rpartition(".")
+    return (getattr(cfg, owner) if owner else cfg), member
+
+
+def test_the_table_s_defaults_are_the_c_defaults():
+    cfg = ffi.new("gf_ins_config *")
+    lib.gf_ins_config_default(cfg)
+    for st in SETTINGS:
+        target, member = _member(cfg, st)
+        got = getattr(target, member)
+        got = list(got) if st.kind == "vector" else got
+        assert got == st.c_value(st.default), st.name
+
+
+def bad_c_value(st):
+    """A value outside a row's bounds, in C form."""
+    if st.kind == "vector":
+        return [0.0] * (st.size - 1) + [2.0 if st.bounds == "half_pi" else math.nan]
+    return {"flag": 2, "enum": 7, "count": -1, "subsamples": 9, "nonneg": -1.0, "positive": 0.0,
+            "finite": math.nan, "probability": 1.5}[st.bounds]
+
+
+@pytest.mark.parametrize("st", SETTINGS, ids=[s.name for s in SETTINGS])
+def test_c_names_the_field_it_refuses(st):
+    """Set one member outside its bounds (its flag on where it is checked only then): the C
+    check names that member, so every layer's message can name the setting."""
+    cfg = ffi.new("gf_ins_config *")
+    lib.gf_ins_config_default(cfg)
+    if st.when:
+        setattr(cfg, st.when, 1)
+    target, member = _member(cfg, st)
+    setattr(target, member, bad_c_value(st))
+    bad = ffi.new("int32_t *")
+    assert lib.gf_ins_config_check(cfg, bad) == lib.GF_ERR_BAD_PARAMETER
+    assert ffi.string(lib.gf_ins_config_field(bad[0])).decode() == st.member
+
+
+def bad_python_value(st):
+    return {"flag": "yes", "enum": "kalman", "int": -1 if st.bounds == "count" else 9,
+            "float": 1.5 if st.bounds == "probability" else
+            (math.nan if st.bounds == "finite" else (0.0 if st.bounds == "positive" else -1.0)),
+            "vector": (0.0, 2.0) if st.bounds == "half_pi" else (0.0, math.nan, 0.0)}[st.kind]
+
+
+@pytest.mark.parametrize("st", python_settings(), ids=[s.python_name for s in python_settings()])
+def test_filter_config_refuses_naming_the_field_value_and_bounds(st):
+    kw = {st.python_name: bad_python_value(st)}
+    if st.when:
+        kw[st.when] = True
+    with pytest.raises(ValueError, match=f"^FilterConfig.{st.python_name} = .*: must be ") as e:
+        FilterConfig(**kw)
+    assert "np.float64" not in str(e.value)
+
+
+def test_filter_config_fields_and_defaults_come_from_the_table():
+    cfg = FilterConfig()
+    fields = [f for f in cfg.__dataclass_fields__ if f != "imu"]
+    assert fields == [st.python_name for st in python_settings()]
+    for st in python_settings():
+        assert getattr(cfg, st.python_name) == st.default, st.name
+        assert st.python_name in FilterConfig.__doc__
+
+
+def test_noise_rows_reach_c_from_the_imu_model_and_the_fields():
+    imu = FilterConfig().imu.__class__(gyro_arw_deg_sqrt_h=0.2, accel_vrw_ug_sqrt_hz=30.0)
+    cfg = FilterConfig(imu=imu, odometer_scale_std=0.02, baro_bias_tau_s=100.0)
+    c = cfg._c()
+    assert c.noise.gyro_arw_rad_sqrt_s == 0.2 * math.pi / 180 / 60
+    assert c.noise.odometer_scale_std == 0.02 and c.noise.baro_bias_tau_s == 100.0
+    assert by_member("noise.gyro_arw_rad_sqrt_s").python_name == ""   # from imu, not a field
+
+
+def test_fmu_parameters_are_the_fmu_rows():
+    assert {st.short for st in fmu_settings()} == {st.short for st in SETTINGS} - {
+        "speed_min_m_s", "subsamples"}
+
+
+FLAGS = ("scale_factors", "baro_bias", "odometer_scale", "odometer_mount")
+
+
+@pytest.mark.parametrize("flags", list(itertools.product([False, True], repeat=4)))
+def test_layout_from_c_is_the_error_model_s_order(flags):
+    """The C layout (gf_ins_state_layout) against the numpy error model's state names (the
+    definition the C filter is tested against): blocks where the names put them."""
+    cfg = FilterConfig(**dict(zip(FLAGS, flags)))
+    lay = cfg.layout()
+    names = ins_state_names(*flags)
+    assert lay.n_states == cfg.n_states == len(names)
+    where = {"idx_vel": "dv_E", "idx_pos": "dL", "idx_att": "phi_E", "idx_bg": "bg_x",
+             "idx_ba": "ba_x", "idx_sg": "sg_x", "idx_sa": "sa_x", "idx_baro": "b_baro",
+             "idx_odo": "k_odo", "idx_mount": "odo_pitch"}
+    for field, first in where.items():
+        idx = getattr(lay, field)
+        assert idx == (names.index(first) if first in names else -1), (field, names)
+
+
+def test_initial_covariance_from_c_against_numpy():
+    """P0 of gf_ins_initial_covariance = the diagonal written out with numpy's WGS-84 radii:
+    east/north metres over the radii of curvature, the rest squared as given; the same
+    formulas evaluated in the same order, so equal to the last bit apart from the radii
+    (numpy vs C sin/pow: relative 1e-15)."""
+    nav = NavState(np.array([1.0, 0, 0, 0]), np.zeros(3), 0.61, 1.9, 320.0, 0.0)
+    cfg = FilterConfig(scale_factors=True, baro_bias=True, odometer_scale=True, odometer_mount=True)
+    init = InitialState(nav, position_std_m=(2.0, 3.0, 5.0), velocity_std_m_s=(0.1, 0.2, 0.3),
+                        attitude_std_rad=(0.01, 0.02, 0.03), gyro_bias_std_rad_s=1e-5,
+                        accel_bias_std_m_s2=(1e-3, 2e-3, 3e-3), gyro_scale_std=1e-4,
+                        odometer_mount_std_rad=(0.01, 0.02))
+    P = init.covariance(cfg)
+    RM, RN = radii(0.61)[:2]
+    want = [0.1, 0.2, 0.3, 3.0 / (RM + 320.0), 2.0 / ((RN + 320.0) * math.cos(0.61)), 5.0,
+            0.01, 0.02, 0.03, 1e-5, 1e-5, 1e-5, 1e-3, 2e-3, 3e-3, 1e-4, 1e-4, 1e-4,
+            1e-3, 1e-3, 1e-3, cfg.baro_bias_std_m, cfg.odometer_scale_std, 0.01, 0.02]
+    assert P.shape == (25, 25) and np.count_nonzero(P - np.diag(np.diag(P))) == 0
+    np.testing.assert_allclose(np.sqrt(np.diag(P)), want, rtol=1e-15)
+    with pytest.raises(ValueError, match=r"InitialState.position_std_m = \[2.0, 0.0, 5.0\]"):
+        InitialState(nav, position_std_m=(2.0, 0.0, 5.0)).covariance(cfg)
+    polar = NavState(np.array([1.0, 0, 0, 0]), np.zeros(3), math.radians(89.5), 0.0, 0.0, 0.0)
+    with pytest.raises(ValueError, match="beyond \\+-89 deg"):
+        InitialState(polar).covariance(FilterConfig())

@@ -77,6 +77,7 @@ static const char *const kFields[] = {
     "noise.accel_scale_tau_s", "noise.baro_bias_std_m", "noise.baro_bias_tau_s",
     "noise.odometer_scale_std", "noise.odometer_scale_tau_s", "noise.odometer_mount_std_rad",
     "noise.odometer_mount_tau_s", "gnss_lever_arm_m", "odometer_lever_arm_m",
+    "gnss_position_std_floor_m",
     "gate_probability", "gate_reset_count", "nhc", "nhc_std_m_s", "nhc_interval_s", "zupt",
     "zupt_std_m_s", "zaru_std_rad_s", "zupt_interval_s", "standstill_window_s",
     "standstill_accel_std_m_s2", "standstill_gyro_rad_s", "max_latency_s", "speed_min_m_s",
@@ -172,6 +173,9 @@ static int32_t config_check(const gf_ins_config *c)
         return BAD(gnss_lever_arm_m);
     if (!gf_all_finite(c->odometer_lever_arm_m, 3))
         return BAD(odometer_lever_arm_m);
+    for (int i = 0; i < 3; ++i)
+        if (!nonneg_finite(c->gnss_position_std_floor_m[i]))
+            return BAD(gnss_position_std_floor_m);
     if (!(c->gate_probability == 0.0 || (c->gate_probability > 0.0 && c->gate_probability < 1.0)))
         return BAD(gate_probability);
     if (c->gate_reset_count < 0)

@@ -213,6 +213,8 @@ typedef struct gf_ins_config {
     gf_ins_noise noise;
     double gnss_lever_arm_m[3];        /* IMU -> GNSS antenna, body axes, m */
     double odometer_lever_arm_m[3];    /* IMU -> odometer wheel contact point, body axes, m */
+    double gnss_position_std_floor_m[3];  /* GNSS position stds E, N, U below this are
+                                             raised to it (m, >= 0; 0: as reported) */
     double gate_probability;           /* NIS gate probability in (0, 1); 0: no gate */
     int32_t gate_reset_count;          /* > 0: after this many consecutive gate rejections of
                                           one kind the next is applied (GF_INS_FORCED); 0: never */

@@ -126,6 +126,7 @@ typedef struct ins_meas_ctx {
  *   value     the measured value z (rows) in the prediction's units (NULL: ms->z);
  *   check     1 if a caller's measurement is valid beyond finite values and std > 0
  *             (NULL: no more checks);
+ *   std       the stds (rows) the update uses for a caller's measurement (NULL: ms->std);
  *   refuse    0, or the GF_INS_REJECTED_* status of an update the model cannot make at
  *             the nominal ref (NULL: never refused). */
 typedef struct ins_meas_model {
@@ -138,6 +139,7 @@ typedef struct ins_meas_model {
     void (*jacobian)(const ins_meas_ctx *c, const nav_hyp *nom, double *H);
     void (*value)(const local_frame *lf, const gf_ins_meas *ms, double *z);
     int (*check)(const gf_ins_meas *ms);
+    void (*std)(const gf_ins_filter *f, const gf_ins_meas *ms, double *sd);
     int32_t (*refuse)(const gf_ins_filter *f, const gf_sins_state *ref);
 } ins_meas_model;
 

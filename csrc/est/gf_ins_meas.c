@@ -102,6 +102,13 @@ static int gnss_pos_check(const gf_ins_meas *ms)
     return fabs(ms->z[0]) < GF_HALF_PI;
 }
 
+/* the reported stds, raised to the configured floor */
+static void gnss_pos_std(const gf_ins_filter *f, const gf_ins_meas *ms, double *sd)
+{
+    for (int i = 0; i < 3; ++i)
+        sd[i] = fmax(ms->std[i], f->cfg.gnss_position_std_floor_m[i]);
+}
+
 /* ---- GNSS velocity (antenna velocity, lever-arm rotation term) ----------------------- */
 
 static void gnss_vel_predict(const ins_meas_ctx *c, const nav_hyp *hy, double *y)
@@ -393,7 +400,7 @@ static const ins_meas_model kModels[GF_INS_N_MEAS_KINDS] = {
     [GF_INS_MEAS_GNSS_POS] = {.kind = GF_INS_MEAS_GNSS_POS, .name = "gnss_pos", .rows = 3,
                               .external = 1, .predict = gnss_pos_predict,
                               .jacobian = gnss_pos_jacobian, .value = gnss_pos_value,
-                              .check = gnss_pos_check},
+                              .check = gnss_pos_check, .std = gnss_pos_std},
     [GF_INS_MEAS_GNSS_VEL] = {.kind = GF_INS_MEAS_GNSS_VEL, .name = "gnss_vel", .rows = 3,
                               .external = 1, .reverses = 1, .predict = gnss_vel_predict,
                               .jacobian = gnss_vel_jacobian},

@@ -62,9 +62,13 @@ gf_status ins_update_at(gf_ins_filter *f, int32_t type, const gf_ins_meas *ms, d
     mm->predict(&mc, &nom, y_nom);
     if (ms)
         ins_meas_value(mm, &lf, ms, z);
+    double sd[3] = {std_int, std_int, std_int};
+    if (ms && mm->std)
+        mm->std(f, ms, sd);
+    else if (ms)
+        memcpy(sd, ms->std, sizeof sd);
     for (int i = 0; i < m; ++i) {
-        const double sd = ms ? ms->std[i] : std_int;
-        R[i * m + i] = sd * sd;
+        R[i * m + i] = sd[i] * sd[i];
         r[i] = y_nom[i] - z[i];
     }
     double gate = 0.0;

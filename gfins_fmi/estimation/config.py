@@ -114,7 +114,8 @@ def _checked(st: Setting, value):
         if arr.shape != (st.size,) and not (st.size == 3 and arr.ndim == 0):
             raise _refuse(st, value, f" ({st.size} values)")
         arr = np.broadcast_to(arr, (st.size,))
-        ok = np.isfinite(arr) & ((np.abs(arr) < np.pi / 2) if st.bounds == "half_pi" else True)
+        ok = np.isfinite(arr) & {"half_pi": np.abs(arr) < np.pi / 2, "nonneg_each": arr >= 0}.get(
+            st.bounds, True)
         if not np.all(ok):
             raise _refuse(st, value)
         return tuple(float(x) for x in arr)

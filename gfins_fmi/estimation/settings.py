@@ -36,6 +36,7 @@ BOUNDS = {
     "probability": "0 (no gate) or in (0, 1)",
     "count": "an integer >= 0",
     "half_pi": "finite and inside (-pi/2, pi/2) (each element)",
+    "nonneg_each": "finite and >= 0 (each element)",
     "subsamples": "an integer in 1..4 (more than 1 only with input 'increments')",
 }
 
@@ -205,6 +206,10 @@ SETTINGS = (
             "IMU -> GNSS antenna phase centre, body axes right, front, up", size=3),
     Setting("odometer_lever_arm_m", "m", "vector", "finite", (0.0, 0.0, 0.0),
             "IMU -> odometer wheel contact point, body axes right, front, up", size=3),
+    Setting("gnss_position_std_floor_m", "m", "vector", "nonneg_each", (0.0, 0.0, 0.0),
+            "GNSS position stds (east, north, up) below this are raised to it: receivers "
+            "report RTK stds of millimetres that multipath and a moving antenna do not keep; "
+            "0: as reported", size=3),
     _float("gate_probability", None, "probability", 0.9999,
            "innovation gate: a measurement whose NIS exceeds the chi-square quantile of "
            "this probability is rejected (Python None, C and FMU 0: no gate)"),

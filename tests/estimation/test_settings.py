@@ -5,6 +5,7 @@ must agree with it row by row), bad values made from each row's bounds, and nump
 """
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 
@@ -12,11 +13,12 @@ import numpy as np
 import pytest
 
 from gfins_fmi._lib import ffi, lib
-from gfins_fmi.estimation import FilterConfig, InitialState
+from gfins_fmi.estimation import FilterConfig, InitialState, IntegratedNavigator
 from gfins_fmi.estimation.error_model import ins_state_names
 from gfins_fmi.estimation.settings import SETTINGS, by_member, fmu_settings, python_settings
 from gfins_fmi.nav.earth import radii
 from gfins_fmi.nav.strapdown import NavState
+from support.drives import Rec, drive, gnss_record, quiet_config
 
 
 def c_fields() -> list:
@@ -157,3 +159,36 @@ def test_initial_covariance_from_c_against_numpy():
     polar = NavState(np.array([1.0, 0, 0, 0]), np.zeros(3), math.radians(89.5), 0.0, 0.0, 0.0)
     with pytest.raises(ValueError, match="beyond \\+-89 deg"):
         InitialState(polar).covariance(FilterConfig())
+
+
+@pytest.fixture(scope="module")
+def exact_drive_records():
+    """40 s of the exact drive of tests/support/drives.py, GNSS at 1 Hz with a lever arm."""
+    tr, imu = drive(40.0)
+    lever = np.array([0.3, 1.0, 1.4])
+    gnss = gnss_record(tr, np.arange(1003, len(tr.t_s), 1000), lever)
+    init = InitialState(NavState.from_trajectory(tr, 0), position_std_m=0.5,
+                        velocity_std_m_s=0.05, attitude_std_rad=(1e-3, 1e-3, 5e-3))
+    return quiet_config(gnss_lever_arm_m=lever), init, imu, gnss
+
+
+def test_gnss_position_std_floor(exact_drive_records):
+    """gnss_position_std_floor_m (the setting added through the table, docs/contributing.md):
+    GNSS stds reported below the floor are used as the floor, so a run with stds of 1 mm and
+    a floor of (3, 4, 6) cm is the run with stds of exactly (3, 4, 6) cm, bit for bit; above
+    the floor the reported stds stand."""
+    cfg, init, imu, gnss = exact_drive_records
+    floor = (0.03, 0.04, 0.06)
+    tiny = Rec(**{**gnss.__dict__, "pos_std_m": np.full_like(gnss.pos_std_m, 1e-3)})
+    exact = Rec(**{**gnss.__dict__, "pos_std_m": np.tile(floor, (len(gnss.t_s), 1))})
+
+    def run(c, g):
+        return IntegratedNavigator(c, init).run(imu, g)
+
+    a = run(dataclasses.replace(cfg, gnss_position_std_floor_m=floor), tiny)
+    b = run(cfg, exact)
+    c = run(cfg, tiny)
+    assert np.array_equal(a.lat_rad, b.lat_rad) and np.array_equal(a.std, b.std)
+    assert not np.array_equal(a.std, c.std)
+    d = run(dataclasses.replace(cfg, gnss_position_std_floor_m=(1e-4, 1e-4, 1e-4)), exact)
+    assert np.array_equal(d.std, b.std)

@@ -11,7 +11,7 @@ Test plan (``test_plan``):
     averages out); the turning also exposes the accelerometers' inner lever arms
     (centripetal r_i (w_j^2 + w_k^2)).
 Each test gives the mean sensor output over its duration; the model is the exact one of
-csrc/gf_imu_error.h (at the reference temperature), fitted per axis:
+csrc/nav/gf_imu_error.h (at the reference temperature), fitted per axis:
   accelerometer i: b, s, K2, two cross-couplings N_ij, lever arm r_i;
   gyro i: b, s, two cross-couplings N_ij.
 """

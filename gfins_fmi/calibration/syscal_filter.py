@@ -1,5 +1,5 @@
 """The system-level calibration filter of a rotating INS (seed 001, steps S3-S5): the
-36-state Kalman filter of the C core (``gf_syscal``; equations in csrc/gf_syscal.h) with
+36-state Kalman filter of the C core (``gf_syscal``; equations in csrc/est/gf_syscal.h) with
 an optional 37th state for the accelerometer sample delay, its parameters in datasheet
 units and their mapping to the IMU error model, the prior and the configuration.
 
@@ -150,7 +150,7 @@ class Prior:
 
 @dataclass(frozen=True)
 class SyscalConfig:
-    """Filter settings (csrc/gf_syscal.h).
+    """Filter settings (csrc/est/gf_syscal.h).
 
     Parameters
     ----------

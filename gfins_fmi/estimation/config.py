@@ -1,7 +1,7 @@
 """Configuration of the integrated-navigation filter: :class:`FilterConfig` (datasheet
 units in, the C struct out), :class:`InitialState` (the start and its 1-sigma per error
 block), the names of measurement kinds, update outcomes and sensor estimates, and
-:class:`FilterError`. Equations, state layout and conventions: ``csrc/gf_ins_gnss.h`` and
+:class:`FilterError`. Equations, state layout and conventions: ``csrc/est/gf_ins_gnss.h`` and
 ``docs/estimation.md``.
 """
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """The continuous error model of the integrated-navigation filter, in numpy: the state
 names of every configuration and F, G as the definition that the C filter
-(``csrc/gf_ins_gnss.c``, ``gf_ins_model``) implements (the tests compare the two), and the
+(``csrc/est/gf_ins_*.c``, ``gf_ins_model``) implements (the tests compare the two), and the
 model as a python-control system for outage predictions and analysis.
 
 Convention C_b^n(computed) = (I - [phi x]) C_b^n(true); position and velocity errors are
@@ -41,7 +41,7 @@ def ins_error_matrices(lat_rad: float, h_m: float, v_enu_m_s, q_bn, f_b_m_s2, w_
                        *, scale_states: bool = False, baro_state: bool = False,
                        odo_state: bool = False, odo_mount_state: bool = False, tau_s=None):
     """The continuous error model of the integrated-navigation filter, x' = F x + G w:
-    **the definition** that the C filter (csrc/gf_ins_gnss.c) implements; tests compare
+    **the definition** that the C filter (csrc/est/gf_ins_*.c) implements; tests compare
     the two at several states, and this one with a numerical linearisation of the
     navigation equations.
 

@@ -6,7 +6,7 @@ outage, and the figures.
 Conventions: position errors in metres east, north, up; velocity errors ENU in m/s;
 attitude error as the rotation vector a (ENU, rad) with C_b^n(estimate) =
 exp([a x]) C_b^n(reference) — the filter's own attitude state is phi = -a
-(csrc/gf_ins_gnss.h).
+(csrc/est/gf_ins_gnss.h).
 """
 from __future__ import annotations
 

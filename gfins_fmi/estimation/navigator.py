@@ -2,7 +2,7 @@
 EKF or UKF, with GNSS position and velocity, barometer, odometer, non-holonomic and
 zero-velocity aiding, reverse-time filtering and forward-backward passes (seed 003).
 
-Equations, state layout and conventions: ``csrc/gf_ins_gnss.h`` and
+Equations, state layout and conventions: ``csrc/est/gf_ins_gnss.h`` and
 ``docs/estimation.md``. The error model's definition is
 :func:`gfins_fmi.estimation.error_model.ins_error_matrices`.
 
@@ -278,7 +278,7 @@ class IntegratedNavigator:
 
     def reverse(self) -> None:
         """Turn the filter around in time (``gf_ins_reverse``: velocity and gyro-bias
-        errors change sign, the Earth rate too; see csrc/gf_ins_gnss.h). Twice = identity."""
+        errors change sign, the Earth rate too; see csrc/est/gf_ins_gnss.h). Twice = identity."""
         check_status(lib.gf_ins_reverse(self._f), "gf_ins_reverse")
 
     def _record(self, imu):

@@ -221,7 +221,7 @@ INS_OUTPUTS = ["std", "sensors", "n_imu", "n_updates", "n_rejected", "nis", "upd
 @dataclass(frozen=True)
 class InitialError:
     """Errors of a navigator's initial state against the vehicle's true start, in the
-    integrated filter's definitions (csrc/gf_ins_gnss.h): position east, north, up (m),
+    integrated filter's definitions (csrc/est/gf_ins_gnss.h): position east, north, up (m),
     velocity east, north, up (m/s), attitude phi east, north, up (rad) with
     C_b^n(initial) = (I - [phi x]) C_b^n(true) to first order (q = q(-phi) (x) q_true)."""
     position_m: tuple = (0.0, 0.0, 0.0)

@@ -3,7 +3,7 @@ from the C core (``gf_array_solver``), and the observed products of w w^T in wor
 
 Each accelerometer output is linear in x = [f, w_dot, W] with W = w w^T (six products);
 the solver separates f, w_dot and the observed product combinations, the rest of W comes
-from the rate (confounded) or not at all (absent). Model: ``csrc/gf_gfins.h``; the
+from the rate (confounded) or not at all (absent). Model: ``csrc/gyrofree/gf_gfins.h``; the
 9-accelerometer closed forms of seed 000 are the special case ``layout("qin9")``
 (:func:`gfins_fmi.gyrofree.array.solve_accel9` keeps the paper's own equations).
 """

@@ -26,7 +26,7 @@ def hermite_increments(w0_rad_s, w_dot0_rad_s2, f0_m_s2, w1_rad_s, w_dot1_rad_s2
                        T_s: float) -> tuple[np.ndarray, np.ndarray]:
     """Rotation vector (rad) and body velocity increment (m/s) of one interval of length
     ``T_s`` under the cubic Hermite rate model through (w, w_dot) at both ends: what the
-    navigator integrates (``integration="hermite"``; equations in csrc/gf_gfins.h).
+    navigator integrates (``integration="hermite"``; equations in csrc/gyrofree/gf_gfins.h).
 
     Returns
     -------
@@ -68,7 +68,7 @@ class GyroFreeNavigator:
         rotation vector) and integrates the specific force in the interval's start
         frame; ``"linear"`` feeds the rates to the mechanization, which takes them as
         linear between samples (second order, two-sample coning and sculling). See
-        ``gf_hermite_increments`` in csrc/gf_gfins.h.
+        ``gf_hermite_increments`` in csrc/gyrofree/gf_gfins.h.
     allow_unstable : bool
         As :class:`RateSolver`.
     """

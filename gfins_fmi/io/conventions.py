@@ -1,6 +1,6 @@
 """Other tools' frames, angles and time scales, mapped once onto ours.
 
-Ours (``csrc/gf_sins.h``): body right-front-up (RFU), navigation East-North-Up (ENU),
+Ours (``csrc/nav/gf_sins.h``): body right-front-up (RFU), navigation East-North-Up (ENU),
 Euler [heading, pitch, roll] with C_b^n = Rz(-heading) Rx(pitch) Ry(roll).
 Many tools (KF-GINS, RTKLIB-based fusion code, most INS manuals) use body
 forward-right-down (FRD), navigation North-East-Down (NED) and roll, pitch, yaw with

@@ -1,7 +1,7 @@
 """Records of sensor and reference data: what the integrated-navigation filters and
 smoothers consume (docs/io.md).
 
-Frames and units (as in ``csrc/gf_sins.h``): body b = right-front-up (x right, y
+Frames and units (as in ``csrc/nav/gf_sins.h``): body b = right-front-up (x right, y
 forward, z up), navigation n = East-North-Up, positions geodetic WGS-84 (latitude and
 longitude in rad, ellipsoidal height in m), Euler angles [heading, pitch, roll] in rad
 (heading clockwise from north in [0, 2 pi), pitch nose-up +, roll right-wing-down +,

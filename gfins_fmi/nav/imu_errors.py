@@ -1,6 +1,6 @@
 """IMU error model (C core ``gf_imu_error``) in datasheet units: one definition for
 simulation (:meth:`ImuErrors.apply`) and compensation (:meth:`ImuErrors.compensate`).
-Model and seed equations: ``csrc/gf_imu_error.h``.
+Model and seed equations: ``csrc/nav/gf_imu_error.h``.
 
 Units at this boundary (SI inside): gyro bias in deg/h, accelerometer bias in ug
 (1 ug = 9.80665e-6 m/s^2), scale factors in ppm, misalignments in arcsec, K2 in ug/g^2,
@@ -251,7 +251,7 @@ class ImuNoise:
     def fmu_parameters(self) -> dict:
         """The model as start values of the vehicle FMU (SI; its noise = 1 switches it
         on): the FMU draws from its own seeded generator with the same per-sample
-        conventions as :meth:`sample` (csrc/gf_noise.h)."""
+        conventions as :meth:`sample` (csrc/sim/gf_noise.h)."""
         deg = np.pi / 180.0
         return dict(gyro_arw=self.gyro_arw_deg_sqrt_h * deg / 60.0,
                     gyro_bias_instability=self.gyro_bias_instability_deg_h * DEG_H,

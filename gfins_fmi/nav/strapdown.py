@@ -1,5 +1,5 @@
 """Strapdown inertial navigation (C core ``gf_sins``): ENU quaternion mechanization on
-WGS-84, forward and reverse in time. Equations and conventions: ``csrc/gf_sins.h``.
+WGS-84, forward and reverse in time. Equations and conventions: ``csrc/nav/gf_sins.h``.
 
 >>> import gfins_fmi as gf
 >>> from gfins_fmi.sim import trajectory as tj
@@ -61,7 +61,7 @@ class SinsConfig:
         the previous sample's coning and sculling terms). N > 1 makes one update of
         N h from N consecutive increments with the N-sample coning and sculling set
         (2/3 for N = 2; 9/20, 27/20 and 54/105, 92/105, 214/105 for N = 3, 4; see
-        ``csrc/gf_sins.h`` and docs/sins.md for the derivation and accuracy): the usual
+        ``csrc/nav/gf_sins.h`` and docs/sins.md for the derivation and accuracy): the usual
         processing of a high-rate IMU, 1.9x (N = 2) to 3.1-3.7x (N = 4) the throughput
         (docs/benchmarks.md).
         :meth:`Strapdown.run` then returns one row per update (``ceil(n / N)`` rows;

@@ -4,7 +4,7 @@ axes, indexing and continuous modulation schemes) and the exact outputs of an IM
 the mechanism on a static base or on a vehicle. Their navigation (rotation modulation, the
 vehicle attitude from the gimbal angles) is :mod:`gfins_fmi.nav.rotating`.
 
-Frames and the mechanism (csrc/gf_rotation.h): base b fixed to the vehicle (right-front-up),
+Frames and the mechanism (csrc/sim/gf_rot.h): base b fixed to the vehicle (right-front-up),
 IMU frame m; middle axis = base x, inner axis = IMU z, C_m^b = R_x(alpha) R_z(beta), both
 angles right-handed (the seed's "clockwise", seen looking along the axis). A schedule is
 a sequence of :class:`Turn` (a turn about a base axis and/or an IMU axis, then a rest).

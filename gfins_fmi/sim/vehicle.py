@@ -3,7 +3,7 @@
 
 The vehicle is level, at constant height, and follows a profile of segments; each
 segment changes the speed, the heading rate and the heading by C2 smooth steps (so
-acceleration and yaw acceleration are continuous). See csrc/gf_vehicle.h for the
+acceleration and yaw acceleration are continuous). See csrc/sim/gf_vehicle.h for the
 equations. ``VehicleProfile.seed001`` is the vehicle test of seed 001 (alignment, a
 start to 15 m/s, two 180 deg turns) and equals ``trajectory.VehicleRun``;
 ``VehicleProfile.circle`` is the circle of seed 000 (level).
@@ -15,7 +15,7 @@ random walk, Gauss-Markov; white noise) and an :class:`Odometer` (wheel lever ar
 scale-factor error, white noise). ``simulate_vehicle(..., gnss=, baro=, odometer=,
 seed=)`` returns their measurements and truth with the IMU record; the vehicle FMU with
 the sensors' ``fmu_parameters()`` and ``noise_seed = seed`` delivers the same bits.
-Geometry and error definitions: csrc/gf_aiding_sim.h and docs/cosim.md.
+Geometry and error definitions: csrc/sim/gf_aiding.h and docs/cosim.md.
 """
 from __future__ import annotations
 
@@ -168,7 +168,7 @@ class _Sensor:
 
 @dataclass(frozen=True)
 class GnssReceiver(_Sensor):
-    """A GNSS receiver on the vehicle (csrc/gf_aiding_sim.h, docs/cosim.md).
+    """A GNSS receiver on the vehicle (csrc/sim/gf_aiding.h, docs/cosim.md).
 
     Epoch k is valid at ``start + offset_s + k / rate_hz`` (epochs need not fall on IMU
     samples) and delivered ``latency_s`` later; epochs valid in an outage are not

@@ -1,4 +1,4 @@
-"""Integrated navigation (csrc/gf_ins_gnss, gfins_fmi.estimation.navigator) on exact
+"""Integrated navigation (csrc/est/gf_ins_gnss, gfins_fmi.estimation.navigator) on exact
 sensors: residuals at the mechanization's truncation level with measurements off the IMU
 grid, subsample groups, reported stds in metres, the process noise between propagations,
 lever arms, odometer and NHC, refused input, stale and delayed measurements. The Kalman

@@ -1,4 +1,4 @@
-"""The Kalman engine's pieces that the integrated navigator added (csrc/gf_kalman via cffi):
+"""The Kalman engine's pieces that the integrated navigator added (csrc/est/gf_kalman via cffi):
 structured predict, Joseph update with the NIS gate, the unscented transform, one
 Rauch-Tung-Striebel step and the chi-square gate's quantiles, each against a numpy
 re-derivation of its formula (not the code under test).

@@ -370,7 +370,7 @@ def _vehicle_outputs(params, n=6000, version=2, h=0.01, names=("gyro_rate", "spe
 
 @pytest.mark.parametrize("version", [2, 3])
 def test_vehicle_fmu_noise_follows_the_imu_noise_conventions(version):
-    """Each noise process alone, against its definition (gfins_fmi.ImuNoise, csrc/gf_noise.h):
+    """Each noise process alone, against its definition (gfins_fmi.ImuNoise, csrc/sim/gf_noise.h):
     white gyro std N / sqrt(h), white accelerometer std ASD sqrt(1/(2h)), Gauss-Markov
     residual y_k - a y_(k-1) of std sigma sqrt(1 - a^2), random-walk steps of std K sqrt(h),
     array white noise. 6000 steps x 3 axes: a sample std is within 1.5% (1 sigma, 18000

@@ -22,7 +22,7 @@ DATASHEET = dict(gyro_bias_deg_h=10.0, gyro_scale_ppm=1000.0, gyro_misalignment_
 
 
 def numpy_apply(e: gf.ImuErrors, w, f, temp):
-    """The output equations of csrc/gf_imu_error.h written out with numpy."""
+    """The output equations of csrc/nav/gf_imu_error.h written out with numpy."""
     dt = temp - e.t0_C
     def poly(base, tc, unit):
         out = np.broadcast_to(np.asarray(base, float) * unit, (len(dt), 3)).copy()

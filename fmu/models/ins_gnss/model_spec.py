@@ -1,5 +1,5 @@
 """Interface of the integrated-navigator FMU: the error-state INS/GNSS filter of the C
-core (csrc/gf_ins_gnss.h, EKF or UKF) aided by GNSS position/velocity, barometer and
+core (csrc/est/gf_ins_gnss.h, EKF or UKF) aided by GNSS position/velocity, barometer and
 odometer, with non-holonomic and zero-velocity updates — the one place its variables are
 listed; fmu/tools/fmugen.py makes the FMI 2.0 and 3.0 modelDescription.xml and the C
 table from it. Parameter defaults equal gfins_fmi.estimation.FilterConfig's (checked by

@@ -2,7 +2,7 @@
 of segments or driven by speed / heading-rate commands, with the outputs of the sensors
 riding it — an IMU (rates and increments, optionally corrupted by the IMU error model),
 an accelerometer array of a chosen layout and, when enabled, the aiding sensors: a GNSS
-receiver, a barometer and an odometer (csrc/gf_aiding_sim.h). fmu/tools/fmugen.py makes the FMI 2.0
+receiver, a barometer and an odometer (csrc/sim/gf_aiding.h). fmu/tools/fmugen.py makes the FMI 2.0
 and 3.0 modelDescription.xml and the C table from it."""
 
 import math
@@ -39,7 +39,7 @@ def _out(name, unit, shape, field, description, type_="Float64"):
 MAX_OUTAGES = 8  # GF_AIDING_MAX_OUTAGES
 MAX_TURNS = 64  # GF_ROT_MAX_SEGMENTS
 # default rotation scheme: 16-position indexing, 180 deg turns at 10 deg/s (1 s ramps),
-# 10 s stops (gfins_fmi.rotation.indexing_scheme(16)); used when rotation = 1
+# 10 s stops (gfins_fmi.sim.rotation.indexing_scheme(16)); used when rotation = 1
 _IDX8 = [("i", 1), ("m", 1), ("i", -1), ("m", -1), ("m", -1), ("i", -1), ("m", 1), ("i", 1)]
 _IDX16 = _IDX8 + [("m" if a == "i" else "i", s) for a, s in _IDX8]
 
@@ -56,9 +56,9 @@ def _turn_column(kind):
 
 
 def _rotation_parameters():
-    """The IMU on seed 001's two-axis mechanism (csrc/gf_rotation.h): a schedule of turns
+    """The IMU on seed 001's two-axis mechanism (csrc/sim/gf_rot.h): a schedule of turns
     about the base's axes (middle axis: base x) and the IMU's axes (inner axis: IMU z);
-    gfins_fmi.rotation.RotationSchedule.fmu_parameters() gives them."""
+    gfins_fmi.sim.rotation.RotationSchedule.fmu_parameters() gives them."""
     r = "rot_"
     return [
         _p("rotation", None, 0, "rotation", "1: the IMU rides the two-axis indexing mechanism "
@@ -89,7 +89,7 @@ def _rotation_parameters():
 
 
 def _aiding_parameters():
-    """GNSS receiver, barometer, odometer (csrc/gf_aiding_sim.h; gfins_fmi.vehicle's
+    """GNSS receiver, barometer, odometer (csrc/sim/gf_aiding.h; gfins_fmi.sim.vehicle's
     GnssReceiver, Barometer, Odometer .fmu_parameters() give them). All off by default."""
     g, b, o = "aiding.gnss.", "aiding.baro.", "aiding.odo."
     return [

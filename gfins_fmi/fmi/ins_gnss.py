@@ -6,6 +6,7 @@ record through fmpy with the grouping of the batch API (:class:`InsGnssDriver`,
 from __future__ import annotations
 
 import pathlib
+import warnings
 from typing import Callable, Mapping
 
 import numpy as np
@@ -18,7 +19,7 @@ from gfins_fmi.estimation.solution import IntegratedSolution
 from gfins_fmi.fmi.paths import FmuRunError, fmu_path
 from gfins_fmi.fmi.runner import FmuLog, FmuSlave
 
-__all__ = ["INITIAL_STD_PARAMETERS", "ins_gnss_fmu_parameters", "monitor_innovations", "InsGnssDriver",
+__all__ = ["INITIAL_STD_PARAMETERS", "OLD_PARAMETER_NAMES", "renamed_parameters", "ins_gnss_fmu_parameters", "monitor_innovations", "InsGnssDriver",
            "run_ins_gnss_fmu"]
 
 #: InitialState's std blocks (gf_ins_initial_std's members) -> the FMU's std0_* parameters
@@ -28,6 +29,43 @@ INITIAL_STD_PARAMETERS = {
     "gyro_scale_std": "std0_gyro_scale", "accel_scale_std": "std0_accel_scale",
     "baro_bias_std_m": "std0_baro_bias", "odometer_scale_std": "std0_odo_scale",
     "odometer_mount_std_rad": "std0_odo_mount"}
+
+
+#: the FMU's parameter names before they became the settings table's (one release of
+#: grace: :func:`renamed_parameters` maps them and warns)
+OLD_PARAMETER_NAMES = {
+    "input_mode": "input", "propagation_interval": "propagation_interval_s",
+    "max_imu_gap": "max_imu_gap_s", "max_rate": "max_rate_rad_s",
+    "max_specific_force": "max_specific_force_m_s2", "scale_states": "scale_factors",
+    "baro_state": "baro_bias", "odo_state": "odometer_scale", "odo_mount_state": "odometer_mount",
+    "gyro_arw": "gyro_arw_rad_sqrt_s", "accel_vrw": "accel_vrw_m_s_sqrt_s",
+    "gyro_bias_std": "gyro_bias_std_rad_s", "gyro_bias_tau": "gyro_bias_tau_s",
+    "accel_bias_std": "accel_bias_std_m_s2", "accel_bias_tau": "accel_bias_tau_s",
+    "gyro_scale_tau": "gyro_scale_tau_s", "accel_scale_tau": "accel_scale_tau_s",
+    "baro_bias_std": "baro_bias_std_m", "baro_bias_tau": "baro_bias_tau_s",
+    "odo_scale_std": "odometer_scale_std", "odo_scale_tau": "odometer_scale_tau_s",
+    "odo_mount_std": "odometer_mount_std_rad", "odo_mount_tau": "odometer_mount_tau_s",
+    "gnss_lever_arm": "gnss_lever_arm_m", "odo_lever_arm": "odometer_lever_arm_m",
+    "odo_mount": "odometer_mount_rad", "gate_prob": "gate_probability",
+    "max_latency": "max_latency_s", "nhc_std": "nhc_std_m_s", "nhc_interval": "nhc_interval_s",
+    "zupt_std": "zupt_std_m_s", "zaru_std": "zaru_std_rad_s", "zupt_interval": "zupt_interval_s",
+    "still_window": "standstill_window_s", "still_accel_std": "standstill_accel_std_m_s2",
+    "still_gyro": "standstill_gyro_rad_s"}
+
+
+def renamed_parameters(parameters) -> dict:
+    """``parameters`` with the FMU's old parameter names replaced by the settings table's,
+    with a DeprecationWarning naming each (the old names go in the next release)."""
+    out = {}
+    for name, value in (parameters or {}).items():
+        new = OLD_PARAMETER_NAMES.get(name)
+        if new is not None:
+            warnings.warn(f"gfins_ins_gnss parameter {name!r} is now {new!r} (the name of the "
+                          "setting in C and FilterConfig); the old name goes in the next release",
+                          DeprecationWarning, stacklevel=3)
+            name = new
+        out[name] = value
+    return out
 
 
 def ins_gnss_fmu_parameters(config, initial) -> dict:
@@ -114,7 +152,7 @@ class InsGnssDriver:
     def __init__(self, imu, gnss, baro, odometer, *, config, initial, gnss_velocity=True,
                  fmi_version=2, path=None, parameters=None, logging_on=False, echo=None):
         params = ins_gnss_fmu_parameters(config, initial)
-        params.update(parameters or {})
+        params.update(renamed_parameters(parameters))
         t = np.ascontiguousarray(np.asarray(imu.t_s, dtype=float))
         n = t.shape[0] if t.ndim == 1 else 0
         if t.ndim != 1 or n == 0:

@@ -660,3 +660,22 @@ def test_alignment_from_gnss_travel_nonfinite_sample(travel):
                          parameters={"align_time": 10.0, "align_heading": 1})
     part = exc.value.partial
     assert len(part.t_s) == k and np.all(np.isfinite(part.lat_rad))
+
+
+def test_old_parameter_names_still_work_with_a_warning(rec):
+    """The FMU's parameters took the settings table's names; the old ones are mapped for
+    one release (with a DeprecationWarning): every old name maps to a parameter the FMU
+    has, and a run with old names equals the run with the new ones."""
+    from gfins_fmi.fmi.ins_gnss import OLD_PARAMETER_NAMES
+    assert set(OLD_PARAMETER_NAMES.values()) <= {st.short for st in fmu_settings()}
+    cfg, imu, gnss, _, _ = _case(rec, "ekf")
+    short = Rec(t_s=imu.t_s[:200], gyro=imu.gyro[:200], accel=imu.accel[:200], kind="increments")
+    new = run_ins_gnss_fmu(short, gnss, config=cfg, initial=_initial(rec[0]),
+                           parameters={"gate_probability": 0.99, "propagation_interval_s": 0.05})
+    with pytest.warns(DeprecationWarning) as caught:
+        old = run_ins_gnss_fmu(short, gnss, config=cfg, initial=_initial(rec[0]),
+                               parameters={"gate_prob": 0.99, "propagation_interval": 0.05})
+    said = " ".join(str(w.message) for w in caught)
+    assert "'gate_prob' is now 'gate_probability'" in said
+    assert "'propagation_interval' is now 'propagation_interval_s'" in said
+    assert np.array_equal(old.lat_rad, new.lat_rad) and np.array_equal(old.std, new.std)

@@ -56,3 +56,13 @@ def test_every_file_the_page_names_exists():
             if not any((b / name).exists() for b in bases):
                 stale.append(name)
     assert not stale, f"docs/architecture.md names files that do not exist: {stale}"
+
+
+def test_every_file_named_in_references_and_contributing_exists():
+    stale = []
+    for page in ("references.md", "contributing.md"):
+        text = (ROOT / "docs" / page).read_text(encoding="utf-8")
+        for token in re.findall(r"`([A-Za-z0-9_./]+\.(?:py|c|h|md))(?:::\w+)?`", text):
+            if "/" in token and not any((b / token).exists() for b in (ROOT, ROOT / "docs")):
+                stale.append(f"{page}: {token}")
+    assert not stale, stale

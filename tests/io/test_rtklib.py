@@ -57,7 +57,11 @@ def test_rtklib_week_form_and_no_header(tmp_path):
     np.testing.assert_allclose(r.t_s, [t0], rtol=0, atol=2.5e-7)
     assert not r.has_velocity and r.quality_counts() == {"single": 1}
     bare = read_rtklib_pos(write(tmp_path / "bare.pos", POS_LINES))
+    full = read_rtklib_pos(write(tmp_path / "full.pos", POS_HEADER + POS_LINES))
     assert bare.has_velocity and len(bare) == 2
+    for name in ("t_s", "lat_rad", "lon_rad", "h_m", "pos_std_m", "vel_enu_m_s", "vel_std_m_s",
+                 "quality"):    # every field as with the header (test_reader_conventions.py)
+        assert np.array_equal(getattr(bare, name), getattr(full, name)), name
     with pytest.raises(FileFormatError, match="velocity=True but the file has no velocity columns"):
         read_rtklib_pos(tmp_path / "w.pos", velocity=True)
 

@@ -123,7 +123,8 @@ def copy_tree(dst: Path) -> None:
     files = subprocess.run(["git", "ls-files", "-co", "--exclude-standard"], cwd=ROOT,
                            capture_output=True, text=True, check=True).stdout.split("\n")
     for f in files:
-        if not f or f.startswith(("mutation/", "docs/", "bench/", "examples/")):
+        # bench/: some tests load a study script from there
+        if not f or f.startswith(("mutation/", "docs/", "examples/")):
             continue
         src = ROOT / f
         if not src.is_file():
@@ -322,8 +323,10 @@ def _python_stage(py, pytest_args, limit):
     rc, log, tb = _run(py["build"], 900)
     if rc != 0:
         return "compiler", [], tb
+    # one process (-o addopts= drops pyproject's -n 2: under xdist -x ends with exit code
+    # 2, "interrupted", like a crash), stopping at the first failure
     cmd = [sys.executable, "-S", "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider",
-           *pytest_args.split()]
+           "-o", "addopts=", *pytest_args.split()]
     t0 = time.monotonic()
     p = subprocess.Popen(cmd, cwd=py["cwd"], env=py["env"], stdout=subprocess.PIPE,
                          stderr=subprocess.STDOUT, text=True, start_new_session=True)

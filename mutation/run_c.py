@@ -123,8 +123,8 @@ def copy_tree(dst: Path) -> None:
     files = subprocess.run(["git", "ls-files", "-co", "--exclude-standard"], cwd=ROOT,
                            capture_output=True, text=True, check=True).stdout.split("\n")
     for f in files:
-        # bench/: some tests load a study script from there
-        if not f or f.startswith(("mutation/", "docs/", "examples/")):
+        # bench/ and examples/ too: some tests load a study or an example from there
+        if not f or f.startswith(("mutation/", "docs/")):
             continue
         src = ROOT / f
         if not src.is_file():

@@ -1,15 +1,22 @@
 #!/usr/bin/env python3
-"""Python mutation run with cosmic-ray over the functions listed in
-mutation/cosmic-ray.toml (``[gfins-mutation] functions``), with that file's test command.
+"""Python mutation run with cosmic-ray over the targets of mutation/cosmic-ray.toml: each
+``[[gfins-mutation.target]]`` names a module, the functions (or ``Class.method``) of it to
+mutate and the test command that judges them (the tests of the matching folder), and runs
+as its own cosmic-ray session.
 
 Usage (from the repository root, in the dev venv with the `mutation` extra):
-    nice -n 5 python mutation/run_py.py              # init, filter, exec, report
-    python mutation/run_py.py --report-only          # report an existing session
+    nice -n 5 python mutation/run_py.py                        # every target
+    nice -n 5 python mutation/run_py.py --target io-rtklib     # some of them
+    python mutation/run_py.py --rerun-survivors --target ...   # after adding tests
+    python mutation/run_py.py --report-only                    # report the sessions
 
-cosmic-ray edits the module in place while a mutant runs and restores it afterwards:
-run it in a checkout you are not editing at the same time. The session database goes to
---session (default: under the system temporary directory); the results to
-mutation/results_py.json and mutation/results_py.md.
+The run never edits the checkout: the tracked tree is copied into --work (default under
+the system temporary directory), the installed package's compiled parts (the cffi module
+and the FMUs) are linked into the copy, and the tests run with ``python -S`` and the copy
+first on PYTHONPATH (so an editable install of the checkout cannot redirect the import);
+cosmic-ray mutates the copy in place. Sessions (``<work>/<target>.sqlite``) persist for
+--rerun-survivors and --report-only. Results: mutation/results_py.json (per target: the
+counts and the survivors) and mutation/results_py.md.
 
 The functions are turned into line ranges here (ast), so the selection follows the
 sources as they change; cosmic-ray's own line filter takes those ranges.
@@ -21,8 +28,10 @@ import ast
 import json
 import os
 import platform
+import shutil
 import subprocess
 import sys
+import sysconfig
 import tempfile
 import time
 import tomllib
@@ -34,12 +43,20 @@ CONFIG = HERE / "cosmic-ray.toml"
 
 
 def function_lines(path: Path, names: list[str]) -> list[str]:
-    """'first-last' line ranges of the named top-level functions of a module."""
+    """'first-last' line ranges of the named top-level functions or classes of a module,
+    or of ``Class.method``."""
     tree = ast.parse(path.read_text())
-    found = {n.name: n for n in tree.body if isinstance(n, (ast.FunctionDef, ast.ClassDef))}
+    found = {}
+    for node in tree.body:
+        if isinstance(node, (ast.FunctionDef, ast.ClassDef)):
+            found[node.name] = node
+            if isinstance(node, ast.ClassDef):
+                for sub in node.body:
+                    if isinstance(sub, ast.FunctionDef):
+                        found[f"{node.name}.{sub.name}"] = sub
     missing = [n for n in names if n not in found]
     if missing:
-        raise SystemExit(f"{path}: no top-level function {missing} (update {CONFIG.name})")
+        raise SystemExit(f"{path}: no function {missing} (update {CONFIG.name})")
     ranges = []
     for n in names:
         node = found[n]
@@ -48,41 +65,74 @@ def function_lines(path: Path, names: list[str]) -> list[str]:
     return ranges
 
 
-def selection() -> tuple[dict, str, list[str]]:
+def targets() -> tuple[dict, list[dict]]:
+    """(the cosmic-ray section, the targets with their line ranges)."""
     with open(CONFIG, "rb") as fh:
         cfg = tomllib.load(fh)
-    sel = cfg["gfins-mutation"]
-    module = sel["module"]
-    return cfg, module, function_lines(ROOT / module, sel["functions"])
+    out = []
+    for t in cfg["gfins-mutation"]["target"]:
+        out.append(dict(t, ranges=function_lines(ROOT / t["module"], t["functions"])))
+    names = [t["name"] for t in out]
+    if len(set(names)) != len(names):
+        raise SystemExit(f"{CONFIG.name}: duplicate target names {names}")
+    return cfg["cosmic-ray"], out
 
 
-def write_session_config(path: Path) -> None:
-    cfg, module, ranges = selection()
-    cr = cfg["cosmic-ray"]
+def copy_tree(dst: Path) -> Path:
+    """The tracked tree in dst/src with the installed compiled parts linked in; returns
+    the PYTHONPATH the tests run with."""
+    src = dst / "src"
+    files = subprocess.run(["git", "ls-files", "-co", "--exclude-standard"], cwd=ROOT,
+                           capture_output=True, text=True, check=True).stdout.split("\n")
+    for f in files:
+        if not f or f.startswith("mutation/") or not (ROOT / f).is_file():
+            continue
+        d = src / f
+        if d.is_file() and d.read_bytes() == (ROOT / f).read_bytes():
+            continue
+        d.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copy2(ROOT / f, d)
+    purelib, platlib = sysconfig.get_paths()["purelib"], sysconfig.get_paths()["platlib"]
+    installed = Path(platlib) / "gfins_fmi"
+    built = sorted(installed.glob("_core*.so")) + [installed / "fmus"]
+    if not built[0].name.startswith("_core") or not built[-1].is_dir():
+        raise SystemExit(f"no compiled gfins_fmi in {installed}: pip install -e '.[test,mutation]'")
+    for b in built:
+        link = src / "gfins_fmi" / b.name
+        if link.is_symlink() or link.exists():
+            link.unlink()
+        link.symlink_to(b)
+    return os.pathsep.join([str(src), purelib, platlib])
+
+
+def write_session_config(path: Path, cr: dict, t: dict, pythonpath: str) -> None:
     ops = cr["filters"]["operators-filter"]["exclude-operators"]
+    # the tests of the copy, one process, stopping at the first failure
+    command = (f"env PYTHONPATH={pythonpath} {sys.executable} -S -m pytest -x -q "
+               f"-p no:cacheprovider -o addopts= {t['tests']}")
     text = [
         "[cosmic-ray]",
-        f"module-path = {json.dumps(module)}",
+        f"module-path = {json.dumps(t['module'])}",
         f"timeout = {float(cr['timeout'])}",
         "excluded-modules = []",
-        f"test-command = {json.dumps(cr['test-command'])}",
+        f"test-command = {json.dumps(command)}",
         "[cosmic-ray.distributor]",
         'name = "local"',
         "[cosmic-ray.filters.operators-filter]",
         "exclude-operators = [" + ", ".join(json.dumps(o) for o in ops) + "]",
         "[cosmic-ray.filters.line-filter.lines]",
-        f"{json.dumps(module)} = [" + ", ".join(json.dumps(r) for r in ranges) + "]",
+        f"{json.dumps(t['module'])} = [" + ", ".join(json.dumps(r) for r in t["ranges"]) + "]",
     ]
     path.write_text("\n".join(text) + "\n")
 
 
-def sh(*cmd: str) -> None:
+def sh(*cmd: str, cwd: Path) -> None:
     print("$", " ".join(cmd), flush=True)
-    subprocess.run(cmd, cwd=ROOT, check=True)
+    subprocess.run(cmd, cwd=cwd, check=True)
 
 
-def report(session: Path) -> dict:
-    dump = subprocess.run(["cosmic-ray", "dump", str(session)], cwd=ROOT, capture_output=True,
+def session_report(session: Path, src: Path, t: dict) -> dict:
+    dump = subprocess.run(["cosmic-ray", "dump", str(session)], cwd=src, capture_output=True,
                           text=True, check=True).stdout
     rows = []
     for line in dump.splitlines():
@@ -96,61 +146,89 @@ def report(session: Path) -> dict:
                          occurrence=m["occurrence"], outcome=outcome,
                          diff=(result or {}).get("diff") or ""))
     run = [r for r in rows if r["outcome"] not in ("skipped", "pending")]
-    killed = [r for r in run if r["outcome"] != "survived"]
     survived = [r for r in run if r["outcome"] == "survived"]
-    _, module, ranges = selection()
-    meta = dict(date=time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
-                commit=subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT,
-                                      capture_output=True, text=True).stdout.strip(),
-                machine=f"{platform.machine()} {platform.system()}, {os.cpu_count()} cores",
-                module=module, lines=ranges, generated=len(rows),
+    return dict(module=t["module"], functions=t["functions"], tests=t["tests"],
+                lines=t["ranges"], generated=len(rows),
                 skipped=sum(r["outcome"] == "skipped" for r in rows),
-                pending=sum(r["outcome"] == "pending" for r in rows),
-                run=len(run), killed=len(killed), survived=len(survived),
-                kill_rate=round(len(killed) / len(run), 4) if run else None)
-    (HERE / "results_py.json").write_text(json.dumps(dict(meta=meta, survived=survived), indent=1)
-                                          + "\n")
-    md = [f"# Python mutation run ({meta['date']}, commit {meta['commit']}, {meta['machine']})",
-          "", f"cosmic-ray over {module}, lines {', '.join(ranges)}: {len(rows)} mutants "
-          f"generated, {meta['skipped']} excluded by the operator filter, {meta['pending']} not "
-          f"run; {len(run)} run: {len(killed)} killed, {len(survived)} survived"
-          + (f" (kill rate {100 * len(killed) / len(run):.1f} %)" if run else ""), "",
-          "Survivors (the reason for each is in mutation/README.md):", ""]
-    for r in survived:
-        body = [ln for ln in r["diff"].splitlines() if ln.startswith(("+", "-"))
-                and not ln.startswith(("+++", "---"))]
-        md.append(f"- line {r['line']}, {r['operator']}: `{' / '.join(body)[:200]}`")
+                pending=sum(r["outcome"] == "pending" for r in rows), run=len(run),
+                killed=len(run) - len(survived), survived_count=len(survived),
+                kill_rate=round((len(run) - len(survived)) / len(run), 4) if run else None,
+                date=time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+                survived=survived)
+
+
+def write_results(results: dict) -> None:
+    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
+                            text=True).stdout.strip()
+    machine = f"{platform.machine()} {platform.system()}, {os.cpu_count()} cores"
+    (HERE / "results_py.json").write_text(json.dumps(dict(machine=machine, commit=commit,
+                                                          targets=results), indent=1) + "\n")
+    run = sum(r["run"] for r in results.values())
+    killed = sum(r["killed"] for r in results.values())
+    md = [f"# Python mutation run (commit {commit}, {machine})", "",
+          f"cosmic-ray, {len(results)} targets: {run} mutants run, {killed} killed, "
+          f"{run - killed} survived" + (f" (kill rate {100 * killed / run:.1f} %)" if run else ""),
+          "", "| target | module | run | killed | survived | kill rate | tests | date |",
+          "|---|---|---|---|---|---|---|---|"]
+    for name, r in results.items():
+        rate = f"{100 * r['kill_rate']:.1f} %" if r["kill_rate"] is not None else "-"
+        md.append(f"| {name} | {r['module']} | {r['run']} | {r['killed']} | {r['survived_count']} "
+                  f"| {rate} | {r['tests']} | {r['date']} |")
+    md += ["", "Survivors (the reason for each is in mutation/README.md):", ""]
+    for name, r in results.items():
+        for s in r["survived"]:
+            body = [ln for ln in s["diff"].splitlines() if ln.startswith(("+", "-"))
+                    and not ln.startswith(("+++", "---"))]
+            md.append(f"- {name}, {r['module']} line {s['line']}, {s['operator']}: "
+                      f"`{' / '.join(body)[:200]}`")
     (HERE / "results_py.md").write_text("\n".join(md) + "\n")
-    print(f"{len(run)} run, {len(killed)} killed, {len(survived)} survived, "
-          f"{meta['pending']} pending", flush=True)
-    return meta
+    print(f"{len(results)} targets: {run} run, {killed} killed, {run - killed} survived", flush=True)
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--session", type=Path,
-                    default=Path(tempfile.gettempdir()) / "gfins_mutation_py.sqlite")
+    ap.add_argument("--work", type=Path, default=Path(tempfile.gettempdir()) / "gfins_mutation_py")
+    ap.add_argument("--target", nargs="*", help="target names (default: all)")
     ap.add_argument("--report-only", action="store_true")
     ap.add_argument("--rerun-survivors", action="store_true",
-                    help="run the survivors of the session again (after adding tests)")
+                    help="run the survivors of the sessions again (after adding tests)")
     args = ap.parse_args(argv)
-    if args.rerun_survivors:
-        import sqlite3
-        cfg = args.session.with_suffix(".toml")
-        write_session_config(cfg)
-        with sqlite3.connect(args.session) as db:
-            n = db.execute("DELETE FROM work_results WHERE test_outcome = 'SURVIVED'").rowcount
-        print(f"{n} survivors to run again", flush=True)
-        sh("cosmic-ray", "exec", str(cfg), str(args.session))
-    elif not args.report_only:
-        cfg = args.session.with_suffix(".toml")
-        write_session_config(cfg)
-        sh("cosmic-ray", "init", str(cfg), str(args.session), "--force")
-        sh("cr-filter-operators", str(args.session), str(cfg))
-        sh("cr-filter-lines", "--config", str(cfg), str(args.session))
-        sh("cosmic-ray", "baseline", str(cfg))
-        sh("cosmic-ray", "exec", str(cfg), str(args.session))
-    report(args.session)
+    cr, all_targets = targets()
+    chosen = [t for t in all_targets if not args.target or t["name"] in args.target]
+    unknown = set(args.target or []) - {t["name"] for t in all_targets}
+    if unknown:
+        print(f"unknown targets {sorted(unknown)}", file=sys.stderr)
+        return 2
+    args.work.mkdir(parents=True, exist_ok=True)
+    pythonpath = copy_tree(args.work)
+    src = args.work / "src"
+    old = {}
+    if (HERE / "results_py.json").is_file():
+        old = json.loads((HERE / "results_py.json").read_text()).get("targets", {})
+    results = {t["name"]: old[t["name"]] for t in all_targets if t["name"] in old}
+    for t in chosen:
+        session = args.work / f"{t['name']}.sqlite"
+        cfg = args.work / f"{t['name']}.toml"
+        write_session_config(cfg, cr, t, pythonpath)
+        if args.rerun_survivors:
+            import sqlite3
+            with sqlite3.connect(session) as db:
+                n = db.execute("DELETE FROM work_results WHERE test_outcome = 'SURVIVED'").rowcount
+            print(f"{t['name']}: {n} survivors to run again", flush=True)
+            sh("cosmic-ray", "exec", str(cfg), str(session), cwd=src)
+        elif not args.report_only:
+            sh("cosmic-ray", "init", str(cfg), str(session), "--force", cwd=src)
+            sh("cr-filter-operators", str(session), str(cfg), cwd=src)
+            sh("cr-filter-lines", "--config", str(cfg), str(session), cwd=src)
+            sh("cosmic-ray", "baseline", str(cfg), cwd=src)
+            sh("cosmic-ray", "exec", str(cfg), str(session), cwd=src)
+        if session.is_file():
+            results[t["name"]] = session_report(session, src, t)
+            r = results[t["name"]]
+            print(f"{t['name']}: {r['run']} run, {r['killed']} killed, {r['survived_count']} "
+                  f"survived", flush=True)
+    order = [t["name"] for t in all_targets]
+    write_results({k: results[k] for k in order if k in results})
     return 0
 
 

@@ -102,7 +102,13 @@ def copy_tree(dst: Path) -> Path:
         if link.is_symlink() or link.exists():
             link.unlink()
         link.symlink_to(b)
-    return os.pathsep.join([str(src), purelib, platlib])
+    # the package through a folder of its own: tests/conftest.py takes the tree's root off
+    # sys.path (the tests exercise the installed package, never the source folder)
+    pkg = dst / "pypkg"
+    pkg.mkdir(exist_ok=True)
+    if not (pkg / "gfins_fmi").is_symlink():
+        (pkg / "gfins_fmi").symlink_to(src / "gfins_fmi")
+    return os.pathsep.join([str(pkg), purelib, platlib])
 
 
 def write_session_config(path: Path, cr: dict, t: dict, pythonpath: str) -> None:

@@ -321,3 +321,34 @@ def test_sensor_estimates_compensate_every_axis(exact_drive, kind):
     # and without the estimates the errors show: the check can fail
     blind = IntegratedNavigator(cfg, InitialState(nav0)).run(raw)
     assert np.abs(blind.v_n_m_s - clean.v_n_m_s).max() > 0.1
+
+
+def test_gate_rejects_then_forces_after_its_count(exact_drive):
+    """gate_reset_count = 3: GNSS position epochs 60 m off are rejected by the gate; the
+    fourth in a row is applied (forced); an accepted epoch starts the count again. Epochs
+    (b: bad, g: good): b b g b b b b -> rejected, rejected, accepted, rejected, rejected,
+    rejected, forced."""
+    tr, imu = exact_drive
+    k = np.arange(1003, 7004, 1000)                  # 7 epochs, 1 Hz
+    g = gnss_record(tr, k, std=(0.5, 0.5, 1.0))
+    bad = np.array([1, 1, 0, 1, 1, 1, 1], bool)
+    g.lat_rad = g.lat_rad + bad * 60.0 / 6.37e6     # 60 m north, 120 sigma
+    cfg = quiet_config(gate_probability=0.9999, gate_reset_count=3)
+    sol = start(tr, cfg, position_std_m=0.5, velocity_std_m_s=0.05,
+                attitude_std_rad=1e-3).run(imu, Rec(t_s=g.t_s, lat_rad=g.lat_rad, lon_rad=g.lon_rad,
+                                                    h_m=g.h_m, pos_std_m=g.pos_std_m))
+    st = sol.innovations_of("gnss_pos")["status"]
+    assert list(st) == [lib.GF_INS_REJECTED_GATE] * 2 + [lib.GF_INS_ACCEPTED] + \
+        [lib.GF_INS_REJECTED_GATE] * 3 + [lib.GF_INS_FORCED], list(st)
+
+
+def test_nhc_keeps_its_own_interval(exact_drive):
+    """NHC updates come every nhc_interval_s (0.3 s here), whatever the ZUPT interval
+    (0.1 s): the log's NHC times are 0.3 s apart."""
+    tr, imu = exact_drive
+    cfg = quiet_config(nhc=True, nhc_interval_s=0.3, zupt_interval_s=0.1, propagation_interval_s=0.1)
+    sol = start(tr, cfg).run(Rec(t_s=imu.t_s[:1000], gyro=imu.gyro[:1000], accel=imu.accel[:1000],
+                                 kind="increments"))
+    dt = np.diff(sol.innovations_of("nhc")["t_s"])
+    assert len(dt) > 20 and np.allclose(dt, 0.3, atol=1e-9), dt[:5]
+

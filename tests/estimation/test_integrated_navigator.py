@@ -352,3 +352,46 @@ def test_nhc_keeps_its_own_interval(exact_drive):
     dt = np.diff(sol.innovations_of("nhc")["t_s"])
     assert len(dt) > 20 and np.allclose(dt, 0.3, atol=1e-9), dt[:5]
 
+
+@pytest.mark.parametrize("yaw_rate, still", [(0.005, True), (0.02, False)])
+def test_standstill_needs_a_small_mean_rate(yaw_rate, still):
+    """At rest on the ground turning about the vertical at a constant rate: the specific
+    force is steady, so only the gyro thresholds decide; standstill_gyro_rad_s = 0.01
+    rad/s: 0.005 rad/s is standstill, 0.02 rad/s is not (it is below the accelerometer's
+    threshold 0.05 and below 3 x 0.01, so only the mean-rate test refuses it)."""
+    lat = 0.6
+    n, dt = 400, 0.01
+    g = np.array([0.0, 0.0, 9.80])
+    w_ie = np.array([0.0, OMEGA * np.cos(lat), OMEGA * np.sin(lat)])
+    gyro = np.tile(w_ie + [0.0, 0.0, yaw_rate], (n, 1))      # level: body = ENU at the start
+    accel = np.tile(g, (n, 1))
+    t = dt * np.arange(1, n + 1)
+    nav0 = gf.NavState(np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3), lat, 2.0, 50.0, 0.0)
+    cfg = quiet_config(input="rates", zupt=True, standstill_gyro_rad_s=0.01,   # the detector
+                       standstill_accel_std_m_s2=0.05, standstill_window_s=0.5)    # runs with zupt
+    sol = IntegratedNavigator(cfg, InitialState(nav0)).run(
+        Rec(t_s=np.r_[0.0, t[:-1]], gyro=gyro, accel=accel, kind="rates"))
+    assert bool(sol.standstill[-1]) is still
+    assert (len(sol.innovations_of("zupt")) > 0) is still
+
+
+@pytest.mark.parametrize("kind", ["increments", "rates"])
+def test_standstill_is_found_one_window_after_the_start(kind):
+    """At rest from the start: the detector (exponential averages over
+    standstill_window_s = 0.5 s, seeded with the first sample) says standstill once the
+    IMU has been quiet for one window, at 0.5 s (+ one 10 ms sample), for increments and
+    rates alike. (Rates: the first sample only starts the record; the averages were not
+    seeded from it, so they rose from zero and |f|'s spread stayed above its threshold
+    for 5.3 s.)"""
+    lat, n, dt = 0.6, 200, 0.01
+    w_ie = np.array([0.0, OMEGA * np.cos(lat), OMEGA * np.sin(lat)])
+    f = np.array([0.0, 0.0, 9.8])
+    nav0 = gf.NavState(np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3), lat, 2.0, 50.0, 0.0)
+    if kind == "rates":
+        rec = Rec(t_s=dt * np.arange(n), gyro=np.tile(w_ie, (n, 1)), accel=np.tile(f, (n, 1)), kind=kind)
+    else:
+        rec = Rec(t_s=dt * np.arange(1, n + 1), gyro=np.tile(w_ie * dt, (n, 1)),
+                  accel=np.tile(f * dt, (n, 1)), kind=kind)
+    sol = IntegratedNavigator(quiet_config(input=kind, zupt=True), InitialState(nav0)).run(rec)
+    first = sol.t_s[np.argmax(sol.standstill)]
+    assert sol.standstill.any() and 0.5 - 1e-9 <= first <= 0.5 + dt + 1e-9, (kind, first)

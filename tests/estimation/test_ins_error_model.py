@@ -62,7 +62,9 @@ def _filter_at(lat, h, v, euler, **cfg_kw):
 
 @pytest.mark.parametrize("state", STATES)
 @pytest.mark.parametrize("opts", [{}, {"scale_factors": True, "baro_bias": True, "odometer_scale": True,
-                                       "odometer_mount": True, "odometer_mount_tau_s": 900.0}])
+                                       "odometer_mount": True, "odometer_mount_tau_s": 900.0,
+                                       "gyro_scale_tau_s": 5100.0, "accel_scale_std": 7e-4,
+                                       "accel_scale_tau_s": 4700.0, "odometer_scale_tau_s": 6100.0}])
 def test_c_error_model_is_the_definition(state, opts):
     """The C filter's F and G equal error_models.ins_error_matrices (the definition)."""
     lat, h, v, euler, fb, wb = state
@@ -70,7 +72,7 @@ def test_c_error_model_is_the_definition(state, opts):
     F_c, G_c, q_c = nav.error_model(fb, wb)
     tau = {"bg": 300.0, "ba": 600.0}
     if opts:
-        tau.update({"baro": 3600.0, "odo_mount": 900.0})
+        tau.update({"baro": 3600.0, "odo_mount": 900.0, "sg": 5100.0, "sa": 4700.0, "odo": 6100.0})
     F_py, G_py = ins_error_matrices(lat, h, v, list(nav._f.nav.q_bn), fb, wb,
                                     scale_states=bool(opts), baro_state=bool(opts),
                                     odo_state=bool(opts), odo_mount_state=bool(opts), tau_s=tau)
@@ -85,6 +87,15 @@ def test_c_error_model_is_the_definition(state, opts):
     np.testing.assert_allclose(q_c[:6], [vrw ** 2] * 3 + [arw ** 2] * 3, rtol=1e-12)
     np.testing.assert_allclose(q_c[6:9], 2 * (1 * DEG_H) ** 2 / 300, rtol=1e-12)
     np.testing.assert_allclose(q_c[9:12], 2 * (100 * UG) ** 2 / 600, rtol=1e-12)
+    if opts:
+        # every sensor state's own 2 sigma^2 / tau (0: a random constant, tau = 0), from
+        # the configuration's values, which differ from block to block
+        c = nav.config
+        gm = [(c.gyro_scale_std, c.gyro_scale_tau_s)] * 3 + [(c.accel_scale_std, c.accel_scale_tau_s)] * 3 \
+            + [(c.baro_bias_std_m, c.baro_bias_tau_s), (c.odometer_scale_std, c.odometer_scale_tau_s)] \
+            + [(c.odometer_mount_std_rad, c.odometer_mount_tau_s)] * 2
+        want = [2 * s * s / tau if tau > 0 else 0.0 for s, tau in gm]
+        np.testing.assert_allclose(q_c[12:], want, rtol=1e-12, atol=0)
 
 
 @pytest.mark.parametrize("state", STATES[:2])

@@ -153,3 +153,40 @@ def test_smoothed_std_is_finite_and_below_the_filtered_in_every_column(runs, nam
     # north std of this drive's GNSS is 1.2 m against 1.0 m east, P0 1.5 m against 1.0 m)
     k = np.searchsorted(sm.epoch_t_s, 5.0)
     assert sm.epoch_std[k, 4] > sm.epoch_std[k, 3]
+
+
+def test_rows_between_epochs_take_the_interpolated_correction(runs):
+    """A row between epochs j and j+1 is corrected by (1 - u) x^s_j + u (x^s_j+1 +
+    dx_j+1), u its fraction of the way (gf_ins_gnss.h, gf_ins_smooth_apply): the error of
+    the posterior nominal of j, moving to that of the prior nominal of j+1 which the rows
+    in between continue. Built here with numpy for every 19th row and applied with
+    gf_ins_apply_error (the filter's correction): equal to the smoothed solution's rows to
+    round-off (1e-12; the same operations in the same order)."""
+    from gfins_fmi._lib import ffi, lib, ptr
+    sol = runs["ekf"]
+    ep = sol.epochs
+    n = ep["n_states"]
+    xs, _ = c_smoother(ep)
+    sm = sol.smooth()
+    et = ep["t_s"]
+    lay = sol.config.layout()
+    f = ffi.new("gf_ins_filter *")
+    f.n_states = lay.n_states
+    f.idx_sg, f.idx_sa, f.idx_baro = lay.idx_sg, lay.idx_sa, lay.idx_baro
+    f.idx_odo, f.idx_mount = lay.idx_odo, lay.idx_mount
+    checked = 0
+    for k in range(3, len(sol) - 1, 19):
+        t = sol.t_s[k]
+        j = int(np.searchsorted(et, t + 1e-9, side="right")) - 1
+        if j + 1 >= len(et) or t <= et[j] + 1e-9:
+            continue
+        u = (t - et[j]) / (et[j + 1] - et[j])
+        e = (1.0 - u) * xs[j] + u * (xs[j + 1] + ep["dx"][j + 1])
+        nav = np.r_[sol.q_bn[k], sol.v_n_m_s[k], sol.lat_rad[k], sol.lon_rad[k], sol.h_m[k]]
+        assert lib.gf_ins_apply_error(f, ptr(e, n), ptr(nav, 10), ffi.NULL) == lib.GF_OK
+        np.testing.assert_allclose(nav[:4], sm.q_bn[k], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(nav[4:7], sm.v_n_m_s[k], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(nav[7:9], [sm.lat_rad[k], sm.lon_rad[k]], rtol=0, atol=1e-15)
+        assert abs(nav[9] - sm.h_m[k]) < 1e-9
+        checked += 1
+    assert checked > 500

@@ -290,26 +290,29 @@ def main(argv=None) -> int:
 
 
 def _python_stage_setup(args, cmake, gen, src):
-    """A second build of the copy with the cffi module only; the package is imported
+    """A second build of the copy with the cffi module and the FMUs; the package is imported
     from the copy (python -S: without the site hooks, so an editable install of the
     checkout cannot redirect the import; site-packages on PYTHONPATH for numpy & co)."""
     import sysconfig
     pybld = args.work / "pybuild"
+    # the cffi module and the FMUs (tests/fmi runs them: a mutant of an FMU model is
+    # judged by the Python FMU tests too)
     rc, log, _ = _run([cmake, "-S", str(src), "-B", str(pybld), *gen, "-DCMAKE_BUILD_TYPE=Release",
                        "-DCMAKE_C_FLAGS_RELEASE=-O1 -DNDEBUG -Wno-maybe-uninitialized",
                        "-DGFINS_BUILD_TESTS=OFF", "-DGFINS_BUILD_PYTHON=ON",
-                       "-DGFINS_BUILD_FMUS=OFF", f"-DPython_EXECUTABLE={sys.executable}"], 600)
-    build = [cmake, "--build", str(pybld), "-j", str(args.jobs), "--target", "_core"]
+                       "-DGFINS_BUILD_FMUS=ON", f"-DPython_EXECUTABLE={sys.executable}"], 600)
+    build = [cmake, "--build", str(pybld), "-j", str(args.jobs)]
     if rc == 0:
         rc, log, _ = _run(build, 1800)
     if rc != 0:
         print("the cffi module does not build in the copy:\n" + log[-4000:], file=sys.stderr)
         return None
     so = sorted(pybld.glob("_core*.so"))[0]
-    link = src / "gfins_fmi" / so.name
-    if link.is_symlink() or link.exists():
-        link.unlink()
-    link.symlink_to(so)
+    for target, name in ((so, so.name), (pybld / "fmus", "fmus")):
+        link = src / "gfins_fmi" / name
+        if link.is_symlink() or link.exists():
+            link.unlink()
+        link.symlink_to(target)
     pkg = args.work / "pypkg"
     pkg.mkdir(exist_ok=True)
     if not (pkg / "gfins_fmi").exists():

@@ -4,7 +4,8 @@
  * fmpy, FMI 2.0 and 3.0, against the Python batch API). Sensor data: the vehicle truth
  * of turn_drive.h (15 s: rest, start, a 180 deg turn) with GNSS at 1 Hz on samples, a GNSS
  * epoch delivered 0.2 s late every 100 samples (stale), barometer and odometer at 10 Hz
- * valid inside the sample intervals; all 25 states (scale factors, barometer bias,
+ * valid inside the sample intervals (and a barometer sample delivered with each GNSS epoch,
+ * valid before it: the FMU must sort what one step brings); all 25 states (scale factors, barometer bias,
  * odometer scale and boresight) and NHC on, every parameter a value of its own.
  *   1. EKF and UKF: the FMU equals gf_ins_init + gf_ins_step called directly with the
  *      same P0 and the same measurements, bit for bit (navigation, std, sensor errors,
@@ -55,6 +56,10 @@ static Delivery delivery(int k)
     if (k > 0 && k % 10 == 3) {
         d.baro = 1;
         d.baro_t = k * H_S - 0.004;
+    }
+    if (k > 0 && k % 100 == 0) {            /* with the GNSS epoch, valid before it */
+        d.baro = 1;
+        d.baro_t = k * H_S - 0.006;
     }
     if (k > 0 && k % 10 == 7) {
         d.odo = 1;
@@ -111,6 +116,14 @@ static size_t core_meas(int k, gf_ins_meas *m)
     if (d.odo)
         m[n++] = (gf_ins_meas){GF_INS_MEAS_ODO, d.odo_t, {g_truth[k].speed_m_s, 0, 0},
                                {ODO_STD_M_S, 0, 0}};
+    /* gf_ins_step takes them sorted by time (stable: kinds in the order above at equal
+     * times), as the FMU must hand them over */
+    for (size_t i = 1; i < n; ++i)
+        for (size_t j = i; j > 0 && m[j - 1].t_s > m[j].t_s; --j) {
+            const gf_ins_meas x = m[j];
+            m[j] = m[j - 1];
+            m[j - 1] = x;
+        }
     return n;
 }
 

@@ -43,8 +43,10 @@ CONFIG = HERE / "cosmic-ray.toml"
 
 
 def function_lines(path: Path, names: list[str]) -> list[str]:
-    """'first-last' line ranges of the named top-level functions or classes of a module,
-    or of ``Class.method``."""
+    """'first-last' line ranges of the bodies of the named top-level functions or classes
+    of a module, or of ``Class.method``: from the first statement (the docstring) to the
+    end, so the signature with its annotations (never evaluated under ``from __future__
+    import annotations``: mutants there are equivalent) and the decorators are left out."""
     tree = ast.parse(path.read_text())
     found = {}
     for node in tree.body:
@@ -60,8 +62,7 @@ def function_lines(path: Path, names: list[str]) -> list[str]:
     ranges = []
     for n in names:
         node = found[n]
-        first = min([node.lineno] + [d.lineno for d in node.decorator_list])
-        ranges.append(f"{first}-{node.end_lineno}")
+        ranges.append(f"{node.body[0].lineno}-{node.end_lineno}")
     return ranges
 
 
@@ -151,6 +152,12 @@ def session_report(session: Path, src: Path, t: dict) -> dict:
         rows.append(dict(job=item["job_id"], line=m["start_pos"][0], operator=m["operator_name"],
                          occurrence=m["occurrence"], outcome=outcome,
                          diff=(result or {}).get("diff") or ""))
+    # sessions made before the ranges started at the bodies: their signature mutants
+    # (annotations, never evaluated) are counted as excluded
+    inside = [tuple(map(int, r.split("-"))) for r in t["ranges"]]
+    for r in rows:
+        if not any(a <= r["line"] <= b for a, b in inside):
+            r["outcome"] = "skipped"
     run = [r for r in rows if r["outcome"] not in ("skipped", "pending")]
     survived = [r for r in run if r["outcome"] == "survived"]
     return dict(module=t["module"], functions=t["functions"], tests=t["tests"],

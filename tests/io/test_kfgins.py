@@ -185,7 +185,7 @@ def test_kfgins_nav_position_columns_and_week_changes(tmp_path):
     r = read_kfgins_nav(write(tmp_path / "t.nav", "2019 456300.0 30.5 114.25 20.75 1.25 -2.5 0.375 "
                                                   "10.0 -5.0 -30.0\n"))
     np.testing.assert_allclose([r.lat_rad[0], r.lon_rad[0]], np.radians([30.5, 114.25]), rtol=2 * EPS)
-    assert r.h_m[0] == 20.75
+    assert r.h_m[0] == 20.75 and r.t_s[0] == 456300.0      # the seconds of week, column 2
     with pytest.raises(FileFormatError, match=r"b.nav:2: the GPS week changes from 2020 to 2019"):
         read_kfgins_nav(write(tmp_path / "b.nav", "2020 0.5 30 114 20 0 0 0 0 0 0\n"
                                                   "2019 604799.0 30 114 20 0 0 0 0 0 0\n"))

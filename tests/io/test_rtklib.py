@@ -80,6 +80,10 @@ def test_rtklib_header_lines_that_are_not_the_column_line(tmp_path):
     swapped = POS_HEADER.replace("vn(m/s) ve(m/s)", "ve(m/s) vn(m/s)")
     sw = read_rtklib_pos(write(tmp_path / "s.pos", swapped + POS_LINES))
     assert np.array_equal(sw.vel_enu_m_s[:, :2], ref.vel_enu_m_s[:, 1::-1])
+    # a tight column line is read as a header, not skipped (its own order followed too)
+    tight_sw = read_rtklib_pos(write(tmp_path / "ts.pos", swapped.replace("%  GPST", "%GPST")
+                                     + POS_LINES))
+    assert np.array_equal(tight_sw.vel_enu_m_s, sw.vel_enu_m_s)
 
 
 @pytest.mark.parametrize("text, match", [

@@ -3,6 +3,7 @@ convention.
 """
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -79,6 +80,16 @@ def test_calendar_fields_at_their_limits():
                 (1980, 1, 10, 0, 0, np.nan)]:
         with pytest.raises(ValueError, match="not a calendar time"):
             one(*bad)
+    # two fields wrong in the same time: refused as well (the checks of different fields
+    # must not cancel each other)
+    good = (1980, 1, 10, 0, 0, 0.0)
+    wrong = {1: (0, 13), 2: (0, 32), 3: (-1, 24), 4: (-1, 60), 5: (-0.1, 61.0, np.nan)}
+    for i, j in itertools.combinations(wrong, 2):
+        for a, b in itertools.product(wrong[i], wrong[j]):
+            t = list(good)
+            t[i], t[j] = a, b
+            with pytest.raises(ValueError, match="not a calendar time"):
+                one(*t)
     # several bad times: the first is named, with its index
     cols = [np.array(c) for c in zip((1980, 1, 10, 0, 0, 0.0), (1980, 13, 10, 0, 0, 0.0),
                                      (1980, 1, 10, 0, 0, 0.0), (1980, 1, 10, 25, 0, 0.0))]

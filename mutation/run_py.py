@@ -9,6 +9,7 @@ Usage (from the repository root, in the dev venv with the `mutation` extra):
     nice -n 5 python mutation/run_py.py --target io-rtklib     # some of them
     python mutation/run_py.py --rerun-survivors --target ...   # after adding tests
     python mutation/run_py.py --report-only                    # report the sessions
+    nice -n 5 python mutation/run_py.py --sample 50 --seed 25 --target ...   # a sample
 
 The run never edits the checkout: the tracked tree is copied into --work (default under
 the system temporary directory), the installed package's compiled parts (the cffi module
@@ -20,6 +21,11 @@ counts and the survivors) and mutation/results_py.md.
 
 The functions are turned into line ranges here (ast), so the selection follows the
 sources as they change; cosmic-ray's own line filter takes those ranges.
+
+--sample N runs a uniform random sample of N of a target's mutants (after the operator and
+line filters; random.Random(seed) over the mutants in source order, so the same
+sources and seed give the same sample); the others are marked skipped with the note "not in the sample"
+and counted apart (``sampled_out``), so the report states the sample it rests on.
 """
 from __future__ import annotations
 
@@ -133,6 +139,27 @@ def write_session_config(path: Path, cr: dict, t: dict, pythonpath: str) -> None
     path.write_text("\n".join(text) + "\n")
 
 
+SAMPLED_OUT = "not in the sample"
+
+
+def sample_session(session: Path, n: int, seed: int) -> tuple[int, int]:
+    """Keep a random sample of n of the session's pending mutants, mark the rest skipped
+    (note SAMPLED_OUT); returns (kept, pending before)."""
+    import random
+    import sqlite3
+    with sqlite3.connect(session) as db:
+        # in source order (job ids are random): the same sources give the same sample
+        pending = [r[0] for r in db.execute(
+            "SELECT job_id FROM mutation_specs WHERE job_id NOT IN "
+            "(SELECT job_id FROM work_results) ORDER BY module_path, start_pos_row, "
+            "start_pos_col, operator_name, occurrence")]
+        keep = set(random.Random(seed).sample(pending, min(n, len(pending))))
+        db.executemany("INSERT INTO work_results (worker_outcome, output, test_outcome, diff, "
+                       "job_id) VALUES ('SKIPPED', ?, NULL, NULL, ?)",
+                       [(SAMPLED_OUT, j) for j in pending if j not in keep])
+    return len(keep), len(pending)
+
+
 def sh(*cmd: str, cwd: Path) -> None:
     print("$", " ".join(cmd), flush=True)
     subprocess.run(cmd, cwd=cwd, check=True)
@@ -146,6 +173,7 @@ def session_report(session: Path, src: Path, t: dict) -> dict:
         item, result = json.loads(line)
         m = item["mutations"][0]
         outcome = "pending" if result is None else (
+            "sampled-out" if result.get("output") == SAMPLED_OUT else
             "skipped" if result["worker_outcome"] == "skipped" else
             result["test_outcome"] if result["worker_outcome"] == "normal" else
             result["worker_outcome"])
@@ -158,11 +186,12 @@ def session_report(session: Path, src: Path, t: dict) -> dict:
     for r in rows:
         if not any(a <= r["line"] <= b for a, b in inside):
             r["outcome"] = "skipped"
-    run = [r for r in rows if r["outcome"] not in ("skipped", "pending")]
+    run = [r for r in rows if r["outcome"] not in ("skipped", "pending", "sampled-out")]
     survived = [r for r in run if r["outcome"] == "survived"]
     return dict(module=t["module"], functions=t["functions"], tests=t["tests"],
                 lines=t["ranges"], generated=len(rows),
                 skipped=sum(r["outcome"] == "skipped" for r in rows),
+                sampled_out=sum(r["outcome"] == "sampled-out" for r in rows),
                 pending=sum(r["outcome"] == "pending" for r in rows), run=len(run),
                 killed=len(run) - len(survived), survived_count=len(survived),
                 kill_rate=round((len(run) - len(survived)) / len(run), 4) if run else None,
@@ -181,11 +210,12 @@ def write_results(results: dict) -> None:
     md = [f"# Python mutation run (commit {commit}, {machine})", "",
           f"cosmic-ray, {len(results)} targets: {run} mutants run, {killed} killed, "
           f"{run - killed} survived" + (f" (kill rate {100 * killed / run:.1f} %)" if run else ""),
-          "", "| target | module | run | killed | survived | kill rate | tests | date |",
-          "|---|---|---|---|---|---|---|---|"]
+          "", "| target | module | run | of | killed | survived | kill rate | tests | date |",
+          "|---|---|---|---|---|---|---|---|---|"]
     for name, r in results.items():
         rate = f"{100 * r['kill_rate']:.1f} %" if r["kill_rate"] is not None else "-"
-        md.append(f"| {name} | {r['module']} | {r['run']} | {r['killed']} | {r['survived_count']} "
+        of = r["run"] + r.get("sampled_out", 0) + r.get("pending", 0)
+        md.append(f"| {name} | {r['module']} | {r['run']} | {of} | {r['killed']} | {r['survived_count']} "
                   f"| {rate} | {r['tests']} | {r['date']} |")
     md += ["", "Survivors (the reason for each is in mutation/README.md):", ""]
     for name, r in results.items():
@@ -203,6 +233,9 @@ def main(argv=None) -> int:
     ap.add_argument("--work", type=Path, default=Path(tempfile.gettempdir()) / "gfins_mutation_py")
     ap.add_argument("--target", nargs="*", help="target names (default: all)")
     ap.add_argument("--report-only", action="store_true")
+    ap.add_argument("--sample", type=int, default=0,
+                    help="run a random sample of this many mutants of each target (0: all)")
+    ap.add_argument("--seed", type=int, default=25, help="the sample's seed")
     ap.add_argument("--rerun-survivors", action="store_true",
                     help="run the survivors of the sessions again (after adding tests)")
     args = ap.parse_args(argv)
@@ -233,6 +266,10 @@ def main(argv=None) -> int:
             sh("cosmic-ray", "init", str(cfg), str(session), "--force", cwd=src)
             sh("cr-filter-operators", str(session), str(cfg), cwd=src)
             sh("cr-filter-lines", "--config", str(cfg), str(session), cwd=src)
+            if args.sample:
+                kept, of = sample_session(session, args.sample, args.seed)
+                print(f"{t['name']}: a sample of {kept} of {of} mutants (seed {args.seed})",
+                      flush=True)
             sh("cosmic-ray", "baseline", str(cfg), cwd=src)
             sh("cosmic-ray", "exec", str(cfg), str(session), cwd=src)
         if session.is_file():

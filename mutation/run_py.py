@@ -12,8 +12,8 @@ Usage (from the repository root, in the dev venv with the `mutation` extra):
     nice -n 5 python mutation/run_py.py --sample 50 --seed 25 --target ...   # a sample
 
 The run never edits the checkout: the tracked tree is copied into --work (default under
-the system temporary directory), the installed package's compiled parts (the cffi module
-and the FMUs) are linked into the copy, and the tests run with ``python -S`` and the copy
+the system temporary directory) at the start, with the installed package's compiled parts
+(the cffi module and the FMUs; so the checkout can be edited and rebuilt meanwhile), and the tests run with ``python -S`` and the copy
 first on PYTHONPATH (so an editable install of the checkout cannot redirect the import);
 cosmic-ray mutates the copy in place. Sessions (``<work>/<target>.sqlite``) persist for
 --rerun-survivors and --report-only. Results: mutation/results_py.json (per target: the
@@ -104,11 +104,17 @@ def copy_tree(dst: Path) -> Path:
     built = sorted(installed.glob("_core*.so")) + [installed / "fmus"]
     if not built[0].name.startswith("_core") or not built[-1].is_dir():
         raise SystemExit(f"no compiled gfins_fmi in {installed}: pip install -e '.[test,mutation]'")
+    # copied, not linked: a rebuild of the checkout during the run cannot change them
     for b in built:
-        link = src / "gfins_fmi" / b.name
-        if link.is_symlink() or link.exists():
-            link.unlink()
-        link.symlink_to(b)
+        dest = src / "gfins_fmi" / b.name
+        if dest.is_symlink() or dest.is_file():
+            dest.unlink()
+        elif dest.is_dir():
+            shutil.rmtree(dest)
+        if b.is_dir():
+            shutil.copytree(b, dest)
+        else:
+            shutil.copy2(b, dest)
     # the package through a folder of its own: tests/conftest.py takes the tree's root off
     # sys.path (the tests exercise the installed package, never the source folder)
     pkg = dst / "pypkg"
@@ -199,24 +205,32 @@ def session_report(session: Path, src: Path, t: dict) -> dict:
                 survived=survived)
 
 
-def write_results(results: dict) -> None:
-    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
-                            text=True).stdout.strip()
+def head_commit() -> str:
+    """The checkout's commit (+ "-dirty" with changes to tracked files outside mutation/):
+    the sources copied."""
+    head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT,
+                          capture_output=True, text=True).stdout.strip()
+    dirty = subprocess.run(["git", "diff", "--quiet", "HEAD", "--", ".", ":!mutation"],
+                           cwd=ROOT).returncode != 0
+    return head + ("-dirty" if dirty else "")
+
+
+def write_results(results: dict, commit: str) -> None:
     machine = f"{platform.machine()} {platform.system()}, {os.cpu_count()} cores"
     (HERE / "results_py.json").write_text(json.dumps(dict(machine=machine, commit=commit,
                                                           targets=results), indent=1) + "\n")
     run = sum(r["run"] for r in results.values())
     killed = sum(r["killed"] for r in results.values())
-    md = [f"# Python mutation run (commit {commit}, {machine})", "",
+    md = [f"# Python mutation run ({machine}; the sources of each target: its commit)", "",
           f"cosmic-ray, {len(results)} targets: {run} mutants run, {killed} killed, "
           f"{run - killed} survived" + (f" (kill rate {100 * killed / run:.1f} %)" if run else ""),
-          "", "| target | module | run | of | killed | survived | kill rate | tests | date |",
-          "|---|---|---|---|---|---|---|---|---|"]
+          "", "| target | module | run | of | killed | survived | kill rate | tests | date | sources |",
+          "|---|---|---|---|---|---|---|---|---|---|"]
     for name, r in results.items():
         rate = f"{100 * r['kill_rate']:.1f} %" if r["kill_rate"] is not None else "-"
         of = r["run"] + r.get("sampled_out", 0) + r.get("pending", 0)
         md.append(f"| {name} | {r['module']} | {r['run']} | {of} | {r['killed']} | {r['survived_count']} "
-                  f"| {rate} | {r['tests']} | {r['date']} |")
+                  f"| {rate} | {r['tests']} | {r['date']} | {r.get('commit', '?')} |")
     md += ["", "Survivors (the reason for each is in mutation/README.md):", ""]
     for name, r in results.items():
         for s in r["survived"]:
@@ -246,6 +260,7 @@ def main(argv=None) -> int:
         print(f"unknown targets {sorted(unknown)}", file=sys.stderr)
         return 2
     args.work.mkdir(parents=True, exist_ok=True)
+    commit = head_commit()          # the sources as copied now
     pythonpath = copy_tree(args.work)
     src = args.work / "src"
     old = {}
@@ -274,11 +289,15 @@ def main(argv=None) -> int:
             sh("cosmic-ray", "exec", str(cfg), str(session), cwd=src)
         if session.is_file():
             results[t["name"]] = session_report(session, src, t)
+            if not args.report_only:
+                results[t["name"]]["commit"] = commit
+            else:
+                results[t["name"]]["commit"] = old.get(t["name"], {}).get("commit", "?")
             r = results[t["name"]]
             print(f"{t['name']}: {r['run']} run, {r['killed']} killed, {r['survived_count']} "
                   f"survived", flush=True)
     order = [t["name"] for t in all_targets]
-    write_results({k: results[k] for k in order if k in results})
+    write_results({k: results[k] for k in order if k in results}, commit)
     return 0
 
 

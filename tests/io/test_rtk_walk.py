@@ -196,3 +196,12 @@ def test_rtk_walk_mounting_and_unit_refusals(tmp_path):
             read_rtk_walk_imu(path, np.eye(3), g_m_s2=g)
     r = read_rtk_walk_imu(path, np.diag([-1.0, -1.0, 1.0]), g_m_s2=9.71)
     assert r.accel[0, 2] == 9.71 and "C_s^b = [[-1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0]]" in r.source
+    # a reflection (determinant -1) is refused; a rotation typed with a little round-off
+    # (|C C^T - I| = 2e-12, det = 1 - 3e-12 < 1) is accepted, as the tolerance 1e-9 says
+    with pytest.raises(ValueError, match=r"determinant \+1\); got .*det = -1"):
+        read_rtk_walk_imu(path, np.diag([1.0, 1.0, -1.0]))
+    near = read_rtk_walk_imu(path, (1.0 - 1e-12) * mounting_from_rpy(0.5, 0.25, 1.5))
+    assert np.isfinite(near.accel).all()
+    # the source text shows the matrix without negative zeros (-I's off-diagonal -0.0)
+    r = read_rtk_walk_imu(path, -np.diag([1.0, 1.0, -1.0]), g_m_s2=9.71)
+    assert "-0.0" not in r.source and "[[-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]" in r.source

@@ -182,6 +182,22 @@ def test_to_rates_first_interval():
         ImuRecord([1.0], np.ones((1, 3)), np.ones((1, 3)), "increments").to_rates()
     with pytest.raises(RecordError, match="at least two rate samples"):
         ImuRecord([1.0], np.ones((1, 3)), np.ones((1, 3)), "rates").to_increments()
+    # two samples are enough for the default first interval; a given one must be > 0, finite
+    two = ImuRecord([1.0, 1.5], np.ones((2, 3)), 3 * np.ones((2, 3)), "increments")
+    np.testing.assert_array_equal(two.to_rates().accel[:, 2], [6.0, 6.0])
+    for bad in (0.0, -0.25, np.inf, np.nan):
+        with pytest.raises(ValueError, match="first_interval_s must be finite and > 0 s"):
+            inc.to_rates(first_interval_s=bad)
+
+
+def test_conversions_say_what_they_did_in_the_source():
+    """The conversion is appended to the record's source, or is the source when it had none."""
+    t = np.array([1.0, 1.5, 2.5])
+    for src, prefix in (("", ""), ("file x.csv", "file x.csv; ")):
+        rates = ImuRecord(t, np.ones((3, 3)), np.ones((3, 3)), "rates", src)
+        incs = ImuRecord(t, np.ones((3, 3)), np.ones((3, 3)), "increments", src)
+        assert rates.to_increments().source == prefix + "increments by the trapezoid"
+        assert incs.to_rates().source == prefix + "rates = increments / interval"
 
 
 def random_records(rng):

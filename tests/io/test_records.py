@@ -128,6 +128,13 @@ def test_with_outages_removes_the_epochs_inside():
     with pytest.raises(ValueError, match=r"lies outside the record, which spans \[1000, 1005\] s.*"
                                          r"add t_s\[0\]"):
         g.with_outages([(10.0, 20.0)])                           # seconds from the start
+    with pytest.raises(ValueError, match="lies outside the record"):
+        g.with_outages([(1005.5, 1010.0)])                       # wholly after the last epoch
+    with pytest.raises(ValueError, match="lies outside the record"):
+        g.with_outages([(990.0, 999.5)])                         # wholly before the first
+    # touching the record's ends is inside: the first or last epoch goes
+    np.testing.assert_array_equal(g.with_outages([(1005.0, 1010.0)]).t_s, g.t_s[:-1])
+    np.testing.assert_array_equal(g.with_outages([(990.0, 1000.0)]).t_s, g.t_s[1:])
     for empty in [(1003.0, 1001.0), (1003.0, 1003.0)]:           # backwards, or no length
         with pytest.raises(ValueError, match="finite t0_s < t1_s"):
             g.with_outages([empty])

@@ -1,7 +1,8 @@
 """``gfins integrate``: integrated navigation of recorded files from the shell.
 
     gfins integrate IMU GNSS OUT.csv [--imu-format csv|kfgins|rtk_walk] [--gnss-format pos|kfgins|csv]
-                    [--truth NAV] [--grade consumer|tactical|navigation] [--filter ekf|ukf] [--smooth]
+                    [--truth NAV] [--grade consumer|tactical|navigation | --noise-file NOISE.toml]
+                    [--filter ekf|ukf] [--smooth]
                     [--outages DURATION:PERIOD:FIRST] [--plot DIR] ...
 
 Writes the solution (time, position, velocity, attitude, 1-sigma, sensor estimates) to
@@ -61,7 +62,7 @@ def run(args) -> int:
         # the multi-sample coning/sculling corrections are formed from increments: the
         # trapezoid over each interval (what the filter's rate input assumes too)
         imu = imu.to_increments()
-    cfg = FilterConfig(imu=imu_noise(args.grade, args.noise), filter=args.filter, input=imu.kind,
+    cfg = FilterConfig(imu=imu_noise(args.grade, args.noise, args.noise_file), filter=args.filter, input=imu.kind,
                        propagation_interval_s=args.propagation_interval,
                        gnss_lever_arm_m=tuple(args.lever_arm), zupt=args.zupt, nhc=args.nhc,
                        odometer_mount=args.odometer_mount, subsamples=args.subsamples)

@@ -149,6 +149,9 @@ def _integrate(sub) -> argparse.ArgumentParser:
                    default=None, metavar="ARW,VRW,GB,AB,TAU",
                    help="IMU noise: ARW deg/sqrt(h), accelerometer noise ug/sqrt(Hz), gyro bias "
                         "instability deg/h, accelerometer bias instability ug, correlation time s")
+    p.add_argument("--noise-file", type=pathlib.Path, default=None, metavar="FILE.toml",
+                   help="IMU noise from a noise block (TOML; `gfins noise RECORD --output FILE.toml` "
+                        "writes one; units in its keys); overrides --grade, excludes --noise")
     p.add_argument("--filter", choices=("ekf", "ukf"), default="ekf")
     p.add_argument("--smooth", action="store_true", help="also run the RTS smoother (its solution is "
                    "written to OUT.smoothed.csv)")
@@ -174,7 +177,38 @@ def _integrate(sub) -> argparse.ArgumentParser:
     p.add_argument("--nhc", action="store_true", help="non-holonomic constraints (ground vehicles)")
     p.add_argument("--plot", type=pathlib.Path, default=None, help="folder for figures")
     p.add_argument("--progress", action="store_true", help="progress bar")
-    _command(p, "integrate")
+    _command(p, "integrate", check=_check_integrate)
+    return p
+
+
+def _check_integrate(args) -> str | None:
+    if args.noise and args.noise_file:
+        return "give the IMU noise once: --noise or --noise-file"
+    return None
+
+
+def _noise(sub) -> argparse.ArgumentParser:
+    p = sub.add_parser("noise", help="noise identification of a static IMU record: Allan deviation "
+                       "per axis with confidence intervals, fitted terms, the filter's noise block",
+                       description="Overlapping Allan deviation of a static record (streamed), the IEEE "
+                       "952 terms fitted per axis (quantisation, ARW/VRW, bias instability or a "
+                       "Gauss-Markov bump, rate random walk, rate ramp) with their 1-sigma, written "
+                       "as the noise block `gfins integrate --noise-file` reads (docs/characterise_imu.md).")
+    p.add_argument("record", type=pathlib.Path, help="static IMU record: ImuRecord CSV, npz or Parquet "
+                   "(rates or increments, read in chunks), or --format kfgins/rtk_walk")
+    p.add_argument("--format", choices=("record", "kfgins", "rtk_walk"), default="record",
+                   help="record: our ImuRecord columns (default); kfgins, rtk_walk: those readers")
+    p.add_argument("--output", type=pathlib.Path, default=None, metavar="NOISE.toml",
+                   help="write the noise block here (for gfins integrate --noise-file)")
+    p.add_argument("--table", type=pathlib.Path, default=None, metavar="ADEV.csv",
+                   help="write tau, the deviation of every axis and its 68%% interval")
+    p.add_argument("--plot", type=pathlib.Path, default=None, help="folder for the log-log figure")
+    p.add_argument("--per-decade", type=count(1), default=10, help="taus per decade (default 10)")
+    p.add_argument("--tau-max", type=real("s", above=0.0), default=None,
+                   help="largest tau, s (default a quarter of the record; memory is 2.5 tau-max "
+                        "of samples per axis)")
+    p.add_argument("--progress", action="store_true", help="progress bar while reading")
+    _command(p, "noise_id")
     return p
 
 
@@ -370,6 +404,7 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict]:
     _command(p, "cosim", check=_check_cosim)
 
     parsers["integrate"] = _integrate(sub)
+    parsers["noise"] = _noise(sub)
     parsers["calibrate"] = _calibrate(sub)
     parsers["align"] = _align(sub)
 

@@ -19,6 +19,7 @@ from gfins_fmi import io
 from gfins_fmi.cli.files import read_gnss, read_imu, read_optional, read_truth, write_table
 from gfins_fmi.cli.initial import from_initial_option, record_start_s
 from gfins_fmi.cli.noise import imu_noise
+from gfins_fmi.estimation.noise_file import read_imu_errors
 from gfins_fmi.estimation.alignment import align_static_then_gnss
 from gfins_fmi.estimation.config import (MEAS_TYPES, SENSOR_NAMES, UPDATE_STATUS, FilterConfig,
                                          FilterError, InitialState)
@@ -52,12 +53,26 @@ def _write_innovations(path, sol):
                 [np.float64, str, str, np.int64, np.float64] + [np.float64] * 6, float_format="repr")
 
 
+def compensated(imu, errors):
+    """The record with the IMU errors removed (increments through the mean rate of each
+    interval, ImuErrors.compensate_increments)."""
+    if imu.kind == "rates":
+        w, f = errors.compensate(imu.gyro, imu.accel)
+    else:
+        dt = np.diff(imu.t_s, prepend=imu.t_s[0] - (imu.t_s[1] - imu.t_s[0]))
+        w, f = errors.compensate_increments(imu.gyro, imu.accel, dt)
+    return io.ImuRecord(t_s=imu.t_s, gyro=w, accel=f, kind=imu.kind, source=f"{imu.source}; compensated")
+
+
 def run(args) -> int:
     imu = read_imu(args.imu, args.imu_format, args.gps_week)
     gnss = read_gnss(args.gnss, args.gnss_format, args.gps_week)
     baro = read_optional(io.BaroRecord, args.baro)
     odo = read_optional(io.OdometerRecord, args.odometer)
     truth = read_truth(args.truth, args.gps_week)
+    if args.imu_errors:
+        imu = compensated(imu, read_imu_errors(args.imu_errors))
+        print(f"IMU record compensated with {args.imu_errors}")
     if args.subsamples > 1 and imu.kind == "rates":
         # the multi-sample coning/sculling corrections are formed from increments: the
         # trapezoid over each interval (what the filter's rate input assumes too)

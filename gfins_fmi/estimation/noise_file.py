@@ -1,6 +1,8 @@
-"""The filter's noise block as a file: the IMU's random errors in TOML, read by
-``gfins integrate --noise-file`` and written by ``gfins noise`` (the full configuration
-file of the own-data issue will take this block as it is).
+"""The IMU's blocks of the configuration file, in TOML: its random errors (the noise block,
+read by ``gfins integrate --noise-file`` and written by ``gfins noise``) and its
+deterministic errors (``[imu_errors]``, read by ``gfins integrate --imu-errors`` and written
+by ``gfins calibrate poses``); the full configuration file of the own-data issue will
+take these blocks as they are.
 
 Two tables, each key carrying its unit:
 
@@ -33,16 +35,24 @@ import math
 import pathlib
 import sys
 
+import numpy as np
+
 from gfins_fmi.estimation.config import UG, FilterConfig
 from gfins_fmi.nav.earth import deg
-from gfins_fmi.nav.imu_errors import DEG_H, ImuNoise
+from gfins_fmi.nav.imu_errors import DEG_H, ImuErrors, ImuNoise
 
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover - Python 3.9 and 3.10 read TOML with tomli (a dependency there)
     import tomli as tomllib
 
-__all__ = ["read_noise_file", "write_noise_file", "noise_text", "IMU_UNITS", "NOISE_KEYS"]
+__all__ = ["read_noise_file", "write_noise_file", "noise_text", "IMU_UNITS", "NOISE_KEYS",
+           "imu_errors_text", "read_imu_errors", "IMU_ERROR_KEYS"]
+
+#: [imu_errors] keys: the ImuErrors fields (datasheet units) and their shapes
+IMU_ERROR_KEYS = {"gyro_bias_deg_h": (3,), "gyro_scale_ppm": (3,), "gyro_misalignment_arcsec": (3, 3),
+                  "accel_bias_ug": (3,), "accel_scale_ppm": (3,), "accel_misalignment_arcsec": (3, 3),
+                  "accel_k2_ug_g2": (3,), "lever_arm_cm": (3,)}
 
 #: [imu] keys: the ImuNoise fields and what they mean
 IMU_UNITS = {
@@ -174,3 +184,66 @@ def read_noise_file(path) -> ImuNoise:
                 raise ValueError(f"{path}: [noise] {k} = {si[k]!r} but [imu] gives {have[k]!r}: "
                                  "edit both tables alike, or delete one of them")
     return dataclasses.replace(model)
+
+
+def _toml_array(a) -> str:
+    a = np.asarray(a, dtype=float)
+    if a.ndim == 1:
+        return "[" + ", ".join(repr(float(x)) for x in a) + "]"
+    return "[" + ", ".join(_toml_array(r) for r in a) + "]"
+
+
+def imu_errors_text(errors, header: str = "", std: dict | None = None) -> str:
+    """``[imu_errors]`` (ImuErrors fields at the reference temperature, datasheet units)
+    as TOML, with ``[imu_errors_std]`` (1-sigma, same keys) when ``std`` is given."""
+    lines = [f"# {x}" if x else "#" for x in header.splitlines()]
+    lines += ["# The IMU's deterministic errors (gfins_fmi.ImuErrors, w_out = (I + diag s)(I + N) w + b):",
+              "# `gfins integrate --imu-errors FILE` compensates the IMU record with them first.", "",
+              "[imu_errors]"]
+    for k in IMU_ERROR_KEYS:
+        v = getattr(errors, k)
+        if v is not None:
+            lines.append(f"{k} = {_toml_array(v)}")
+    if std:
+        lines += ["", "[imu_errors_std]   # 1-sigma of each value above (informative, not read)"]
+        for k, v in std.items():
+            lines.append(f"{k} = {_toml_array(v)}")
+    return "\n".join(lines) + "\n"
+
+
+def read_imu_errors(path):
+    """The ImuErrors of a file's ``[imu_errors]`` table.
+
+    Raises
+    ------
+    FileNotFoundError, ValueError
+        No file, no table, an unknown key (the known ones listed), a value of the wrong
+        shape or out of the model's range (named).
+    """
+    path = pathlib.Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: no such file (IMU errors, TOML, were expected: `gfins "
+                                "calibrate poses RECORD --output FILE` writes them)")
+    try:
+        doc = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise ValueError(f"{path}: not TOML: {exc}") from exc
+    t = doc.get("imu_errors")
+    if t is None:
+        raise ValueError(f"{path}: no [imu_errors] table")
+    bad = sorted(set(t) - set(IMU_ERROR_KEYS))
+    if bad:
+        raise ValueError(f"{path}: [imu_errors] has unknown keys {bad}; the keys are {', '.join(IMU_ERROR_KEYS)}")
+    kw = {}
+    for k, v in t.items():
+        try:
+            arr = np.asarray(v, dtype=float)
+        except (TypeError, ValueError):
+            raise ValueError(f"{path}: [imu_errors] {k} must be numbers of shape {IMU_ERROR_KEYS[k]}") from None
+        if arr.shape != IMU_ERROR_KEYS[k]:
+            raise ValueError(f"{path}: [imu_errors] {k} must have shape {IMU_ERROR_KEYS[k]}; got {arr.shape}")
+        kw[k] = arr
+    try:
+        return ImuErrors(**kw)
+    except ValueError as exc:
+        raise ValueError(f"{path}: [imu_errors]: {exc}") from exc

@@ -1,7 +1,8 @@
 """Overlapping Allan deviation: gfins_fmi.analysis.allan (C sums, streamed) against
 allantools' ``oadev`` on the same record and the same tau set, one core.
 
-    python bench/bench_allan.py [--hours 10] [--rate 200] [--axes 6] [--per-decade 10] [--no-allantools]
+    python bench/bench_allan.py [--hours 10] [--rate 200] [--axes 6] [--per-decade 10] [--tau-max S]
+                                [--repeat 3] [--no-allantools]
 
 Prints the wall time of each (best of --repeat for ours), their ratio, the largest
 relative difference of the deviations, and the peak memory each adds (tracemalloc: numpy
@@ -51,11 +52,14 @@ def main(argv=None):
     ap.add_argument("--axes", type=int, default=6)
     ap.add_argument("--per-decade", type=int, default=10)
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--tau-max", type=float, default=None,
+                    help="largest tau, s (default a quarter of the record); memory follows it")
     ap.add_argument("--no-allantools", action="store_true")
     a = ap.parse_args(argv)
     dt = 1.0 / a.rate
     n = int(round(a.hours * 3600 * a.rate))
-    m = averaging_factors(n, a.per_decade)
+    frac = 0.25 if a.tau_max is None else a.tau_max * a.rate / n
+    m = averaging_factors(n, a.per_decade, frac)
     print(f"{a.hours:g} h at {a.rate:g} Hz: {n} samples x {a.axes} axes, {m.size} taus "
           f"({m[0] * dt:g} .. {m[-1] * dt:g} s)")
     best = np.inf

@@ -16,7 +16,7 @@ import sys
 import numpy as np
 
 from gfins_fmi import io
-from gfins_fmi.cli.files import read_gnss, read_imu, read_optional, read_truth, write_table
+from gfins_fmi.cli.files import compensated, read_gnss, read_imu, read_optional, read_truth, write_table
 from gfins_fmi.cli.initial import from_initial_option, record_start_s
 from gfins_fmi.cli.noise import imu_noise
 from gfins_fmi.estimation.noise_file import read_imu_errors
@@ -51,17 +51,6 @@ def _write_innovations(path, sol):
     cols = [inn["t_s"], kinds, status, inn["m"], inn["nis"], *inn["r"].T, *inn["s_std"].T]
     write_table(path, INNOVATION_COLUMNS, cols,
                 [np.float64, str, str, np.int64, np.float64] + [np.float64] * 6, float_format="repr")
-
-
-def compensated(imu, errors):
-    """The record with the IMU errors removed (increments through the mean rate of each
-    interval, ImuErrors.compensate_increments)."""
-    if imu.kind == "rates":
-        w, f = errors.compensate(imu.gyro, imu.accel)
-    else:
-        dt = np.diff(imu.t_s, prepend=imu.t_s[0] - (imu.t_s[1] - imu.t_s[0]))
-        w, f = errors.compensate_increments(imu.gyro, imu.accel, dt)
-    return io.ImuRecord(t_s=imu.t_s, gyro=w, accel=f, kind=imu.kind, source=f"{imu.source}; compensated")
 
 
 def run(args) -> int:

@@ -14,7 +14,7 @@ from gfins_fmi.cli.options import GRADES, count, prior_setting, real, vector
 from gfins_fmi.gyrofree.array import MIN_LEVER_ARM_M
 from gfins_fmi.nav.earth import WGS84
 
-__all__ = ["build_parser", "executor_arguments", "record_arguments", "state_arguments",
+__all__ = ["build_parser", "executor_arguments", "record_arguments", "state_arguments", "imu_errors_argument",
            "ANALYZE_CONFIGS"]
 
 #: ``gfins analyze --config``: the scenarios of gfins_fmi.analysis.error_report.CONFIGS (named
@@ -109,6 +109,13 @@ def record_arguments(p, what: str) -> None:
                         "inputs of 10^6 samples, or 64 MiB of text, or more)")
 
 
+def imu_errors_argument(p) -> None:
+    """``--imu-errors CAL.toml``, shared by the commands that read IMU records."""
+    p.add_argument("--imu-errors", type=pathlib.Path, default=None, metavar="CAL.toml",
+                   help="compensate the IMU record with these errors first ([imu_errors] of a file "
+                        "`gfins calibrate poses` writes)")
+
+
 def state_arguments(p) -> None:
     """Initial state and vertical channel, shared by the navigation commands (the state:
     :func:`gfins_fmi.cli.initial.from_state_options`)."""
@@ -162,9 +169,7 @@ def _integrate(sub) -> argparse.ArgumentParser:
     p.add_argument("--noise-file", type=pathlib.Path, default=None, metavar="FILE.toml",
                    help="IMU noise from a noise block (TOML; `gfins noise RECORD --output FILE.toml` "
                         "writes one; units in its keys); overrides --grade, excludes --noise")
-    p.add_argument("--imu-errors", type=pathlib.Path, default=None, metavar="CAL.toml",
-                   help="compensate the IMU record with these errors first ([imu_errors] of a file "
-                        "`gfins calibrate poses` writes)")
+    imu_errors_argument(p)
     p.add_argument("--filter", choices=("ekf", "ukf"), default="ekf")
     p.add_argument("--smooth", action="store_true", help="also run the RTS smoother (its solution is "
                    "written to OUT.smoothed.csv)")
@@ -312,6 +317,7 @@ def _align(sub) -> argparse.ArgumentParser:
                        description="Initial alignment of recorded files (docs/alignment.md).")
     p.add_argument("mode", choices=("static", "motion"))
     p.add_argument("imu", type=pathlib.Path, help="IMU file (ImuRecord CSV / npz / parquet)")
+    imu_errors_argument(p)
     p.add_argument("speed", type=pathlib.Path, nargs="?", default=None,
                    help="motion: speed record (OdometerRecord: t_s, speed_m_s, std_m_s)")
     p.add_argument("--position", type=vector(3, "LAT,LON,H in deg, deg, m"), default=None,
@@ -387,6 +393,7 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict]:
     record_arguments(p, "t (s), gyro x y z, accel x y z [, h_ext (m)]")
     p.add_argument("--input-kind", choices=["increments", "rates"], default="increments",
                    help="increments: rad and m/s over (t_(k-1), t_k]; rates: rad/s and m/s^2 at t_k")
+    imu_errors_argument(p)
     state_arguments(p)
     p.add_argument("--t0", type=real("s"), default=None,
                    help="time of the initial state, s (default: one interval before the first "

@@ -9,7 +9,9 @@ import pytest
 
 from gfins_fmi.calibration.poses import calibrate_poses
 from gfins_fmi.cli import main
-from gfins_fmi.estimation.noise_file import read_imu_errors
+from gfins_fmi.cli.files import compensated
+from gfins_fmi.estimation.noise_file import imu_errors_text, read_imu_errors
+from gfins_fmi.io import ImuRecord
 from gfins_fmi.nav.imu_errors import ImuErrors, ImuNoise
 from gfins_fmi.sim.hand_poses import CONSUMER_MEMS_ERRORS, hand_turned_record
 
@@ -62,7 +64,6 @@ def test_raw_counts(record, tmp_path, capsys):
 def test_integrate_compensates_with_the_file(record, tmp_path):
     """`integrate --imu-errors` hands the filter the record compensated by the file's
     errors: compensated(imu) = ImuErrors.compensate of the rates (0 difference)."""
-    from gfins_fmi.cli.integrate import compensated
     d, rec = record
     errs = read_imu_errors(d / "cal.toml") if (d / "cal.toml").exists() else ImuErrors(gyro_bias_deg_h=[1.0, 2, 3])
     out = compensated(rec.imu, errs)
@@ -84,3 +85,30 @@ def test_refusals(record, capsys):
     assert "gfins calibrate poses RECORD" in capsys.readouterr().err
     assert main(["calibrate", "poses", str(d / "hand.csv"), "--gravity", "9.8", "--min-still", "12"]) == 2
     assert "still poses found" in capsys.readouterr().err
+
+
+def test_navigate_and_align_take_the_errors(tmp_path):
+    """`navigate --imu-errors` on a record with known errors applied navigates as on the
+    clean record (chunks of 1000: the increments' first interval carried across chunks;
+    1e-12 of the outputs: round-off of apply then compensate); `align static
+    --imu-errors` reads the same file."""
+    n, dt = 3000, 0.01
+    t = np.arange(1, n + 1) * dt
+    w = np.c_[0.02 * np.sin(0.7 * t), 0.01 * np.cos(1.1 * t), 0.05 * np.sin(0.2 * t)] * dt
+    f = np.c_[0.3 * np.sin(0.5 * t), 0.2 + 0.1 * np.cos(0.3 * t), 9.8 + 0.05 * np.sin(t)] * dt
+    e = ImuErrors(gyro_bias_deg_h=[100, -50, 20], gyro_scale_ppm=[300, 0, -100],
+                  accel_scale_ppm=[1000, 2000, -500], accel_bias_ug=[500, 100, -300])
+    we, fe = e.apply_increments(w, f, dt)
+    np.savetxt(tmp_path / "clean.csv", np.c_[t, w, f], delimiter=",")
+    np.savetxt(tmp_path / "err.csv", np.c_[t, we, fe], delimiter=",")
+    (tmp_path / "e.toml").write_text(imu_errors_text(e))
+    nav0 = ["--lat0", "30", "--lon0", "114", "--h0", "50", "--chunk", "1000"]
+    assert main(["navigate", str(tmp_path / "clean.csv"), str(tmp_path / "a.csv")] + nav0) == 0
+    assert main(["navigate", str(tmp_path / "err.csv"), str(tmp_path / "b.csv"), "--imu-errors",
+                 str(tmp_path / "e.toml")] + nav0) == 0
+    a = np.loadtxt(tmp_path / "a.csv", delimiter=",", skiprows=1)
+    b = np.loadtxt(tmp_path / "b.csv", delimiter=",", skiprows=1)
+    assert np.all(np.abs(b - a) <= 1e-12 * np.abs(a).max(axis=0) + 1e-12), np.abs(b - a).max(axis=0)
+    ImuRecord(t, we, fe, "increments").to_csv(tmp_path / "rec.csv")
+    assert main(["align", "static", str(tmp_path / "rec.csv"), "--position", "30,114,50", "--window", "0,20",
+                 "--imu-errors", str(tmp_path / "e.toml")]) == 0

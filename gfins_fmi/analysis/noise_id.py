@@ -20,8 +20,10 @@ model^2 (the variance of an estimate with edf degrees of freedom, divided by the
 per octave: neighbouring taus of one record are correlated), iterated with the model's
 own noise type at each tau; the Gauss-Markov time by a search over a log grid, refined.
 The stated 1-sigma of a term is what the single most telling tau says about it (the
-precision sqrt(2/edf) of the variance there over the term's share of the model); of a
-term fitted to zero, the size the data could have hidden; of T, its chi-square profile. The model with the Gauss-Markov bump is kept when it lowers the
+precision sqrt(2/edf) of the variance there over the term's share of the model), with,
+for a Gauss-Markov model, the spread of the term over the Ts within chi-square + 1 of the
+best (T's own uncertainty, from that profile); of a term fitted to zero, the size the
+data could have hidden. The model with the Gauss-Markov bump is kept when it lowers the
 weighted chi-square by more than 2 (one more parameter, Akaike).
 
 For the filter (whose bias model is Gauss-Markov, no flicker): the bump's sigma and T
@@ -230,10 +232,16 @@ def fit_noise_terms(ad: AllanDeviation, column: int, gauss_markov: bool = True,
                 nu_g, a_g = edf_for(cg, T)
                 cg, chi2g, wg = _nnls_fit(Ag, v, nu_g, per_octave)
                 if chi2g + 2.0 < best[2]:
+                    # the profile over T: the Ts within chi-square + 1 of the best, and the
+                    # spread of every coefficient over them (T's uncertainty carried into
+                    # sigma, N and K)
                     chis = np.array([p[0] for p in prof])
-                    inside = grid[chis <= chis.min() + 1.0]
+                    near = chis <= chis.min() + 1.0
+                    inside = grid[near]
                     T_std = 0.5 * (inside.max() - inside.min()) if inside.size > 1 else T * 0.1
-                    best = ("gauss-markov", cg, chi2g, wg, Ag, (T, T_std), a_g)
+                    cs = np.array([p[2] for p, ok in zip(prof, near) if ok] + [cg])
+                    spread = 0.5 * (cs.max(axis=0) - cs.min(axis=0))
+                    best = ("gauss-markov", cg, chi2g, wg, Ag, (T, T_std, spread), a_g)
     kind, c, chi2, w, A, gm, a = best
     sc = _stds(A, w, c)
     # the stated 1-sigma of a term found: what the single best tau says about it, the
@@ -246,6 +254,8 @@ def fit_noise_terms(ad: AllanDeviation, column: int, gauss_markov: bool = True,
     for j in np.flatnonzero(c > 0):
         share = parts[:, j] / total
         sc[j] = c[j] * np.min(np.sqrt(2.0 / nu_k) / np.maximum(share, 1e-300))
+    if gm is not None:
+        sc = np.hypot(sc, gm[2])
     values, stds = {}, {}
     for j, (name, coef) in enumerate(zip(TERM_NAMES[:5], _COEF)):
         if kind == "gauss-markov" and name == "bias_instability":

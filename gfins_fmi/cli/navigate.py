@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 
 from gfins_fmi._lib import NonFiniteInputError, SampleError
-from gfins_fmi.cli.files import Refused, TimeColumn, nav_columns, record_reader, stream
+from gfins_fmi.cli.files import Refused, TimeColumn, nav_columns, outputs, record_reader, stream
 from gfins_fmi.cli.initial import from_state_options
 from gfins_fmi.io.columns import NAV_COLUMNS
 from gfins_fmi.nav.strapdown import SinsConfig, Strapdown
@@ -14,6 +14,12 @@ __all__ = ["run"]
 
 
 def run(args) -> int:
+    with outputs(args.input) as outs:
+        outs.claim(args.output)
+        return _run(args, outs)
+
+
+def _run(args, outs) -> int:
     N = args.subsamples
     if N > 1:   # chunks of a multiple of N keep the groups of the whole record
         args.chunk = -(-args.chunk // N) * N
@@ -54,10 +60,10 @@ def run(args) -> int:
             raise Refused(exc, nav_columns(exc.partial), len(exc.partial)) from None
         return nav_columns(sol)
 
-    status, rows = stream(args, reader, NAV_COLUMNS, None, solve, "navigated", group=N)
+    status, rows = stream(args, outs, reader, NAV_COLUMNS, None, solve, "navigated", group=N)
     for note in times.notes():   # the navigator takes any intervals; a gap is worth knowing about
         print(f"note: {note}", file=sys.stderr)
-    if rows:
+    if status == 0:
         what = f"{rows} samples" if N == 1 else f"{rows} updates of {N} samples"
         print(f"{what} navigated -> {args.output}")
     return status

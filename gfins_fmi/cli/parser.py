@@ -55,6 +55,15 @@ def _check_cosim(args) -> str | None:
     return None
 
 
+def _check_integrate(args) -> str | None:
+    if args.outages is not None:
+        dur, per, first = args.outages
+        if not (dur > 0 and per >= dur and first >= 0):
+            return (f"--outages {dur:g},{per:g},{first:g}: DURATION must be > 0 s, PERIOD >= "
+                    "DURATION and FIRST >= 0 s")
+    return None
+
+
 def _check_align(args) -> str | None:
     if args.mode == "static" and args.position is None:
         return "static alignment needs --position LAT,LON,H"
@@ -174,7 +183,7 @@ def _integrate(sub) -> argparse.ArgumentParser:
     p.add_argument("--nhc", action="store_true", help="non-holonomic constraints (ground vehicles)")
     p.add_argument("--plot", type=pathlib.Path, default=None, help="folder for figures")
     p.add_argument("--progress", action="store_true", help="progress bar")
-    _command(p, "integrate")
+    _command(p, "integrate", check=_check_integrate)
     return p
 
 

@@ -48,8 +48,9 @@ def _hint(t_meas: np.ndarray, t0: float, t1: float) -> str:
 
 def unusable_measurements(t_start_s: float, t_end_s: float, **records) -> list[str]:
     """One sentence per record (keyword: its name, e.g. ``gnss=``) that has epochs but
-    none in (``t_start_s``, ``t_end_s``], the span of the IMU record the filter processes
-    (its state's time to the last sample). None records and empty ones are skipped."""
+    none in [``t_start_s``, ``t_end_s``], the span of the IMU record the filter processes
+    (its state's time, where an epoch is still applied, to the last sample). None records
+    and empty ones are skipped."""
     problems = []
     t0, t1 = float(t_start_s), float(t_end_s)
     if abs(t0) < 1e-9 * max(1.0, abs(t1)):
@@ -61,7 +62,7 @@ def unusable_measurements(t_start_s: float, t_end_s: float, **records) -> list[s
         t = t[np.isfinite(t)]
         if t.size == 0:
             continue
-        inside = int(np.count_nonzero((t > t0) & (t <= t1)))
+        inside = int(np.count_nonzero((t >= t0) & (t <= t1)))
         if inside:
             continue
         label = "GNSS" if name == "gnss" else name

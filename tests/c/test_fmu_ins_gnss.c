@@ -509,6 +509,42 @@ static void test_crafted_covariances(fmi2Component c)
     free(bytes);
 }
 
+/* A state saved in initialization mode (before any output is computed) with an output
+ * overwritten and the CRC recomputed: before, the model's checks ran only for an
+ * initialized model, so it was accepted and the getters returned update_time = Inf
+ * (fuzz_fmu_state, issue 21). Now its outputs must be their start values. */
+static void test_crafted_state_before_initialization(void)
+{
+    fmi2Component c = open_ready(GF_INS_EKF, 0);     /* in initialization mode */
+    fmi2FMUstate st = NULL;
+    size_t size = 0;
+    CHECK(fmi2GetFMUstate(c, &st) == fmi2OK && fmi2SerializedFMUstateSize(c, st, &size) == fmi2OK,
+          "state in initialization mode");
+    uint8_t *ok = malloc(size), *bytes = malloc(size);
+    CHECK(ok && bytes && fmi2SerializeFMUstate(c, st, (fmi2Byte *)ok, size) == fmi2OK, "serialize");
+    g_log[0] = '\0';
+    fmi2FMUstate back = NULL;
+    CHECK(fmi2DeSerializeFMUstate(c, (const fmi2Byte *)ok, size, &back) == fmi2OK,
+          "the untouched state is taken: %s", g_log);
+    fmi2FreeFMUstate(c, &back);
+    const double inf = INFINITY, nan = NAN;
+    const struct { size_t at; double v; const char *what; } cases[] = {
+        {offsetof(ModelData, update_time_s) + 3 * sizeof(double), inf, "update_time[4] = Inf"},
+        {offsetof(ModelData, lat_rad), nan, "lat = NaN"},
+        {offsetof(ModelData, std9) + 4 * sizeof(double), 1.0, "std[5] = 1 (finite, not its start value)"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+        memcpy(bytes, ok, size);
+        memcpy(snapshot_model_data(bytes, size) + cases[i].at, &cases[i].v, sizeof(double));
+        ref_state_fix_crc(bytes, size);
+        expect_bytes_refused(c, bytes, size, cases[i].what, "start value");
+    }
+    fmi2FreeFMUstate(c, &st);
+    free(ok);
+    free(bytes);
+    fmi2FreeInstance(c);
+}
+
 static void test_damaged_states(int filter)
 {
     fmi2Component c = open_ready(filter, 0);
@@ -568,6 +604,7 @@ int main(void)
 {
     turn_drive(g_truth, N, H_S);
     test_damaged_states(GF_INS_EKF);
+    test_crafted_state_before_initialization();
     test_equals_core(GF_INS_EKF, 0);
     test_equals_core(GF_INS_UKF, 0);
     test_equals_core(GF_INS_EKF, 2);

@@ -4,10 +4,13 @@ from __future__ import annotations
 
 import sys
 
+import numpy as np
+
 from gfins_fmi._lib import NonFiniteInputError, SampleError
 from gfins_fmi.cli.files import Refused, TimeColumn, nav_columns, outputs, record_reader, stream
 from gfins_fmi.cli.initial import from_state_options
 from gfins_fmi.io.columns import NAV_COLUMNS
+from gfins_fmi.nav.plausibility import report, specific_force_problem
 from gfins_fmi.nav.strapdown import SinsConfig, Strapdown
 
 __all__ = ["run"]
@@ -50,9 +53,21 @@ def _run(args, outs) -> int:
                 # row k is the increment over (t_(k-1), t_k]; the navigator starts one
                 # interval before the first row unless --t0 says otherwise
                 t0 = args.t0 if args.t0 is not None else t[0] - (t[1] - t[0])
+                if not t0 < t[0]:
+                    raise ValueError(f"--t0 {t0!r} s is not before the record's first time "
+                                     f"{float(t[0])!r} s: the first increment covers the interval "
+                                     "from --t0 to it; give an earlier --t0 (or leave it out)")
             else:
                 t0 = args.t0 if args.t0 is not None else t[0]
+                if not t0 <= t[0]:
+                    raise ValueError(f"--t0 {t0!r} s is after the record's first time "
+                                     f"{float(t[0])!r} s: give --t0 at or before it (or leave "
+                                     "it out)")
             nav = Strapdown(from_state_options(args, t0), cfg)
+            # the specific force of the first chunk: units, increments against rates, ms
+            f = block[:, 4:7] if args.input_kind == "rates" else \
+                block[:, 4:7] / np.diff(np.r_[t0, t])[:, None]
+            report([specific_force_problem(np.linalg.norm(f, axis=1), str(args.input))], "warn")
         try:
             sol = nav.run(block[:, 1:4], block[:, 4:7], t_s=t,
                           h_ext_m=block[:, 7] if has_h else None, start_index=start)

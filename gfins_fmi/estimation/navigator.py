@@ -90,7 +90,7 @@ class IntegratedNavigator:
             raise ValueError("initial.nav.q_bn must have 4 elements and initial.nav.v_n_m_s 3")
         for name in ("lat_rad", "lon_rad", "h_m", "t_s"):
             if not np.isfinite(getattr(nav, name)):
-                raise ValueError(f"initial.nav.{name} = {getattr(nav, name)!r} must be finite")
+                raise ValueError(f"initial.nav.{name} = {float(getattr(nav, name))!r} must be finite")
         P0 = np.ascontiguousarray(initial.covariance(config))
         sens = np.zeros(N_SENSORS) if initial.sensors is None else np.ascontiguousarray(initial.sensors, float)
         if sens.shape != (N_SENSORS,) or not np.all(np.isfinite(sens)):
@@ -275,7 +275,11 @@ class IntegratedNavigator:
                                       f"previous sample ({self.t_s!r} s) is not in (0, "
                                       f"{cfg.max_imu_gap_s}] s (time going backwards or an IMU gap; "
                                       "raise max_imu_gap_s to bridge gaps by dead reckoning)"),
-                lib.GF_ERR_NONFINITE_INPUT: f"IMU sample {bad} holds NaN or Inf",
+                lib.GF_ERR_NONFINITE_INPUT: (
+                    f"IMU sample {bad} holds NaN or Inf" if not (
+                        np.isfinite(t[bad]) and np.all(np.isfinite(g[bad])) and np.all(np.isfinite(a[bad])))
+                    else f"IMU sample {bad} (t = {float(t[bad])!r} s) is finite, but an update in its "
+                         "interval was not (a measurement's value, or its variance, overflows)"),
                 lib.GF_ERR_OUT_OF_RANGE: (f"IMU sample {bad} exceeds |w| <= {cfg.max_rate_rad_s} rad/s or "
                                           f"|f| <= {cfg.max_specific_force_m_s2} m/s^2 (input = "
                                           f"{cfg.input!r}: check the units)"),

@@ -9,7 +9,7 @@ and every API writer that produces more than one file goes through an :class:`Ou
   (:mod:`gfins_fmi.io.temporaries`) and :meth:`OutputSet.commit` renames the whole set
   into place only when the run has succeeded: under a lock on the folder (two runs on the
   same outputs commit one after the other, never interleaved), with SIGINT and SIGTERM
-  held back until the renames are done, and with the previous files kept aside until
+  held back until the renames are done (then delivered), and with the previous files kept aside until
   then, so a failing rename puts them back. Files of the set that this run does not
   produce (``--smooth`` left out this time) are removed in the same step: the folder
   holds the previous set or the new one, never a mix.
@@ -89,16 +89,33 @@ def _names(paths) -> str:
 
 @contextlib.contextmanager
 def _signals_held():
-    """SIGINT and SIGTERM held back (pending, delivered when the block ends) while a set
-    is renamed into place; a no-op off the main thread or without ``pthread_sigmask``."""
-    if not hasattr(signal, "pthread_sigmask") or threading.current_thread() is not threading.main_thread():
+    """SIGINT and SIGTERM held back while a set is renamed into place: recorded by a
+    handler of ours and handed to the previous handlers when the block ends (a Python
+    handler, not a signal mask: a mask is the calling thread's, and a signal sent to the
+    process may be delivered to another thread, e.g. one of polars' pool, whose Python
+    handler then runs in the main thread all the same). A no-op off the main thread."""
+    if threading.current_thread() is not threading.main_thread():
         yield
         return
-    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
+    pending = []
+
+    def hold(signum, frame):
+        pending.append(signum)
+
+    previous = {}
     try:
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            previous[sig] = signal.signal(sig, hold)
         yield
     finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+        for sig in dict.fromkeys(pending):            # each one once, in order of arrival
+            handler = previous[sig]
+            if callable(handler):
+                handler(sig, None)                    # KeyboardInterrupt, the CLI's Terminated
+            elif handler == signal.SIG_DFL:
+                os.kill(os.getpid(), sig)             # its default action, now
 
 
 @contextlib.contextmanager
@@ -156,7 +173,10 @@ def _replace_all(moves, removes) -> None:
             if _key(dest) not in had:
                 dest.unlink(missing_ok=True)
         for dest, old in kept:
-            os.replace(old, dest)
+            if os.path.lexists(dest) and os.path.samestat(os.lstat(dest), os.lstat(old)):
+                old.unlink()      # never replaced: renaming a hard link onto itself does nothing
+            else:
+                os.replace(old, dest)
         raise
     for _, old in kept:
         old.unlink(missing_ok=True)

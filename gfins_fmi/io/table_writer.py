@@ -359,7 +359,9 @@ class TableWriter:
         The run's set of files this table belongs to
         (:meth:`gfins_fmi.io.output_set.OutputSet.table` passes it): :meth:`commit` then
         only finishes the file, and the set renames it with the others when the whole
-        run has succeeded; the temporary lives as long as the set.
+        run has succeeded; the temporary lives as long as the set, and leaving the
+        ``with`` block without a commit leaves the rows to the set (its partial file, or
+        nothing when it is discarded).
 
     Text columns (dtype ``str``: words without commas, quotes or line breaks, such as
     the names of measurement kinds) are written to CSV only.
@@ -475,4 +477,7 @@ class TableWriter:
         return self
 
     def __exit__(self, *exc) -> None:
-        self.discard()
+        # a table of a set: what was written is the set's to keep (its partial file) or
+        # drop, when the run ends; alone: dropped unless committed
+        if self.output_set is None:
+            self.discard()

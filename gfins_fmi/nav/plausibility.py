@@ -61,8 +61,8 @@ def specific_force_problem(f_norm_m_s2, what: str = "the record") -> str | None:
     g = 9.80665
     if g / _F_FACTOR <= med <= g * _F_FACTOR:
         return None
-    if med <= 0.0:
-        return None           # no force at all: free fall or a record of zeros, nothing to say
+    if med < 1e-6:
+        return None           # no force at all: free fall or a synthetic record, nothing to say
     ratio = med / g
     hints = []
     if abs(ratio * 1000.0 - 1.0) < 0.2:
@@ -115,7 +115,7 @@ def interval_problem(dt_s: float, omega_sq_rad2_s2, omega_dot_rad_s2,
     factor, longer = (ratio, "longer") if ratio > 1 else (1.0 / ratio, "shorter")
     return (f"{what}: the sample interval is {dt_s:.6g} s, but the record's own rates imply "
             f"about {implied:.3g} s (the change of omega^2 between samples against "
-            f"2 omega omega_dot): the interval given is {factor:.3g} times {longer}; likely "
+            f"2 omega omega_dot): the interval given is {factor:.4g} times {longer}; likely "
             f"cause: {hint}. The signs of omega come from integrating omega_dot over this "
             "interval: with a wrong one they are wrong")
 

@@ -57,7 +57,7 @@ OPTION_CASES = {
                           "--omega-init", "1,2,x", *NAV],
                          "argument --omega-init: expected 3 comma-separated finite numbers (x,y,z in rad/s)"),
     "gfnav noise 0": (["gfnav", "a.csv", "o.csv", "--layout", "qin9", "--lever-arm", "0.1", "--accel-noise",
-                       "0", *NAV], "argument --accel-noise: must be finite and > 0 m/s^2"),
+                       "0", *NAV], "argument --accel-noise: must be finite and in (0, 1000] m/s^2"),
     "gfnav lever arm": (["gfnav", "a.csv", "o.csv", "--layout", "qin9", "--lever-arm", "-0.1", *NAV],
                         "argument --lever-arm: must be finite and >= 1e-06 m"),
     "navigate v0 nan": (["navigate", "a.csv", "o.csv", "--v0", "0,nan,0", *NAV],

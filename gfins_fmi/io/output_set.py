@@ -105,17 +105,38 @@ def _signals_held():
     previous = {}
     try:
         for sig in (signal.SIGINT, signal.SIGTERM):
-            previous[sig] = signal.signal(sig, hold)
+            # the old handler first: signal.signal() runs the handlers of pending signals
+            # before it returns, so an interrupt there must find it recorded (the study
+            # of tests/cli/test_interrupts.py found SIGINT left held forever that way)
+            previous[sig] = signal.getsignal(sig)
+            signal.signal(sig, hold)
         yield
     finally:
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)
+        _restore(previous)
         for sig in dict.fromkeys(pending):            # each one once, in order of arrival
             handler = previous[sig]
             if callable(handler):
                 handler(sig, None)                    # KeyboardInterrupt, the CLI's Terminated
             elif handler == signal.SIG_DFL:
                 os.kill(os.getpid(), sig)             # its default action, now
+
+
+def _restore(previous: dict) -> None:
+    """Put every handler back, even when a signal arrives meanwhile (its exception is
+    raised once all are back)."""
+    raised = None
+    for sig, handler in previous.items():
+        while True:
+            try:
+                if handler is not None:
+                    signal.signal(sig, handler)
+                break
+            except BaseException as exc:              # a pending signal's handler raised
+                raised = raised or exc
+                if signal.getsignal(sig) == handler:
+                    break
+    if raised is not None:
+        raise raised
 
 
 @contextlib.contextmanager
@@ -205,6 +226,9 @@ class OutputSet:
         self._members: dict[str, _Member] = {}
         self._stale: dict[str, pathlib.Path] = {}
         self._made: list[pathlib.Path] = []
+        #: the finalizers of every temporary made for the set (registered before the file
+        #: exists): discard() calls them all, whatever point an interrupt came at
+        self.temporaries: list = []
         self.state = "open"
         #: what the run left: the destinations written (commit) or the partial tables
         self.written: list[pathlib.Path] = []
@@ -304,6 +328,7 @@ class OutputSet:
         m = self._members[_key(writer.path)]
         m.tmp = writer.temporary
         m.remove = weakref.finalize(self, remove_temporary, m.tmp)
+        self.temporaries.append(m.remove)
         writer.release()
 
     def write_table(self, path, names, columns, dtypes=None, **kwargs) -> None:
@@ -318,7 +343,7 @@ class OutputSet:
         if self.state != "open":
             raise ValueError(f"the outputs are already {self.state}")
         m = self._member(path)
-        m.tmp, m.remove = temporary_beside(m.dest, self)
+        m.tmp, m.remove = temporary_beside(m.dest, self, self.temporaries)
         return m.tmp
 
     def write_text(self, path, text: str) -> None:
@@ -347,9 +372,8 @@ class OutputSet:
                     if os.path.lexists(partial_path(p))]
         with _signals_held(), _folders_locked(self._folders()):
             _replace_all(moves, removes)
-            for m in self._members.values():
-                if m.remove is not None:
-                    m.remove.detach()
+            for remove in self.temporaries:
+                remove.detach()
             self.state = "committed"
         self.written = [d for _, d in moves]
         self.removed = [p for p in removes]
@@ -392,8 +416,8 @@ class OutputSet:
         for m in self._members.values():
             if m.writer is not None and not m.finished:
                 m.writer.discard()
-            elif m.remove is not None:
-                m.remove()
+        for remove in self.temporaries:   # every other temporary (a removed one is no-op)
+            remove()
 
     def _drop_made_folders(self) -> None:
         for top in reversed(self._made):

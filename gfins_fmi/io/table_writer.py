@@ -397,7 +397,8 @@ class TableWriter:
             raise IsADirectoryError(f"{self.path} is a folder: give a file name for the output")
         self.output_set = output_set
         self._tmp, self._remove = temporary_beside(
-            self.path, self if output_set is None else output_set)
+            self.path, self if output_set is None else output_set,
+            None if output_set is None else output_set.temporaries)
         try:
             self._sink = _SINKS[self.format](self._tmp, self.names, self.dtypes, list(comments),
                                              rows, float_format)

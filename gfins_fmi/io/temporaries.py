@@ -48,7 +48,8 @@ def temporary_pattern(path: pathlib.Path) -> re.Pattern:
     return re.compile(re.escape(stem) + r"\.(\d+)-[0-9a-f]{8}\.tmp" + re.escape(suffix) + r"(\.d)?$")
 
 
-def temporary_beside(path: pathlib.Path, owner) -> tuple[pathlib.Path, weakref.finalize]:
+def temporary_beside(path: pathlib.Path, owner, registry: list | None = None
+                     ) -> tuple[pathlib.Path, weakref.finalize]:
     """A new empty file beside ``path`` (same folder, so the final rename stays on one
     file system), ``<stem>.<pid>-<random>.tmp<suffix>`` (the suffix kept, so that a writer
     that infers the format from the name, such as matplotlib's, writes the right one),
@@ -56,11 +57,16 @@ def temporary_beside(path: pathlib.Path, owner) -> tuple[pathlib.Path, weakref.f
     The finalizer is registered before the file exists: a Ctrl-C at any point after (even
     before the caller has entered its ``with`` block) leaves no temporary file once
     ``owner`` is collected or the interpreter exits; a commit detaches it. The process id
-    in the name lets a later run remove what a killed one left (:func:`sweep_temporaries`)."""
+    in the name lets a later run remove what a killed one left (:func:`sweep_temporaries`).
+    ``registry``: a list the finalizer is appended to before the file exists (an output
+    set's, so that it can remove the temporary at once, whatever the point an interrupt
+    came at)."""
     stem, suffix = _name_parts(path)
     for _ in range(100):
         tmp = path.with_name(f"{stem}.{os.getpid()}-{secrets.token_hex(4)}.tmp{suffix}")
         remove = weakref.finalize(owner, remove_temporary, tmp)
+        if registry is not None:
+            registry.append(remove)
         try:
             with open(tmp, "xb"):
                 return tmp, remove

@@ -5,7 +5,8 @@
                     [--outages DURATION:PERIOD:FIRST] [--plot DIR] ...
 
 Writes the solution (time, position, velocity, attitude, 1-sigma, sensor estimates) to
-OUT.csv, the innovation log to OUT.innovations.csv, and prints a summary; with --truth
+OUT.csv, the innovation log to OUT.innovations.csv, what the run used (inputs, options,
+filter settings, initial state) to OUT.config.json, and prints a summary; with --truth
 the errors against it; with --outages the outage protocol's score. The files are one set
 (gfins_fmi.io.output_set): they appear together when the run has succeeded; after a
 refused sample the tables before it go to OUT.partial.csv and OUT.innovations.partial.csv.
@@ -13,11 +14,17 @@ Records that the run could not use (no epoch inside the IMU record) are refused 
 """
 from __future__ import annotations
 
+import dataclasses
+import datetime
+import json
+import os
+import pathlib
 import sys
 
 import numpy as np
 
 from gfins_fmi import io
+from gfins_fmi._version import __version__
 from gfins_fmi.cli.files import cause, outputs, read_gnss, read_imu, read_optional, read_truth
 from gfins_fmi.cli.initial import from_initial_option, record_start_s
 from gfins_fmi.cli.noise import imu_noise
@@ -29,6 +36,7 @@ from gfins_fmi.estimation.measurement_checks import unusable_measurements
 from gfins_fmi.estimation.navigator import IntegratedNavigator
 from gfins_fmi.io.columns import INNOVATION_COLUMNS, integrated_columns
 from gfins_fmi.nav.earth import deg
+from gfins_fmi.nav.strapdown import quat_to_euler
 
 __all__ = ["run"]
 
@@ -56,6 +64,36 @@ def _write_innovations(outs, path, sol):
                      [np.float64, str, str, np.int64, np.float64] + [np.float64] * 6, float_format="repr")
 
 
+def _input(path) -> dict | None:
+    if not path:
+        return None
+    st = os.stat(path)
+    return {"path": str(path), "bytes": st.st_size,
+            "modified_utc": datetime.datetime.fromtimestamp(st.st_mtime, datetime.timezone.utc).isoformat()}
+
+
+def _effective_config(args, cfg, init, windows) -> str:
+    """What the run used, to read back or rerun it: the inputs (path, size, time), every
+    option, the filter's settings (FilterConfig, datasheet units), the initial state and
+    its 1-sigma (as gf_ins_initial_std holds them), the simulated outages."""
+    nav = init.nav
+    doc = {
+        "gfins_fmi": __version__, "command": "integrate",
+        "inputs": {k: _input(getattr(args, k)) for k in ("imu", "gnss", "baro", "odometer", "truth")},
+        "options": {k: (str(v) if isinstance(v, pathlib.Path) else v) for k, v in sorted(vars(args).items())
+                    if k not in ("check", "module", "function")},
+        "filter": dataclasses.asdict(cfg),
+        "initial": {"t_s": float(nav.t_s), "lat_deg": float(np.degrees(nav.lat_rad)),
+                    "lon_deg": float(np.degrees(nav.lon_rad)), "h_m": float(nav.h_m),
+                    "v_enu_m_s": [float(x) for x in nav.v_n_m_s],
+                    "heading_pitch_roll_deg": [float(x) for x in np.degrees(quat_to_euler(nav.q_bn))],
+                    "std": init.std_blocks(cfg),
+                    "sensors": None if init.sensors is None else [float(x) for x in init.sensors]},
+        "outages_s": None if windows is None else [[float(a), float(b)] for a, b in windows],
+    }
+    return json.dumps(doc, indent=1, default=float) + "\n"
+
+
 def _outage_windows(args, gnss, rec):
     """The simulated outages of --outages, refused when none falls inside the record."""
     dur, per, first = args.outages
@@ -77,6 +115,7 @@ def run(args) -> int:
         outs.claim(args.output)
         outs.claim(inn_path)
         outs.claim(sm_path, produced=args.smooth)
+        outs.claim(args.output.with_suffix(".config.json"))
         figures = {}
         if args.plot:
             outs.claim_folder(args.plot)
@@ -129,6 +168,7 @@ def _run(args, outs, inn_path, sm_path, figures) -> int:
         g_used = gnss.with_outages([tuple(w) for w in windows])
         print(f"{len(windows)} simulated GNSS outages of {args.outages[0]:g} s")
     nav = IntegratedNavigator(cfg, init)
+    outs.write_text(args.output.with_suffix(".config.json"), _effective_config(args, cfg, init, windows))
     try:
         # checked above, on the whole record ("warn": the alignment may have taken its start)
         sol = nav.run(rec, g_used, baro, odo, smoother=args.smooth, progress=args.progress, checks="warn")

@@ -1,5 +1,5 @@
-"""Measurements that cannot be used, found before a run (docs/estimation.md, "Checks
-before a run"): a sensor record none of whose epochs falls inside the IMU record the
+"""Measurements that cannot be used, found before a run (docs/io.md, "Checks before a
+run"): a sensor record none of whose epochs falls inside the IMU record the
 filter is about to process would leave the run unaided while looking aided — the usual
 cause is two time scales (GPS seconds of week against seconds since start, UTC against
 GPS, ms against s). :func:`unusable_measurements` says which; the batch API raises

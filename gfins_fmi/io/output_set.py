@@ -383,9 +383,10 @@ class OutputSet:
     def keep_partial(self, reason: str) -> list[pathlib.Path]:
         """The run failed after writing some rows: every table of the set goes to its
         partial name (``sol.csv`` -> ``sol.partial.csv``), stamped with ``reason`` (where
-        and why the run stopped: the CSV's first line), and the destinations stay as they
-        were. Other files (figures, JSON) are dropped. Nothing is kept when no table has
-        a row. Returns the partial files."""
+        and why the run stopped: the CSV's first line), and so does every other file
+        already finished (the run's configuration: ``sol.config.partial.json``), while the
+        destinations stay as they were. Nothing is kept when no table has a row. Returns
+        the partial files."""
         if self.state != "open":
             return []
         tables = [m for m in self._members.values() if m.writer is not None]
@@ -397,6 +398,7 @@ class OutputSet:
                 m.writer.finish()
                 self.finished(m.writer)
             mark_partial(m.tmp, m.format, reason)
+        tables += [m for m in self._members.values() if m.writer is None and m.finished]
         moves = [(m.tmp, partial_path(m.dest)) for m in tables]
         kept = {_key(d) for _, d in moves}
         others = [m.dest for m in self._members.values()] + list(self._stale.values())

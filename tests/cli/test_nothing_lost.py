@@ -164,6 +164,7 @@ def test_integrate_keeps_partial_tables_after_a_refused_sample(drive, tmp_path, 
             f"{tmp_path / 'out.innovations.partial.csv'}") in err, err
     for name in ("out.csv", "out.innovations.csv"):
         assert (tmp_path / name).read_text() == "previous\n"
+    assert (tmp_path / "out.config.partial.json").is_file()     # what the failed run used
     for name in ("out.partial.csv", "out.innovations.partial.csv"):
         assert (tmp_path / name).read_text().startswith(
             f"# partial: the filter stopped at IMU sample 700 of {tmp_path / 'imu.csv'}: IMU sample 700 exceeds")
@@ -177,10 +178,16 @@ def test_a_set_holds_only_this_runs_files(drive, tmp_path, capsys):
     folder, _, init = drive
     out = tmp_path / "out.csv"
     assert main(_integrate(folder, out, init, "--smooth")) == 0
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.csv", "out.innovations.csv",
-                                                           "out.smoothed.csv"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.config.json", "out.csv",
+                                                           "out.innovations.csv", "out.smoothed.csv"]
     assert main(_integrate(folder, out, init)) == 0
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.csv", "out.innovations.csv"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.config.json", "out.csv",
+                                                           "out.innovations.csv"]
+    # the effective configuration: what the run used, to read back or rerun it
+    import json
+    doc = json.loads((tmp_path / "out.config.json").read_text())
+    assert doc["options"]["smooth"] is False and doc["filter"]["imu"]["gyro_arw_deg_sqrt_h"] == 0.05
+    assert doc["inputs"]["imu"]["bytes"] == (folder / "imu.csv").stat().st_size
 
 
 # ---- silently unaided ----------------------------------------------------------------------

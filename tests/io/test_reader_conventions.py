@@ -20,7 +20,7 @@ import pathlib
 import numpy as np
 import pytest
 
-from gfins_fmi.cli.files import nav_columns, write_table
+from gfins_fmi.cli.files import nav_columns, outputs
 from gfins_fmi.io import (BaroRecord, GnssRecord, ImuRecord, OdometerRecord, TableReader,
                           TruthRecord, read_kfgins_gnss, read_kfgins_imu, read_kfgins_nav,
                           read_rtk_walk_imu, read_rtklib_pos)
@@ -219,9 +219,10 @@ def test_every_record_type_round_trips_with_its_columns_named(tmp_path):
 
 
 def test_navigation_solution_table_names_each_axis(tmp_path):
-    """The commands' navigation table (cli/files.py nav_columns + write_table, the
-    vocabulary of io/columns.py): a solution with every axis different, written and read
-    back with TableReader, has each quantity under its own name and unit (deg)."""
+    """The commands' navigation table (cli/files.py nav_columns, written through the
+    commands' output set io/output_set.py; the vocabulary of io/columns.py): a solution
+    with every axis different, written and read back with TableReader, has each quantity
+    under its own name and unit (deg)."""
     eul = np.array([[0.5, 0.1, -0.2], [1.5, -0.3, 0.4]])                # heading, pitch, roll
     q = np.array([earth.euler_to_quat(*e) for e in eul])
     sol = _Sized(t_s=np.array([1.0, 2.0]), lat_rad=np.array([0.5, 0.6]),
@@ -229,7 +230,9 @@ def test_navigation_solution_table_names_each_axis(tmp_path):
                  v_n_m_s=np.array([[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]), euler_rad=eul, q_bn=q)
     cols = nav_columns(sol)
     path = tmp_path / "nav.csv"
-    write_table(path, list(NAV_COLUMNS), cols)
+    outs = outputs()
+    outs.write_table(path, list(NAV_COLUMNS), cols)
+    outs.commit()
     with TableReader(path, header=True) as r:
         names = r.names
         table = np.concatenate([b for _, b in r])

@@ -15,6 +15,8 @@ at epoch k+1 is that of its posterior nominal plus the correction dx_k+1 fed bac
 """
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -149,6 +151,21 @@ def test_smoothed_std_is_finite_and_below_the_filtered_in_every_column(runs, nam
     f9[:, 6:9] = np.sqrt(var_f[:, 6:9])
     bad = np.argwhere(sm.epoch_std > f9 * (1 + 1e-9))
     assert bad.size == 0, bad[:5]
+    # and the reported std is the smoothed covariance (gf_ins_smooth, checked against the
+    # numpy RTS above) in the solution's units, column by column: the same conversion
+    # written here, so equal to round-off (1e-13 relative); the rows take it interpolated
+    # linearly between the epochs
+    s9 = np.empty_like(f9)
+    s9[:, 0:3] = np.sqrt(var_s[:, 0:3])
+    s9[:, 3] = np.sqrt(var_s[:, 4]) * (RN + nav[:, 9]) * np.cos(nav[:, 7])
+    s9[:, 4] = np.sqrt(var_s[:, 3]) * (RM + nav[:, 9])
+    s9[:, 5] = np.sqrt(var_s[:, 5])
+    s9[:, 6:9] = np.sqrt(var_s[:, 6:9])
+    np.testing.assert_allclose(sm.epoch_std, s9, rtol=1e-13, atol=0.0)
+    assert sm.std.shape == (len(sol.t_s), 9)
+    for i in range(9):
+        np.testing.assert_allclose(sm.std[:, i], np.interp(sol.t_s, ep["t_s"], s9[:, i]),
+                                   rtol=1e-13, atol=0.0)
     # the column order of the smoothed std is the filter's: east before north (the
     # north std of this drive's GNSS is 1.2 m against 1.0 m east, P0 1.5 m against 1.0 m)
     k = np.searchsorted(sm.epoch_t_s, 5.0)
@@ -190,3 +207,14 @@ def test_rows_between_epochs_take_the_interpolated_correction(runs):
         assert abs(nav[9] - sm.h_m[k]) < 1e-9
         checked += 1
     assert checked > 500
+
+
+def test_smoothing_refuses_a_configuration_of_another_layout(runs):
+    """The epochs hold the run's 21 states; a solution handed a configuration with more or
+    fewer states is refused, naming both counts (the C apply step reads the layout)."""
+    sol = runs["ekf"]
+    for other, m in ((FilterConfig(imu=TACTICAL, scale_factors=True, baro_bias=True), 22),
+                     (FilterConfig(imu=TACTICAL), 15)):
+        with pytest.raises(ValueError, match=f"the solution's epochs hold 21 states, its "
+                                             f"configuration {m}"):
+            dataclasses.replace(sol, config=other).smooth()

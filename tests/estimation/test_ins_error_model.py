@@ -8,6 +8,8 @@ reduction.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 from scipy.linalg import expm
@@ -202,3 +204,23 @@ def test_bad_arguments():
                                       ptr(F, 81)) == lib.GF_ERR_BAD_SIZE
     assert lib.gf_ins_nav_error_model(ptr(q, 4), ptr(v, 3), 0.2, 0.0, ffi.NULL, 9, 0, 3, 6,
                                       ptr(F, 81)) == lib.GF_ERR_NULL_POINTER
+
+
+def test_definition_refuses_the_poles_and_decays_each_block_alone():
+    """ins_error_matrices: a latitude at or beyond +-90 deg refused; each block's
+    correlation time sets the decay -1/tau of its own states only (a block without one is
+    a random constant: 0 on its diagonal), so a block cannot spill into its neighbour."""
+    q, v, fb, wb = [1.0, 0, 0, 0], np.zeros(3), np.array([0.1, 0.2, 9.8]), np.array([0.01, 0.02, 0.03])
+    for lat in (math.pi / 2, -1.6, 3.0):
+        with pytest.raises(ValueError, match="lat_rad must be inside"):
+            ins_error_matrices(lat, 0.0, v, q, fb, wb)
+    names = ["bg", "ba", "sg", "sa", "baro", "odo", "odo_mount"]
+    for given in names:
+        F, _ = ins_error_matrices(0.6, 10.0, v, q, fb, wb, scale_states=True, baro_state=True,
+                                  odo_state=True, odo_mount_state=True, tau_s={given: 50.0})
+        diag = np.diag(F)[9:]
+        k0 = {"bg": 0, "ba": 3, "sg": 6, "sa": 9, "baro": 12, "odo": 13, "odo_mount": 14}[given]
+        k1 = k0 + {"baro": 1, "odo": 1, "odo_mount": 2}.get(given, 3)
+        want = np.zeros(len(diag))
+        want[k0:k1] = -1.0 / 50.0
+        np.testing.assert_array_equal(diag, want, err_msg=given)

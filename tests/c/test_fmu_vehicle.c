@@ -239,7 +239,8 @@ static void test_equals_core(int imu_errors)
         memcpy(e.g_bias_rad_s, bias, sizeof bias);
         memcpy(e.a_scale, scale, sizeof scale);
         memcpy(e.a_k2_s2_m, k2, sizeof k2);
-        memcpy(e.a_lever_m, lever, sizeof lever);
+        for (int i = 0; i < 3; ++i)
+            e.a_lever_pos_m[4 * i] = lever[i];
         memcpy(e.g_misalign_rad, mis, sizeof mis);
     }
     int worst = -1;
@@ -319,7 +320,8 @@ static void test_rotation_equals_core(void)
     gf_imu_errors e;
     memset(&e, 0, sizeof e);
     memcpy(e.a_k2_s2_m, k2, sizeof k2);
-    memcpy(e.a_lever_m, lever, sizeof lever);
+    for (int i = 0; i < 3; ++i)
+        e.a_lever_pos_m[4 * i] = lever[i];
     int worst = -1;
     for (int k = 0; k < N && worst < 0; ++k) {
         s.time_s = k * H_S;

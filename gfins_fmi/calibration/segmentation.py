@@ -130,8 +130,11 @@ def segment_record(t_s, dtheta_rad, rate_threshold_deg_s: float = 0.5, smooth_s:
 
 
 
-def check_record(t_end, dt, dth, dv, segs, lat_rad, h_m, min_align_s, max_angle_per_sample_rad):
-    """Units, sampling and rest: CalibrationInputError with what was found."""
+def check_record(t_end, dt, dth, dv, segs, lat_rad, h_m, min_align_s, max_angle_per_sample_rad,
+                 gravity_m_s2: float | None = None, earth_rate: bool = True):
+    """Units, sampling and rest: CalibrationInputError with what was found. ``gravity_m_s2``:
+    the site's gravity (default WGS-84 normal gravity); ``earth_rate``: the gyros must see
+    the Earth rate (the coarse alignment gyrocompasses; False when the heading is given)."""
     if not (dt > 0).all():
         k = int(np.flatnonzero(~(dt > 0))[0])
         raise CalibrationInputError(f"sample times must increase: interval {k} is {dt[k]!r} s")
@@ -146,7 +149,7 @@ def check_record(t_end, dt, dth, dv, segs, lat_rad, h_m, min_align_s, max_angle_
                                     "(seed 001 rests 10 min)")
     sel = np.concatenate([np.arange(s.i0, s.i1) for s in stat])
     f = np.linalg.norm(dv[sel] / dt[sel, None], axis=1).mean()
-    g = core_gravity_m_s2(lat_rad, h_m)
+    g = core_gravity_m_s2(lat_rad, h_m) if gravity_m_s2 is None else gravity_m_s2
     if abs(f / g - 1.0) > 0.05:
         hint = (" (dv looks like a specific force in m/s^2 rather than increments in m/s over "
                 "each interval: build the record with kind='rates'; or the increments are in "
@@ -157,10 +160,12 @@ def check_record(t_end, dt, dth, dv, segs, lat_rad, h_m, min_align_s, max_angle_
                                     f"the site is {g:.6g} m/s^2{hint}")
     w = np.linalg.norm(dth[sel] / dt[sel, None], axis=1).mean()
     W = WGS84.omega_ie
-    if w > 30 * W:
+    if earth_rate and w > 30 * W:
         hint = " (are the gyro increments in degrees? np.radians)" if abs(w / (W * 180 / np.pi) - 1) < 0.5 else ""
         raise CalibrationInputError(f"at rest the gyros read {w:.3g} rad/s = {w / W:.1f} x the Earth "
-                                    f"rate{hint}: the filter needs rad and a gyro that sees the Earth rate")
+                                    f"rate{hint}: the coarse alignment needs rad and a gyro that sees the "
+                                    "Earth rate (for MEMS gyros give the start heading: heading_rad, "
+                                    "--heading)")
     worst = float(np.max(np.linalg.norm(dth, axis=1)))
     if worst > max_angle_per_sample_rad:
         k = int(np.argmax(np.linalg.norm(dth, axis=1)))

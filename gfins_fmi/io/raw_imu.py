@@ -90,9 +90,18 @@ def read_raw_imu(path, layout: str | None = None, kind: str = "increments", gyro
                                   f"samples (seven {layout}){hint}")
         table = np.fromfile(path, dtype="<f4" if width == 4 else "<f8").astype(float).reshape(-1, 7)
     col = {n: table[:, columns.index(n)] for n in names}
+    t = col["t"] * time_scale_s
+    if t.size > 1:
+        dt = float(np.median(np.diff(t)))
+        if not (1e-6 <= dt <= 100.0):
+            hint = {"float64": " (a float32 file read as float64?)", "float32": " (a float64 file read "
+                    "as float32?)"}.get(layout, "")
+            raise FileFormatError(path, None, f"the median sample interval is {dt:.3g} s, not a sampling "
+                                  f"interval (1 us to 100 s): the layout{hint}, the column order or "
+                                  "--time-scale is wrong")
     g = np.c_[col["wx"], col["wy"], col["wz"]] * GYRO_UNITS[gyro_unit]
     a = np.c_[col["ax"], col["ay"], col["az"]] * ACCEL_UNITS[accel_unit]
     with record_errors_at_lines(path, line_of):
-        return ImuRecord(col["t"] * time_scale_s, g, a, kind,
+        return ImuRecord(t, g, a, kind,
                          f"raw 7-column IMU {layout} file {path.name}: {kind}, gyro {gyro_unit}, "
                          f"accel {accel_unit}")

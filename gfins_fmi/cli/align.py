@@ -20,12 +20,13 @@ import sys
 import numpy as np
 
 from gfins_fmi import io
-from gfins_fmi.cli.files import write_table
+from gfins_fmi.cli.files import compensated, write_table
 from gfins_fmi.cli.initial import from_initial_option, record_start_s
 from gfins_fmi.cli.noise import imu_noise
 from gfins_fmi.estimation.alignment import coarse_align, coarse_align_inertial
 from gfins_fmi.estimation.config import UG, FilterConfig, InitialState
 from gfins_fmi.estimation.fine_alignment import align_in_motion, fine_align
+from gfins_fmi.estimation.noise_file import read_imu_errors
 from gfins_fmi.io.columns import ALIGNMENT_PASS_COLUMNS
 
 __all__ = ["run"]
@@ -42,6 +43,8 @@ def run(args) -> int:
     deg = math.pi / 180.0
     noise = imu_noise(args.grade)
     imu = io.ImuRecord.from_csv(args.imu)
+    if args.imu_errors:
+        imu = compensated(imu, read_imu_errors(args.imu_errors))
     gb, ab = _biases(args, noise)
     if args.mode == "static":
         lat, lon, h = args.position

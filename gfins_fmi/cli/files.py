@@ -11,11 +11,12 @@ import sys
 import numpy as np
 
 from gfins_fmi import io
+from gfins_fmi._lib import NonFiniteInputError
 from gfins_fmi.io.table_writer import TableWriter
 from gfins_fmi.io.tables import TableReader
 
 __all__ = ["TimeColumn", "Refused", "record_reader", "stream", "nav_columns", "write_table", "read_imu",
-           "read_gnss", "read_optional", "read_truth"]
+           "read_gnss", "read_optional", "read_truth", "compensated", "compensated_block"]
 
 
 #: relative tolerance of a fixed sampling interval in a time column: timestamps rounded
@@ -243,3 +244,36 @@ def read_truth(path, gps_week=None):
         return None
     return (io.read_kfgins_nav(path, gps_week=gps_week) if path.suffix == ".nav"
             else io.TruthRecord.from_csv(path))
+
+
+def compensated(imu, errors):
+    """An ImuRecord with the IMU errors removed (``--imu-errors``): rates by
+    ImuErrors.compensate, increments through the mean rate of each interval
+    (compensate_increments; the first interval taken as long as the second)."""
+    if errors is None:
+        return imu
+    if imu.kind == "rates":
+        w, f = errors.compensate(imu.gyro, imu.accel)
+    else:
+        first = imu.t_s[1] - imu.t_s[0] if len(imu) > 1 else 1.0
+        dt = np.diff(imu.t_s, prepend=imu.t_s[0] - first)
+        w, f = errors.compensate_increments(imu.gyro, imu.accel, dt)
+    return io.ImuRecord(t_s=imu.t_s, gyro=w, accel=f, kind=imu.kind, source=f"{imu.source}; compensated")
+
+
+def compensated_block(errors, t, gyro, accel, kind: str, t_prev=None):
+    """One chunk of a streamed record compensated (``--imu-errors``): (gyro, accel). Rows
+    from the first one the error model refuses (not finite) on are passed as they are,
+    for the navigator to refuse at the same row with its own message. ``t_prev``: the
+    time before the chunk (increments: the first interval)."""
+    if kind == "rates":
+        fn, args = errors.compensate, ()
+    else:
+        before = t_prev if t_prev is not None else (t[0] - (t[1] - t[0]) if len(t) > 1 else t[0] - 1.0)
+        fn, args = errors.compensate_increments, (np.diff(t, prepend=before),)
+    try:
+        return fn(gyro, accel, *args)
+    except NonFiniteInputError as exc:
+        k = exc.index
+        w, f = exc.partial
+        return np.vstack([w, gyro[k:]]), np.vstack([f, accel[k:]])

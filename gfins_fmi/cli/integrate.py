@@ -1,7 +1,8 @@
 """``gfins integrate``: integrated navigation of recorded files from the shell.
 
     gfins integrate IMU GNSS OUT.csv [--imu-format csv|kfgins|rtk_walk] [--gnss-format pos|kfgins|csv]
-                    [--truth NAV] [--grade consumer|tactical|navigation] [--filter ekf|ukf] [--smooth]
+                    [--truth NAV] [--grade consumer|tactical|navigation | --noise-file NOISE.toml]
+                    [--filter ekf|ukf] [--smooth]
                     [--outages DURATION:PERIOD:FIRST] [--plot DIR] ...
 
 Writes the solution (time, position, velocity, attitude, 1-sigma, sensor estimates) to
@@ -15,9 +16,10 @@ import sys
 import numpy as np
 
 from gfins_fmi import io
-from gfins_fmi.cli.files import read_gnss, read_imu, read_optional, read_truth, write_table
+from gfins_fmi.cli.files import compensated, read_gnss, read_imu, read_optional, read_truth, write_table
 from gfins_fmi.cli.initial import from_initial_option, record_start_s
 from gfins_fmi.cli.noise import imu_noise
+from gfins_fmi.estimation.noise_file import read_imu_errors
 from gfins_fmi.estimation.alignment import align_static_then_gnss
 from gfins_fmi.estimation.config import (MEAS_TYPES, SENSOR_NAMES, UPDATE_STATUS, FilterConfig,
                                          FilterError, InitialState)
@@ -57,11 +59,14 @@ def run(args) -> int:
     baro = read_optional(io.BaroRecord, args.baro)
     odo = read_optional(io.OdometerRecord, args.odometer)
     truth = read_truth(args.truth, args.gps_week)
+    if args.imu_errors:
+        imu = compensated(imu, read_imu_errors(args.imu_errors))
+        print(f"IMU record compensated with {args.imu_errors}")
     if args.subsamples > 1 and imu.kind == "rates":
         # the multi-sample coning/sculling corrections are formed from increments: the
         # trapezoid over each interval (what the filter's rate input assumes too)
         imu = imu.to_increments()
-    cfg = FilterConfig(imu=imu_noise(args.grade, args.noise), filter=args.filter, input=imu.kind,
+    cfg = FilterConfig(imu=imu_noise(args.grade, args.noise, args.noise_file), filter=args.filter, input=imu.kind,
                        propagation_interval_s=args.propagation_interval,
                        gnss_lever_arm_m=tuple(args.lever_arm), zupt=args.zupt, nhc=args.nhc,
                        odometer_mount=args.odometer_mount, subsamples=args.subsamples)

@@ -5,8 +5,9 @@ from __future__ import annotations
 import sys
 
 from gfins_fmi._lib import NonFiniteInputError, SampleError
-from gfins_fmi.cli.files import Refused, TimeColumn, nav_columns, record_reader, stream
+from gfins_fmi.cli.files import Refused, TimeColumn, compensated_block, nav_columns, record_reader, stream
 from gfins_fmi.cli.initial import from_state_options
+from gfins_fmi.estimation.noise_file import read_imu_errors
 from gfins_fmi.io.columns import NAV_COLUMNS
 from gfins_fmi.nav.strapdown import SinsConfig, Strapdown
 
@@ -31,11 +32,18 @@ def run(args) -> int:
         raise ValueError(f"--subsamples {args.subsamples} needs --input-kind increments (rate "
                          "samples are navigated one update per sample)")
     nav = None
+    errors = read_imu_errors(args.imu_errors) if args.imu_errors else None
+    t_prev = None
 
     def solve(start, block):
-        nonlocal nav
+        nonlocal nav, t_prev
         t = block[:, 0]
         times.check(t, start)
+        if errors is not None:   # --imu-errors: the chunk compensated before the navigator
+            block = block.copy()
+            block[:, 1:4], block[:, 4:7] = compensated_block(errors, t, block[:, 1:4], block[:, 4:7],
+                                                             args.input_kind, t_prev)
+            t_prev = t[-1]
         if nav is None:
             if args.input_kind == "increments":
                 if len(t) < 2 and args.t0 is None:

@@ -401,7 +401,7 @@ def simulate_static(schedule: RotationSchedule, duration_s: float, dt_s: float,
         Bad durations (a sample interval above 10 s), latitude beyond 89 deg, or a delay
         longer than a sample.
     """
-    dt = as_scalar("dt_s", dt_s, "s", above=0.0, at_most=10.0)   # gf_rotation.h GF_ROT_MAX_DT_S
+    dt = as_scalar("dt_s", dt_s, "s", above=0.0, at_most=10.0)   # sim/gf_rot.h GF_ROT_MAX_DT_S
     dur = as_scalar("duration_s", duration_s, "s", above=0.0)
     lat = as_scalar("lat_rad", lat_rad, "rad", above=-np.radians(89.0), below=np.radians(89.0))
     h = as_scalar("h_m", h_m, "m", at_least=-1000.0, at_most=1e5)

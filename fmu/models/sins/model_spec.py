@@ -52,7 +52,7 @@ MODEL = dict(
              description="1: the inputs come from an IMU on seed 001's two-axis mechanism (the "
                          "IMU frame m is navigated: q, euler describe it); q_vehicle and "
                          "euler_vehicle give the vehicle from it and the input gimbal "
-                         "(gf_rotation.h: C_b^n = C_m^n (R_x(middle) R_z(inner))^T)"),
+                         "(sim/gf_rot.h: C_b^n = C_m^n (R_x(middle) R_z(inner))^T)"),
         *_COMMON["imu_inputs"](),
         _COMMON["external_height"](),
         dict(name="gimbal", causality="input", variability="continuous", type="Float64",

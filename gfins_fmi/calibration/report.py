@@ -158,10 +158,13 @@ class CalibrationReport:
         return doc
 
 
-def plot_report(rep: CalibrationReport, folder, truth=None, names=None, tag: str = "") -> list:
+def plot_report(rep: CalibrationReport, folder, truth=None, names=None, tag: str = "",
+                save=None) -> list:
     """Two figures in ``folder``: the first pass's estimates of nine parameters with
     +-1 sigma bands (and ``truth``, SI, model order, if known), and the zero-velocity
-    residuals of the last pass with the static intervals shaded. Returns their paths."""
+    residuals of the last pass with the static intervals shaded. Returns their paths.
+    ``save``: where a figure's bytes go, given its path (e.g. an output set's temporary,
+    :meth:`gfins_fmi.io.output_set.OutputSet.file`); default: the path itself."""
     import matplotlib   # lazy: matplotlib (~0.3 s) only for figures
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -190,8 +193,9 @@ def plot_report(rep: CalibrationReport, folder, truth=None, names=None, tag: str
         ax.set_xlabel("time (min)")
     axes[0, 0].legend(fontsize=8)
     fig.suptitle("system calibration, first pass from the prior: estimates with +-1 sigma")
+    save = save or (lambda path: path)
     f1 = folder / f"syscal_convergence{tag}.png"
-    fig.savefig(f1, dpi=90)
+    fig.savefig(save(f1), dpi=90)
     plt.close(fig)
     fig, ax = plt.subplots(figsize=(12, 4), constrained_layout=True)
     for s in rep.segments:
@@ -204,6 +208,6 @@ def plot_report(rep: CalibrationReport, folder, truth=None, names=None, tag: str
            title="zero-velocity residual at each update (last pass)")
     ax.legend(fontsize=8)
     f2 = folder / f"syscal_residuals{tag}.png"
-    fig.savefig(f2, dpi=90)
+    fig.savefig(save(f2), dpi=90)
     plt.close(fig)
     return [f1, f2]

@@ -27,7 +27,8 @@ from gfins_fmi.calibration.diagnostics import diagnose, missing_terms
 from gfins_fmi.calibration.grades import (config_for_grade, detect_grade, grade as grade_by_name,
                                          measured_noise)
 from gfins_fmi.calibration.report import CalibrationReport, plot_report
-from gfins_fmi.calibration.segmentation import check_record, record_increments, segment_record
+from gfins_fmi.calibration.segmentation import (check_record, lat_problem, record_increments,
+                                                segment_record)
 from gfins_fmi.calibration.syscal_filter import (N_C_PARAMS, CalibrationInputError, Prior,
                                                  SyscalConfig, SyscalFilter, c_params_to_imu_errors,
                                                  core_gravity_m_s2, param_index, param_names,
@@ -123,7 +124,7 @@ def calibrate(record, lat_rad: float, h_m: float, *, lon_rad: float = 0.0,
               max_rounds: int = 4, check_model: bool = True, rate_threshold_deg_s: float = 0.5,
               min_static_s: float = 5.0, min_align_s: float = 30.0,
               max_angle_per_sample_deg: float = 3.0, heading_rad: float | None = None,
-              progress: bool = False) -> CalibrationReport:
+              progress: bool = False, checks: str = "raise") -> CalibrationReport:
     """System-level calibration of a raw multi-position record (seed 001 S4-S5).
 
     Parameters
@@ -155,6 +156,11 @@ def calibrate(record, lat_rad: float, h_m: float, *, lon_rad: float = 0.0,
     heading_rad : the heading of the IMU's y axis at the start, for gyros that cannot
         see the Earth rate (MEMS): the coarse alignment then levels only.
     progress : a progress bar over the filter passes (tqdm).
+    checks : {"raise", "warn", "off"}
+        A site latitude the Earth rate measured in the static intervals contradicts
+        (more than 5 sigma of the prior's gyro bias and 2 deg away: the record was made
+        elsewhere) raises :class:`CalibrationInputError`, warns or passes (not checked
+        with ``heading_rad``: gyros that cannot see the Earth rate).
 
     Returns
     -------
@@ -169,7 +175,7 @@ def calibrate(record, lat_rad: float, h_m: float, *, lon_rad: float = 0.0,
     """
     lat = float(lat_rad)
     if not (np.isfinite(lat) and abs(lat) < np.radians(89.0)):
-        raise CalibrationInputError(f"lat_rad = {lat_rad!r}: the site's latitude must be within +-89 deg "
+        raise CalibrationInputError(f"lat_rad = {float(lat_rad)!r}: the site's latitude must be within +-89 deg "
                                     "(in radians: np.radians)")
     h = as_scalar("h_m", h_m, "m", at_least=-1000.0, at_most=1e5)
     if not (isinstance(passes, int) and 1 <= passes <= 10):
@@ -197,6 +203,9 @@ def calibrate(record, lat_rad: float, h_m: float, *, lon_rad: float = 0.0,
             config = config_for_grade(gr)
         grade_name = gr.name
     config = dataclasses.replace(config, gravity_anomaly_m_s2=g_site - g_normal)
+    if heading_rad is None:     # the site's latitude against the Earth rate (issue 21)
+        lat_problem(t_end, dt, dth, dv, [s for s in segs if s.kind == "static"], lat,
+                    np.radians(config.prior.gyro_bias_deg_h) / 3600.0, checks)
     mu_c = _prior_mean(config, params0)
     site, rec = (lat, h, lon_rad), (t_end, dt, dth, dv)
     diagnostic = check_model and (config.model == "seed" or not config.estimate_delay)

@@ -20,7 +20,7 @@ import sys
 import numpy as np
 
 from gfins_fmi import io
-from gfins_fmi.cli.files import compensated, write_table
+from gfins_fmi.cli.files import compensated, outputs
 from gfins_fmi.cli.initial import from_initial_option, record_start_s
 from gfins_fmi.cli.noise import imu_noise
 from gfins_fmi.estimation.alignment import coarse_align, coarse_align_inertial
@@ -40,6 +40,15 @@ def _biases(args, noise):
 
 
 def run(args) -> int:
+    with outputs(args.imu, args.speed, args.depth) as outs:
+        if args.output:
+            outs.claim(args.output)
+        status = _run(args, outs)
+        outs.commit()
+        return status
+
+
+def _run(args, outs) -> int:
     deg = math.pi / 180.0
     noise = imu_noise(args.grade)
     imu = io.ImuRecord.from_csv(args.imu)
@@ -90,7 +99,7 @@ def run(args) -> int:
         cols = [al.passes["t_s"], al.passes["direction"].astype(float), e[:, 0], e[:, 1], e[:, 2],
                 *(al.passes["std9"][:, 6 + i] / deg for i in range(3)),
                 al.passes["n_updates"].astype(float), al.passes["n_rejected"].astype(float)]
-        write_table(args.output, ALIGNMENT_PASS_COLUMNS, cols)
+        outs.write_table(args.output, ALIGNMENT_PASS_COLUMNS, cols)
         print(f"{len(al.passes)} passes -> {args.output}")
     if not al.converged:
         print("gfins align: warning: the alignment has not converged (see the note above); exit status 1",

@@ -16,7 +16,7 @@ from gfins_fmi.calibration.segmentation import record_increments, segment_record
 from gfins_fmi.calibration.syscal_filter import (Prior, SyscalConfig, core_gravity_m_s2,
                                                  imu_errors_to_params, param_names, params_to_c)
 from gfins_fmi.calibration.system import calibrate, plot_report, random_params, simulate_record
-from gfins_fmi.cli.files import read_imu
+from gfins_fmi.cli.files import outputs, read_imu
 from gfins_fmi.cli.parser import RAW_FORMATS
 from gfins_fmi.io import read_raw_imu
 from gfins_fmi.nav.imu_errors import ImuNoise
@@ -27,7 +27,16 @@ __all__ = ["run"]
 
 def _simulate(args) -> None:
     """The record of --simulate: seed errors drawn as before issue 22 (the same records for
-    the same options), or a laboratory tool's (lever arms across the axes, the delay)."""
+    the same options), or a laboratory tool's (lever arms across the axes, the delay);
+    the record and its truth written as one output set."""
+    with outputs() as outs:
+        truth = outs.claim(args.imu.with_name(args.imu.name + ".truth.json"))
+        outs.claim(args.imu)
+        _simulate_into(args, outs, truth)
+        outs.commit()
+
+
+def _simulate_into(args, outs, truth) -> None:
     sched = rot.seed001_path(2) if args.simulate == "seed001" else rot.turntable_path_19()
     rng = np.random.default_rng(args.sim_seed)
     noise = ImuNoise(gyro_arw_deg_sqrt_h=0.002 if args.arw is None else args.arw,
@@ -45,9 +54,8 @@ def _simulate(args) -> None:
                      "compensation_form": cf.to_dict()}
     rec, _ = simulate_record(sched, p, np.radians(args.lat), args.height, noise=noise,
                              seed=args.sim_seed + 1)
-    rec.to_csv(args.imu)
-    truth = args.imu.with_name(args.imu.name + ".truth.json")
-    truth.write_text(json.dumps(truth_doc, indent=1), encoding="utf-8")
+    rec.to_csv(outs.file(args.imu))
+    outs.write_text(truth, json.dumps(truth_doc, indent=1))
     print(f"simulated {args.simulate}: {len(rec)} samples written to {args.imu} (truth: {truth})")
 
 
@@ -102,6 +110,18 @@ def _prior_mean(args, config: SyscalConfig):
 def run(args) -> int:
     if args.simulate:
         _simulate(args)
+    with outputs(args.imu, args.prior_mean) as outs:
+        for path in (args.report, args.json, args.compensation):
+            if path:
+                outs.claim(path)
+        if args.plot:
+            outs.claim_folder(args.plot)
+        status = _calibrate(args, outs)
+        outs.commit()
+        return status
+
+
+def _calibrate(args, outs) -> int:
     imu = _read(args)
     config, grade_name, figures = _config(args, imu)
     rep = calibrate(imu, np.radians(args.lat), args.height, lon_rad=np.radians(args.lon),
@@ -134,12 +154,12 @@ def run(args) -> int:
     out = "\n".join(text)
     print(out)
     if args.report:
-        args.report.write_text(out + "\n", encoding="utf-8")
+        outs.write_text(args.report, out + "\n")
     if args.json:
-        args.json.write_text(json.dumps(rep.document(), indent=1), encoding="utf-8")
+        outs.write_text(args.json, json.dumps(rep.document(), indent=1))
     if args.compensation:
-        compensation.write_compensation(rep.compensation(), args.compensation)
+        compensation.write_compensation(rep.compensation(), outs.file(args.compensation))
     if args.plot:
-        for f in plot_report(rep, args.plot):
+        for f in plot_report(rep, args.plot, save=outs.file):
             print(f"figure: {f}")
     return 0

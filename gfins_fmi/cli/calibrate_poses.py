@@ -11,7 +11,7 @@ from gfins_fmi.calibration.poses import calibrate_poses
 from gfins_fmi.calibration.poses_report import (UNITS, parameter_table, plot_pose_calibration, pose_rows,
                                                 turn_rows)
 from gfins_fmi.calibration.still import StillDetector
-from gfins_fmi.cli.files import read_imu, write_table
+from gfins_fmi.cli.files import outputs, read_imu
 from gfins_fmi.estimation.noise_file import imu_errors_text
 from gfins_fmi.io.records import ImuRecord
 from gfins_fmi.io.tables import TableReader
@@ -39,7 +39,26 @@ def _record(args) -> ImuRecord:
     return rec
 
 
+def _tables(args):
+    return [(suffix, args.table.with_name(f"{args.table.name}.{suffix}.csv")) for suffix in ("poses", "turns")]
+
+
 def run(args) -> int:
+    with outputs(args.record) as outs:
+        for path in (args.report, args.output):
+            if path:
+                outs.claim(path)
+        if args.table:
+            for _, path in _tables(args):
+                outs.claim(path)
+        if args.plot:
+            outs.claim_folder(args.plot)
+        status = _run(args, outs)
+        outs.commit()
+        return status
+
+
+def _run(args, outs) -> int:
     imu = _record(args)
     det = StillDetector(initial_s=args.initial_still, window_s=args.still_window, accel_factor=args.still_accel,
                         gyro_factor=args.still_gyro, min_still_s=args.min_still)
@@ -55,7 +74,7 @@ def run(args) -> int:
     out = "\n".join(text)
     print(out)
     if args.report:
-        args.report.write_text(out + "\n", encoding="utf-8")
+        outs.write_text(args.report, out + "\n")
         print(f"report -> {args.report}")
     if args.output:
         std = {}
@@ -65,17 +84,15 @@ def run(args) -> int:
             std[key] = [s * f for n, s in zip(cal.names, cal.std) if n.startswith(pref + "_")]
         header = (f"`gfins calibrate poses` of {args.record.name}: {len(cal.still)} poses; "
                   f"{cal.notes[-2]}\n{cal.notes[-1]}")
-        tmp = args.output.with_name(args.output.name + ".part")
-        tmp.write_text(imu_errors_text(cal.errors, header, std), encoding="utf-8")
-        tmp.replace(args.output)
+        outs.write_text(args.output, imu_errors_text(cal.errors, header, std))
         print(f"IMU errors -> {args.output} (gfins integrate --imu-errors {args.output})")
     if args.table:
-        for suffix, (names, cols) in (("poses", pose_rows(cal)), ("turns", turn_rows(cal))):
-            path = args.table.with_name(f"{args.table.name}.{suffix}.csv")
-            write_table(path, names, cols)
+        rows = {"poses": pose_rows(cal), "turns": turn_rows(cal)}
+        for suffix, path in _tables(args):
+            outs.write_table(path, *rows[suffix])
             print(f"{suffix} residuals -> {path}")
     if args.plot:
-        args.plot.mkdir(parents=True, exist_ok=True)
-        print("figure:", plot_pose_calibration(cal, imu, args.plot / "pose_calibration.png",
-                                               title=args.record.name))
+        figure = args.plot / "pose_calibration.png"
+        plot_pose_calibration(cal, imu, outs.file(figure), title=args.record.name)
+        print("figure:", figure)
     return 0

@@ -16,7 +16,7 @@ import numpy as np
 from gfins_fmi.analysis.allan import AllanAccumulator, averaging_factors
 from gfins_fmi.analysis.noise_id import fit_noise_terms
 from gfins_fmi.analysis.noise_report import identified_toml, imu_noise_of, plot_allan, terms_table
-from gfins_fmi.cli.files import read_imu, write_table
+from gfins_fmi.cli.files import outputs, read_imu
 from gfins_fmi.estimation.noise_file import write_noise_file
 from gfins_fmi.io.tables import TableReader
 from gfins_fmi.nav.imu_errors import ImuNoise
@@ -84,6 +84,18 @@ class _Stream:
 
 
 def run(args) -> int:
+    with outputs(args.record) as outs:
+        for path in (args.output, args.table):
+            if path:
+                outs.claim(path)
+        if args.plot:
+            outs.claim_folder(args.plot)
+        status = _run(args, outs)
+        outs.commit()
+        return status
+
+
+def _run(args, outs) -> int:
     st = _Stream(args)
     acc = None
     for block, kind in st.chunks():
@@ -120,7 +132,7 @@ def run(args) -> int:
                   f"{1 / ad.dt_s:g} Hz ({T / 3600:.3g} h), overlapping Allan deviation, IEEE Std 952 "
                   "terms;\nthe largest axis of each sensor; quantisation and rate ramp are not in the "
                   "filter's model (see [identified])")
-        write_noise_file(args.output, model, header, identified_toml(terms))
+        write_noise_file(outs.file(args.output), model, header, identified_toml(terms))
         print(f"noise block -> {args.output}")
     if args.table:
         lo, hi = ad.confidence()
@@ -129,9 +141,10 @@ def run(args) -> int:
         unit = ["rad_s"] * 3 + ["m_s2"] * 3
         names = (["tau_s", "n_terms"] + [f"adev_{a}_{u}" for a, u in zip(AXES, unit)]
                  + [f"low_{a}_{u}" for a, u in zip(AXES, unit)] + [f"high_{a}_{u}" for a, u in zip(AXES, unit)])
-        write_table(args.table, names, cols, [np.float64, np.int64] + [np.float64] * 18)
+        outs.write_table(args.table, names, cols, [np.float64, np.int64] + [np.float64] * 18)
         print(f"Allan deviation with its 68% interval -> {args.table}")
     if args.plot:
-        args.plot.mkdir(parents=True, exist_ok=True)
-        print("figure:", plot_allan(ad, terms, args.plot / "allan.png", title=args.record.name))
+        figure = args.plot / "allan.png"
+        plot_allan(ad, terms, outs.file(figure), title=args.record.name)
+        print("figure:", figure)
     return 0

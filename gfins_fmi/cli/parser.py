@@ -74,6 +74,27 @@ def _check_demo(args) -> str | None:
 def _check_cosim(args) -> str | None:
     if args.seconds < args.step:
         return f"--seconds {args.seconds:g} s is shorter than one --step ({args.step:g} s)"
+    # the FMUs refuse a step past their stop time (to 1e-9 relative, the glue's tolerance on
+    # communication points): before, a step that does not divide the run failed at its
+    # last step, deep inside the run
+    n = args.seconds / args.step
+    k = round(n)
+    if abs(k * args.step - args.seconds) > 1e-9 * max(1.0, args.seconds):
+        lo, hi = int(n), int(n) + 1
+        return (f"--seconds {args.seconds:.10g} s is not a whole number of --step {args.step:.10g} s "
+                f"({n:.6g} steps): give a step that divides it, or --seconds {lo * args.step:.10g} or "
+                f"{hi * args.step:.10g} ({lo} or {hi} steps)")
+    return None
+
+
+def _check_integrate(args) -> str | None:
+    if args.outages is not None:
+        dur, per, first = args.outages
+        if not (dur > 0 and per >= dur and first >= 0):
+            return (f"--outages {dur:g},{per:g},{first:g}: DURATION must be > 0 s, PERIOD >= "
+                    "DURATION and FIRST >= 0 s")
+    if args.noise and args.noise_file:
+        return "give the IMU noise once: --noise or --noise-file"
     return None
 
 
@@ -134,8 +155,9 @@ def state_arguments(p) -> None:
     p.add_argument("--lat0", type=real("deg", above=-90.0, below=90.0), required=True,
                    help="initial latitude, deg")
     p.add_argument("--lon0", type=real("deg"), required=True, help="initial longitude, deg")
-    p.add_argument("--h0", type=real("m", above=-0.5 * WGS84.a), default=0.0,
-                   help="initial height, m (also the held height)")
+    p.add_argument("--h0", type=real("m", above=-0.5 * WGS84.a, below=WGS84.a / 3.0), default=0.0,
+                   help="initial height above the ellipsoid, m, in (-a/2, a/3) (also the held "
+                        "height)")
     p.add_argument("--heading0", type=real("deg"), default=0.0,
                    help="initial heading, deg clockwise from north")
     p.add_argument("--pitch0", type=real("deg"), default=0.0, help="initial pitch, deg")
@@ -209,12 +231,6 @@ def _integrate(sub) -> argparse.ArgumentParser:
     p.add_argument("--progress", action="store_true", help="progress bar")
     _command(p, "integrate", check=_check_integrate)
     return p
-
-
-def _check_integrate(args) -> str | None:
-    if args.noise and args.noise_file:
-        return "give the IMU noise once: --noise or --noise-file"
-    return None
 
 
 def _noise(sub) -> argparse.ArgumentParser:
@@ -469,8 +485,8 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict]:
     p.add_argument("--lever-arm", type=lever_arm, required=True, help="lever arm l, m")
     p.add_argument("--strategy", choices=["integrate", "sqrt", "eigen", "fused"],
                    default="integrate", help="angular-rate strategy (default integrate)")
-    p.add_argument("--accel-noise", type=real("m/s^2", above=0.0), default=1e-4,
-                   help="accelerometer white-noise std, m/s^2 (fused strategy)")
+    p.add_argument("--accel-noise", type=real("m/s^2", above=0.0, at_most=1000.0), default=1e-4,
+                   help="accelerometer white-noise std, m/s^2, at most 1000 (fused strategy)")
     p.add_argument("--omega-init", type=vector(3, "x,y,z in rad/s"), default=[0.0, 0.0, 0.0],
                    help="rate at the first sample, rad/s, x,y,z (write --omega-init=-1,0,0 "
                         "when it starts with -)")

@@ -16,7 +16,7 @@ from gfins_fmi.calibration.segmentation import record_increments, segment_record
 from gfins_fmi.calibration.syscal_filter import (Prior, SyscalConfig, core_gravity_m_s2,
                                                  imu_errors_to_params, param_names, params_to_c)
 from gfins_fmi.calibration.system import calibrate, plot_report, random_params, simulate_record
-from gfins_fmi.cli.files import outputs, read_imu
+from gfins_fmi.cli.files import read_imu, run_writing
 from gfins_fmi.cli.parser import RAW_FORMATS
 from gfins_fmi.io import read_raw_imu
 from gfins_fmi.nav.imu_errors import ImuNoise
@@ -29,11 +29,8 @@ def _simulate(args) -> None:
     """The record of --simulate: seed errors drawn as before issue 22 (the same records for
     the same options), or a laboratory tool's (lever arms across the axes, the delay);
     the record and its truth written as one output set."""
-    with outputs() as outs:
-        truth = outs.claim(args.imu.with_name(args.imu.name + ".truth.json"))
-        outs.claim(args.imu)
-        _simulate_into(args, outs, truth)
-        outs.commit()
+    truth = args.imu.with_name(args.imu.name + ".truth.json")
+    run_writing(lambda a, outs: _simulate_into(a, outs, truth), args, files=(truth, args.imu))
 
 
 def _simulate_into(args, outs, truth) -> None:
@@ -110,15 +107,8 @@ def _prior_mean(args, config: SyscalConfig):
 def run(args) -> int:
     if args.simulate:
         _simulate(args)
-    with outputs(args.imu, args.prior_mean) as outs:
-        for path in (args.report, args.json, args.compensation):
-            if path:
-                outs.claim(path)
-        if args.plot:
-            outs.claim_folder(args.plot)
-        status = _calibrate(args, outs)
-        outs.commit()
-        return status
+    return run_writing(_calibrate, args, inputs=(args.imu, args.prior_mean),
+                       files=(args.report, args.json, args.compensation), folder=args.plot)
 
 
 def _calibrate(args, outs) -> int:

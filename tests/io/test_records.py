@@ -189,6 +189,8 @@ def test_to_rates_first_interval():
         ImuRecord([1.0], np.ones((1, 3)), np.ones((1, 3)), "increments").to_rates()
     with pytest.raises(RecordError, match="at least two rate samples"):
         ImuRecord([1.0], np.ones((1, 3)), np.ones((1, 3)), "rates").to_increments()
+    one = ImuRecord([1.0, 1.5], np.ones((2, 3)), 4 * np.ones((2, 3)), "rates").to_increments()
+    np.testing.assert_array_equal(one.accel, [[2.0, 2.0, 2.0]])     # two samples: one interval
     # two samples are enough for the default first interval; a given one must be > 0, finite
     two = ImuRecord([1.0, 1.5], np.ones((2, 3)), 3 * np.ones((2, 3)), "increments")
     np.testing.assert_array_equal(two.to_rates().accel[:, 2], [6.0, 6.0])

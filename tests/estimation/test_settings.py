@@ -250,3 +250,23 @@ def test_a_one_number_block_refuses_several():
         for value in ([1.0], [1.0, 2.0]):
             with pytest.raises(ValueError, match=rf"InitialState.{name} must be one number"):
                 InitialState(nav, **{name: value}).std_blocks(cfg)
+
+
+def test_initial_std_limits_and_the_bias_hint():
+    """InitialState's largest 1-sigma per block is allowed, above it refused naming the
+    limit (issue 21); a bias std that defaults to an IMU model's bias instability of 0
+    is refused with the hint to give it, an explicit 0 without it."""
+    from gfins_fmi.nav.imu_errors import ImuNoise
+    nav = NavState(np.array([1.0, 0, 0, 0]), np.zeros(3), 0.61, 1.9, 320.0, 0.0)
+    cfg = FilterConfig()
+    assert InitialState(nav, position_std_m=1e7).std_blocks(cfg)["position_std_m"] == [1e7] * 3
+    assert InitialState(nav, attitude_std_rad=math.pi).std_blocks(cfg)["attitude_std_rad"] == [math.pi] * 3
+    with pytest.raises(ValueError, match=r"InitialState.position_std_m = .* is above 1e\+07 m"):
+        InitialState(nav, position_std_m=(1.0, 2e7, 1.0)).std_blocks(cfg)
+    bare = FilterConfig(imu=ImuNoise(gyro_arw_deg_sqrt_h=0.1, accel_vrw_ug_sqrt_hz=50.0))
+    with pytest.raises(ValueError, match=r"InitialState.gyro_bias_std_rad_s = .*: every element "
+                                         r"must be finite and > 0 \(it defaults to the IMU model"):
+        InitialState(nav, accel_bias_std_m_s2=1e-3).covariance(bare)
+    with pytest.raises(ValueError, match=r"InitialState.gyro_bias_std_rad_s = \[0.0, 0.0, 0.0\]: every element "
+                                         r"must be finite and > 0$"):
+        InitialState(nav, gyro_bias_std_rad_s=0.0, accel_bias_std_m_s2=1e-3).covariance(bare)

@@ -79,3 +79,16 @@ def test_a_one_row_kind_with_std_zero_or_below_is_refused(which, value):
     args[which] = bad
     with pytest.raises(ValueError, match=r"at t = 2.0 s has a standard deviation <= 0"):
         gather_measurements(None, args["baro"], args["odometer"], False, speed=args["speed"])
+
+
+def test_the_first_bad_std_is_named_and_the_largest_std_taken():
+    """Of several epochs with a std <= 0 the first is named; a std of exactly MAX_STD
+    (1e100) is taken, one above it refused (its square would near the double's range)."""
+    from gfins_fmi.estimation.measurements import MAX_STD
+    g = gnss(pos_std_m=np.array([[1.0, 0.0, 3.0], [1.0, 2.0, -1.0]]))
+    with pytest.raises(ValueError, match=r"gnss_pos at t = 1.0 s has a standard deviation <= 0"):
+        gather_measurements(g, None, None, False)
+    ok = gather_measurements(gnss(pos_std_m=np.array([[1.0, 2.0, MAX_STD]] * 2)), None, None, False)
+    assert ok["std"][0, 2] == 1e100
+    with pytest.raises(ValueError, match="gnss_pos"):
+        gather_measurements(gnss(pos_std_m=np.array([[1.0, 2.0, 1e101]] * 2)), None, None, False)

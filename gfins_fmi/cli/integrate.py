@@ -26,19 +26,22 @@ import numpy as np
 
 from gfins_fmi import io
 from gfins_fmi._version import __version__
+from gfins_fmi.cli import Failed
 from gfins_fmi.cli.files import cause, compensated, outputs, read_gnss, read_imu, read_optional, read_truth
 from gfins_fmi.cli.initial import from_initial_option, record_start_s
+from gfins_fmi.cli.parser import INITIAL_STD_DEFAULTS
 from gfins_fmi.cli.noise import imu_noise
 from gfins_fmi.estimation.noise_file import read_imu_errors
 from gfins_fmi.estimation.alignment import align_static_then_gnss
 from gfins_fmi.estimation.config import (MEAS_TYPES, SENSOR_NAMES, UPDATE_STATUS, FilterConfig,
                                          FilterError, InitialState)
-from gfins_fmi.estimation.evaluation import navigation_errors, outage_drift, outage_windows, plot_errors
+from gfins_fmi.estimation.evaluation import (NavErrors, gnss_outage_drift, gnss_residuals, kfgins_outage_windows,
+                                             navigation_errors, outage_drift, plot_errors, reference_at,
+                                             without_outages)
 from gfins_fmi.estimation.measurement_checks import unusable_measurements
 from gfins_fmi.estimation.navigator import IntegratedNavigator
 from gfins_fmi.io.columns import INNOVATION_COLUMNS, integrated_columns
-from gfins_fmi.nav.earth import deg
-from gfins_fmi.nav.strapdown import quat_to_euler
+from gfins_fmi.nav.strapdown import NavState, quat_to_euler
 
 __all__ = ["run"]
 
@@ -100,13 +103,57 @@ def _outage_windows(args, gnss, rec):
     """The simulated outages of --outages, refused when none falls inside the record."""
     dur, per, first = args.outages
     t0, t1 = float(gnss.t_s[0]), float(min(gnss.t_s[-1], rec.t_s[-1]))
-    windows = outage_windows(t0, t1, dur, per, first)
+    windows = kfgins_outage_windows(t0, t1, dur, per, first)
+    # an outage with no fix strictly inside removes nothing and scores nothing
+    tg = np.asarray(gnss.t_s)
+    windows = windows[[bool(np.any((tg > a) & (tg < b))) for a, b in windows]] if len(windows) else windows
     if len(windows) == 0:
-        raise ValueError(f"--outages {dur:g},{per:g},{first:g}: no outage of {dur:g} s starting "
-                         f"{first:g} s after the first GNSS epoch ends inside the aided span "
-                         f"({t0:.10g} to {t1:.10g} s, {t1 - t0:.6g} s long): give a DURATION and a FIRST "
-                         f"whose sum is below {t1 - t0:.6g} s")
+        raise ValueError(f"--outages {dur:g},{per:g},{first:g}: no outage starting {first:g} s after "
+                         f"the first GNSS epoch removes a fix inside the aided span ({t0:.10g} to "
+                         f"{t1:.10g} s, {t1 - t0:.6g} s long): give a FIRST below {t1 - t0:.6g} s")
     return windows
+
+
+def _initial_from_options(args, imu, truth, cfg) -> InitialState:
+    """The initial state of --initial (LAT,LON,H,HEADING,PITCH,ROLL, or 'truth') with
+    --initial-velocity and the 1-sigma options (defaults: INITIAL_STD_DEFAULTS), printed."""
+    t0 = record_start_s(imu)
+    if args.initial == "truth":
+        ref = reference_at(truth, np.array([t0]))
+        if not ref["inside"][0] or ref["v"] is None or ref["q"] is None:
+            raise ValueError(f"--initial truth: the truth file {args.truth} does not cover the record's start "
+                             f"{t0:.10g} s with a position, velocity and attitude: give --initial "
+                             "LAT,LON,H,HEADING,PITCH,ROLL")
+        nav0 = NavState(ref["q"][0], ref["v"][0], float(ref["lat"][0]), float(ref["lon"][0]),
+                        float(ref["h"][0]), t0)
+        how = f"from the truth {args.truth} at {t0:.10g} s"
+    else:
+        nav0 = from_initial_option(args.initial, t0, args.initial_velocity or (0.0, 0.0, 0.0))
+        how = "from --initial" + (" and --initial-velocity" if args.initial_velocity else " (at rest)")
+    std = {k: getattr(args, k) or v for k, v in INITIAL_STD_DEFAULTS.items()}
+    init = InitialState(nav0, position_std_m=tuple(std["position_std"]),
+                        velocity_std_m_s=tuple(std["velocity_std"]),
+                        attitude_std_rad=tuple(np.radians(std["attitude_std"])), **_bias_stds(args))
+    e = np.degrees(quat_to_euler(nav0.q_bn))
+    print(f"initial state {how}: lat {np.degrees(nav0.lat_rad):.9f} deg, lon {np.degrees(nav0.lon_rad):.9f} deg, "
+          f"h {nav0.h_m:.3f} m, v ENU {', '.join(f'{x:.3f}' for x in nav0.v_n_m_s)} m/s, heading/pitch/roll "
+          f"{e[0]:.4f}, {e[1]:.4f}, {e[2]:.4f} deg; 1-sigma position {_csv(std['position_std'])} m, velocity "
+          f"{_csv(std['velocity_std'])} m/s, attitude (tilt E, tilt N, heading) {_csv(std['attitude_std'])} deg")
+    return init
+
+
+def _csv(v) -> str:
+    return ",".join(f"{x:g}" for x in v)
+
+
+def _bias_stds(args) -> dict:
+    """--gyro-bias-std (deg/h), --accel-bias-std (mGal) as InitialState's (SI)."""
+    out = {}
+    if args.gyro_bias_std is not None:
+        out["gyro_bias_std_rad_s"] = tuple(np.radians(np.asarray(args.gyro_bias_std) / 3600.0))
+    if args.accel_bias_std is not None:
+        out["accel_bias_std_m_s2"] = tuple(np.asarray(args.accel_bias_std) * 1e-5)
+    return out
 
 
 def run(args) -> int:
@@ -150,9 +197,7 @@ def _run(args, outs, inn_path, sm_path, figures) -> int:
                        gnss_lever_arm_m=tuple(args.lever_arm), zupt=args.zupt, nhc=args.nhc,
                        odometer_mount=args.odometer_mount, subsamples=args.subsamples)
     if args.initial:
-        nav0 = from_initial_option(args.initial, record_start_s(imu))
-        init = InitialState(nav0, position_std_m=5.0, velocity_std_m_s=0.5,
-                            attitude_std_rad=(2 * deg, 2 * deg, 10 * deg))
+        init = _initial_from_options(args, imu, truth, cfg)
         rec = imu
     else:
         static = args.static or 5.0
@@ -162,7 +207,8 @@ def _run(args, outs, inn_path, sm_path, figures) -> int:
         for note in sp.notes:
             print("alignment:", note)
         init = InitialState(sp.nav, position_std_m=(0.5, 0.5, 1.0), velocity_std_m_s=0.05,
-                            attitude_std_rad=np.maximum(sp.attitude_std_rad, 1e-3), sensors=sp.sensors)
+                            attitude_std_rad=np.maximum(sp.attitude_std_rad, 1e-3), sensors=sp.sensors,
+                            **_bias_stds(args))
         sel = imu.t_s > sp.nav.t_s
         rec = io.ImuRecord(t_s=imu.t_s[sel], gyro=imu.gyro[sel], accel=imu.accel[sel], kind=imu.kind,
                            source=imu.source)
@@ -170,8 +216,9 @@ def _run(args, outs, inn_path, sm_path, figures) -> int:
     g_used = gnss
     if args.outages:
         windows = _outage_windows(args, gnss, rec)
-        g_used = gnss.with_outages([tuple(w) for w in windows])
-        print(f"{len(windows)} simulated GNSS outages of {args.outages[0]:g} s")
+        g_used = without_outages(gnss, windows)
+        print(f"{len(windows)} simulated GNSS outages of {args.outages[0]:g} s (KF-GINS's protocol: the "
+              f"{len(gnss) - len(g_used)} fixes strictly inside them removed)")
     nav = IntegratedNavigator(cfg, init)
     outs.write_text(args.output.with_suffix(".config.json"), _effective_config(args, cfg, init, windows))
     try:
@@ -194,22 +241,60 @@ def _run(args, outs, inn_path, sm_path, figures) -> int:
     print(f"updates: {counts} -> {inn_path}")
     sm = None
     if args.smooth:
-        sm = sol.smooth(progress=args.progress)
-        _write(outs, sm_path, sm, " (smoothed)")
-    ref = truth if truth is not None else gnss
-    what = "truth" if truth is not None else "GNSS (all epochs)"
+        try:
+            sm = sol.smooth(progress=args.progress)
+            _write(outs, sm_path, sm, " (smoothed)")
+        except (ValueError, FilterError, OSError) as exc:
+            _failed_after_solution(outs, "the smoother", exc)
+    try:
+        _summary(args, outs, figures, sol, sm, gnss, truth, windows, cfg)
+    except (ValueError, TypeError, OSError, ImportError) as exc:
+        _failed_after_solution(outs, "the summary", exc)
+    outs.commit()
+    return 0
+
+
+def _failed_after_solution(outs, what: str, exc: Exception):
+    """A failure once the solution is written: the solution kept (the set committed
+    without the rest), exit status 1, the message says so."""
+    outs.commit()
+    raise Failed(f"{what}: {exc}; the solution was kept ({outs.outcome()})") from exc
+
+
+def _summary(args, outs, figures, sol, sm, gnss, truth, windows, cfg) -> None:
+    """Errors against --truth, or the residuals to GNSS at the antenna (lever arm
+    applied) at the fixes the filter used; the outage protocol's drift; the figures."""
+    arm = cfg.gnss_lever_arm_m
+    used = gnss if windows is None else without_outages(gnss, windows)
     for name, s in (("filter", sol), ("smoother", sm)):
         if s is None or len(s) == 0:
             continue
-        e = navigation_errors(s, ref)
-        print(f"{name}: horizontal difference to {what}: RMS {e.rms()['horizontal_m']:.3f} m")
+        if truth is not None:
+            e = navigation_errors(s, truth)
+            r = e.rms()
+            att = "" if r["heading_rad"] is None else f", heading RMS {np.degrees(r['heading_rad']):.4f} deg"
+            print(f"{name}: error to the truth: horizontal RMS {r['horizontal_m']:.3f} m, vertical RMS "
+                  f"{r['pos_enu_m'][2]:.3f} m{att}")
+        else:
+            res = gnss_residuals(s, used, arm)
+            r = res.rms()
+            print(f"{name}: residuals to the GNSS fixes used ({len(res.t_s)}, at the antenna: lever arm "
+                  f"{_csv(arm)} m): horizontal RMS {r['horizontal_m']:.3f} m, vertical RMS {r['up_m']:.3f} m "
+                  "(residuals, not errors: the fixes carry their own noise)")
         if windows is not None:
-            d = outage_drift(s, ref, windows)
-            print(f"{name}: outage protocol: RMS of the maximum drift per outage "
-                  f"{np.sqrt(np.mean(d['max_m'] ** 2)):.3f} m (max {d['max_m'].max():.3f} m)")
+            if truth is not None:
+                drift, against = outage_drift(s, truth, windows)["max_m"], "the truth"
+            else:
+                drift, against = gnss_outage_drift(s, gnss, windows, arm), "the removed fixes at the antenna"
+            ok = drift[np.isfinite(drift)]
+            print(f"{name}: outage protocol ({len(windows)} outages, against {against}): RMS of the maximum "
+                  f"horizontal drift per outage {np.sqrt(np.mean(ok ** 2)):.3f} m (max {ok.max():.3f} m)")
         if args.plot:
-            plot_errors(e, outs.file(figures[name]), std=s.std if truth is not None else None,
-                        title=f"{name} vs {what}", windows=windows)
+            if truth is not None:
+                plot_errors(navigation_errors(s, truth), outs.file(figures[name]), std=s.std,
+                            title=f"{name} vs truth", windows=windows)
+            else:
+                res = gnss_residuals(s, gnss, arm)
+                plot_errors(NavErrors(res.t_s, res.enu_m, None, None, None), outs.file(figures[name]), std=None,
+                            title=f"{name}: residuals to GNSS at the antenna (at the fixes)", windows=windows)
             print("figure:", figures[name])
-    outs.commit()
-    return 0

@@ -10,7 +10,7 @@ from __future__ import annotations
 import argparse
 import pathlib
 
-from gfins_fmi.cli.options import GRADES, count, prior_setting, real, vector
+from gfins_fmi.cli.options import GRADES, count, noise_values, prior_setting, real, vector
 from gfins_fmi.gyrofree.array import MIN_LEVER_ARM_M
 from gfins_fmi.nav.earth import WGS84
 
@@ -83,6 +83,16 @@ def _check_integrate(args) -> str | None:
                     "DURATION and FIRST >= 0 s")
     if args.noise and args.noise_file:
         return "give the IMU noise once: --noise or --noise-file"
+    if args.initial == "truth" and args.truth is None:
+        return "--initial truth takes the initial state from the --truth file: give --truth"
+    started = [o for o, v in (("--initial-velocity", args.initial_velocity), ("--position-std", args.position_std),
+                              ("--velocity-std", args.velocity_std), ("--attitude-std", args.attitude_std))
+               if v is not None]
+    if started and args.initial is None:
+        return (f"{', '.join(started)} describe the initial state of --initial; without --initial the "
+                "static alignment (--static) gives the state and its 1-sigma")
+    if args.initial == "truth" and args.initial_velocity is not None:
+        return "--initial truth takes the velocity from the truth too: leave out --initial-velocity"
     return None
 
 
@@ -151,7 +161,7 @@ def state_arguments(p) -> None:
     p.add_argument("--pitch0", type=real("deg"), default=0.0, help="initial pitch, deg")
     p.add_argument("--roll0", type=real("deg"), default=0.0, help="initial roll, deg")
     p.add_argument("--v0", type=vector(3, "E,N,U in m/s"), default=[0.0, 0.0, 0.0],
-                   help="initial velocity E,N,U in m/s (write --v0=-1,2,0 when it starts with -)")
+                   help="initial velocity E,N,U in m/s (e.g. --v0 -1,2,0)")
     p.add_argument("--vertical", choices=["free", "hold", "baro"], default="free",
                    help="vertical channel (baro needs the external height as the last column)")
     p.add_argument("--baro-tau", type=real("s", above=0.0), default=10.0,
@@ -160,6 +170,27 @@ def state_arguments(p) -> None:
 
 #: ``--initial`` of integrate and align motion: LAT,LON,H,HEADING,PITCH,ROLL
 _INITIAL = vector(6, "LAT,LON,H,HEADING,PITCH,ROLL in deg, deg, m, deg, deg, deg")
+
+#: integrate's initial 1-sigma when --initial gives the state (FilterConfig's InitialState
+#: blocks: position E,N,U m; velocity E,N,U m/s; attitude tilt E, tilt N, heading deg)
+INITIAL_STD_DEFAULTS = {"position_std": (5.0, 5.0, 5.0), "velocity_std": (0.5, 0.5, 0.5),
+                        "attitude_std": (2.0, 2.0, 10.0)}
+
+
+def _initial_or_truth(text: str):
+    """``--initial LAT,LON,H,HEADING,PITCH,ROLL`` or ``--initial truth``."""
+    return "truth" if text.strip().lower() == "truth" else _INITIAL(text)
+
+
+def _nonneg3(what: str):
+    parse = vector(3, what)
+
+    def check(text: str):
+        v = parse(text)
+        if not all(x > 0 for x in v):
+            raise argparse.ArgumentTypeError(f"each of {what} must be > 0; got {text!r}")
+        return v
+    return check
 
 
 def _integrate(sub) -> argparse.ArgumentParser:
@@ -184,10 +215,14 @@ def _integrate(sub) -> argparse.ArgumentParser:
     p.add_argument("--truth", type=pathlib.Path, help="reference: KF-GINS .nav or TruthRecord CSV")
     p.add_argument("--grade", choices=GRADES, default="tactical",
                    help="IMU noise model (gfins_fmi.sim.scenarios); overridden by --noise")
-    p.add_argument("--noise", type=vector(5, "ARW deg/sqrt(h), VRW ug/sqrt(Hz), GB deg/h, AB ug, TAU s"),
+    p.add_argument("--noise", type=noise_values,
                    default=None, metavar="ARW,VRW,GB,AB,TAU",
-                   help="IMU noise: ARW deg/sqrt(h), accelerometer noise ug/sqrt(Hz), gyro bias "
-                        "instability deg/h, accelerometer bias instability ug, correlation time s")
+                   help="IMU noise, each value with an optional unit: ARW (deg/sqrt(h); or deg/h/sqrt(Hz)), "
+                        "VRW (a bare number is the ONE-sided density in ug/sqrt(Hz), = sqrt(2) x the "
+                        "Allan VRW; write the datasheet's as e.g. 0.03m/s/sqrt(h), = 72.1 ug/sqrt(Hz)), "
+                        "GB gyro bias instability (deg/h), AB accelerometer bias instability (ug; or "
+                        "mg, mGal, m/s^2), TAU their correlation time (s; or h). Example: "
+                        "--noise 0.003,0.03m/s/sqrt(h),0.027,15mGal,1h")
     p.add_argument("--noise-file", type=pathlib.Path, default=None, metavar="FILE.toml",
                    help="IMU noise from a noise block (TOML; `gfins noise RECORD --output FILE.toml` "
                         "writes one; units in its keys); overrides --grade, excludes --noise")
@@ -205,18 +240,40 @@ def _integrate(sub) -> argparse.ArgumentParser:
     p.add_argument("--static", type=real("s", above=0.0), default=None, metavar="SECONDS",
                    help="the record starts at rest for SECONDS: level (and gyrocompass if the gyros "
                         "allow; otherwise heading from GNSS velocity); default when no --initial")
-    p.add_argument("--initial", type=_INITIAL, default=None, metavar="LAT,LON,H,HEADING,PITCH,ROLL",
-                   help="initial state (deg, deg, m, deg, deg, deg) at the first IMU time, at rest")
+    p.add_argument("--initial", type=_initial_or_truth, default=None, metavar="LAT,LON,H,HEADING,PITCH,ROLL|truth",
+                   help="initial state at the record's start (deg, deg, m, deg, deg, deg; at rest unless "
+                        "--initial-velocity), or 'truth': the --truth file's state at that time")
+    p.add_argument("--initial-velocity", type=vector(3, "E,N,U in m/s"), default=None, metavar="E,N,U",
+                   help="with --initial: the initial velocity east, north, up, m/s (a record that starts "
+                        "moving; default 0,0,0)")
+    p.add_argument("--position-std", type=_nonneg3("E,N,U in m"), default=None, metavar="E,N,U",
+                   help="with --initial: initial position 1-sigma east, north, up, m (default 5,5,5)")
+    p.add_argument("--velocity-std", type=_nonneg3("E,N,U in m/s"), default=None, metavar="E,N,U",
+                   help="with --initial: initial velocity 1-sigma east, north, up, m/s (default 0.5,0.5,0.5)")
+    p.add_argument("--attitude-std", type=_nonneg3("TILT_E,TILT_N,HEADING in deg"), default=None,
+                   metavar="TILT_E,TILT_N,HEADING",
+                   help="with --initial: initial attitude 1-sigma, deg: the tilts about east and north "
+                        "(roll/pitch for a level vehicle heading north) and the heading (default 2,2,10)")
+    p.add_argument("--gyro-bias-std", type=_nonneg3("X,Y,Z in deg/h"), default=None, metavar="X,Y,Z",
+                   help="initial gyro bias 1-sigma, deg/h (default: the noise model's bias instability)")
+    p.add_argument("--accel-bias-std", type=_nonneg3("X,Y,Z in mGal"), default=None, metavar="X,Y,Z",
+                   help="initial accelerometer bias 1-sigma, mGal (1e-5 m/s^2; default: the noise "
+                        "model's bias instability)")
     p.add_argument("--lever-arm", type=vector(3, "X,Y,Z in m"), default=(0.0, 0.0, 0.0),
-                   metavar="X,Y,Z", help="IMU -> GNSS antenna, body right, front, up, m")
+                   metavar="X,Y,Z", help="IMU -> GNSS antenna, body right, front, up, m (negative values as "
+                   "typed: --lever-arm -0.3,0.1,1.2)")
     p.add_argument("--outages", type=vector(3, "DURATION,PERIOD,FIRST in s"), default=None,
                    metavar="DURATION,PERIOD,FIRST",
                    help="simulate GNSS outages of DURATION s every PERIOD s from FIRST s after the "
-                        "first epoch, and score the drift (needs --truth or scores against GNSS)")
+                        "first epoch, KF-GINS's and pyins's protocol: the fixes with t0 < t < t0 + "
+                        "DURATION removed, every outage that starts inside the record scored by the "
+                        "maximum horizontal error inside it (against --truth; without it, against the "
+                        "removed fixes at the antenna)")
     p.add_argument("--zupt", action="store_true", help="zero-velocity updates at detected standstill")
     p.add_argument("--nhc", action="store_true", help="non-holonomic constraints (ground vehicles)")
     p.add_argument("--plot", type=pathlib.Path, default=None, help="folder for figures")
-    p.add_argument("--progress", action="store_true", help="progress bar")
+    p.add_argument("--progress", action="store_true", help="progress bar over reading, filtering, "
+                   "smoothing and writing")
     _command(p, "integrate", check=_check_integrate)
     return p
 
@@ -432,8 +489,7 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict]:
     p.add_argument("--accel-noise", type=real("m/s^2", above=0.0, at_most=1000.0), default=1e-4,
                    help="accelerometer white-noise std, m/s^2, at most 1000 (fused strategy)")
     p.add_argument("--omega-init", type=vector(3, "x,y,z in rad/s"), default=[0.0, 0.0, 0.0],
-                   help="rate at the first sample, rad/s, x,y,z (write --omega-init=-1,0,0 "
-                        "when it starts with -)")
+                   help="rate at the first sample, rad/s, x,y,z (e.g. --omega-init -1,0,0)")
     state_arguments(p)
     _command(p, "gfnav")
 

@@ -101,9 +101,12 @@ def _check_align(args) -> str | None:
         return "static alignment needs --position LAT,LON,H"
     if args.mode == "motion" and (args.speed is None or args.initial is None):
         return "motion alignment needs a SPEED record and --initial LAT,LON,H,HEADING,PITCH,ROLL"
-    if args.disturbed and (args.mode != "static" or args.fine):
-        return ("--disturbed is a static coarse alignment; the fine alignment's zero-velocity "
-                "updates assume a base at rest (leave out --fine)")
+    if args.disturbed and args.mode != "static":
+        return "--disturbed is a static coarse alignment (on a swaying base)"
+    if args.fine_end is not None and not args.fine:
+        return "--fine-end is the end of the fine alignment: give --fine"
+    if args.heading is not None and args.mode != "static":
+        return "--heading is for the static alignment (motion: --initial holds the heading)"
     if args.position is not None and not abs(args.position[0]) < 90:
         return f"--position: latitude must be in (-90, 90) deg; got {args.position[0]}"
     if args.initial is not None and not abs(args.initial[0]) < 90:
@@ -397,7 +400,13 @@ def _align(sub) -> argparse.ArgumentParser:
                    metavar="LAT,LON,H", help="static: position (deg, deg, m)")
     p.add_argument("--window", type=vector(2, "T0,T1 in s"), default=None, metavar="T0,T1",
                    help="static: the window at rest for the coarse alignment, s (default: the first 60 s)")
-    p.add_argument("--fine", action="store_true", help="static: fine alignment over the record after it")
+    p.add_argument("--fine", action="store_true", help="static: fine alignment (zero-velocity updates) from "
+                   "the window's end to --fine-end; after --disturbed with a 0.1 m/s velocity 1-sigma")
+    p.add_argument("--fine-end", type=real("s"), default=None, metavar="T1",
+                   help="static: the fine alignment's end time, s, on the record's scale (default: its end)")
+    p.add_argument("--heading", type=real("deg"), default=None, metavar="DEG",
+                   help="static: the heading, deg clockwise from north, when gyrocompassing cannot give one "
+                        "(a MEMS IMU) or to replace it; its 1-sigma is --heading-std")
     p.add_argument("--disturbed", action="store_true",
                    help="static on a swaying base (a moored ship, an idling vehicle): the inertial-frame "
                         "coarse alignment; the attitude is that at the window's end (default window: the "
@@ -409,7 +418,7 @@ def _align(sub) -> argparse.ArgumentParser:
                    help="motion: height record (BaroRecord CSV, h_m = -depth)")
     p.add_argument("--passes", type=count(0), default=5, help="motion: forward-backward passes (default 5)")
     p.add_argument("--heading-std", type=real("deg", above=0.0), default=5.0,
-                   help="motion: 1-sigma of the coarse heading, deg (default 5)")
+                   help="motion, and static with --heading: 1-sigma of the coarse heading, deg (default 5)")
     p.add_argument("--tilt-std", type=real("deg", above=0.0), default=0.5,
                    help="motion: 1-sigma of the coarse pitch/roll, deg (default 0.5)")
     p.add_argument("--gyro-bias", type=real("deg/h", at_least=0.0), default=None,

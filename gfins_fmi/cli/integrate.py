@@ -29,6 +29,8 @@ from gfins_fmi._version import __version__
 from gfins_fmi.cli import Failed
 from gfins_fmi.cli.files import cause, compensated, outputs, read_gnss, read_imu, read_optional, read_truth
 from gfins_fmi.cli.initial import from_initial_option, record_start_s
+from gfins_fmi.cli.kfgins_config import initial_state as kfgins_initial_state
+from gfins_fmi.cli.kfgins_config import kfgins_outputs, read_kfgins_config, write_kfgins_outputs
 from gfins_fmi.cli.parser import INITIAL_STD_DEFAULTS
 from gfins_fmi.cli.noise import imu_noise
 from gfins_fmi.estimation.noise_file import read_imu_errors
@@ -58,6 +60,17 @@ def _write(outs, path, sol, extra_note="", quiet=False):
         print(f"{len(sol)} samples{extra_note} -> {path}")
 
 
+def _write_solution(args, outs, sol, quiet=False):
+    """Our solution table, or with --kfgins-config KF-GINS's three files."""
+    if args.kfgins is None:
+        _write(outs, args.output, sol, quiet=quiet)
+        return
+    files = kfgins_outputs(args.kfgins.output)
+    write_kfgins_outputs(outs, files, sol)
+    if not quiet:
+        print(f"{len(sol)} samples -> {files['nav']}, {files['imu_err'].name}, {files['std'].name}")
+
+
 def _write_innovations(outs, path, sol):
     """The innovation log: one row per update, its kind and outcome by name; Python's
     notation for the numbers (the log's format since before TableWriter)."""
@@ -84,9 +97,10 @@ def _effective_config(args, cfg, init, windows) -> str:
     nav = init.nav
     doc = {
         "gfins_fmi": __version__, "command": "integrate",
-        "inputs": {k: _input(getattr(args, k)) for k in ("imu", "gnss", "baro", "odometer", "truth")},
+        "inputs": {k: _input(getattr(args, k)) for k in ("imu", "gnss", "baro", "odometer", "truth",
+                                                             "kfgins_config")},
         "options": {k: (str(v) if isinstance(v, pathlib.Path) else v) for k, v in sorted(vars(args).items())
-                    if k not in ("check", "module", "function")},
+                    if k not in ("check", "module", "function", "kfgins")},
         "filter": dataclasses.asdict(cfg),
         "initial": {"t_s": float(nav.t_s), "lat_deg": float(np.degrees(nav.lat_rad)),
                     "lon_deg": float(np.degrees(nav.lon_rad)), "h_m": float(nav.h_m),
@@ -157,14 +171,28 @@ def _bias_stds(args) -> dict:
 
 
 def run(args) -> int:
+    kf = None
+    if args.kfgins_config:
+        # a KF-GINS configuration file as it is: its paths, settings and output files
+        kf = read_kfgins_config(args.kfgins_config)
+        args.imu, args.gnss, args.imu_format, args.gnss_format = kf.imu, kf.gnss, "kfgins", "kfgins"
+        args.output = kfgins_outputs(kf.output)["nav"]
+        args.lever_arm = kf.lever_arm_m
     inn_path = args.output.with_suffix(".innovations.csv")
     sm_path = args.output.with_suffix(".smoothed.csv")
-    with outputs(args.imu, args.gnss, args.baro, args.odometer, args.truth) as outs:
+    with outputs(args.imu, args.gnss, args.baro, args.odometer, args.truth, args.kfgins_config) as outs:
         # every file of the run claimed before it: inputs, folders, links refused now
-        outs.claim(args.output)
+        if kf is None:
+            outs.claim(args.output)
+            outs.claim(args.output.with_suffix(".config.json"))
+        else:
+            if not kf.output.is_dir():
+                raise ValueError(f"{args.kfgins_config}: outputpath {kf.output} is not a folder")
+            for f in kfgins_outputs(kf.output).values():
+                outs.claim(f)
+        args.kfgins = kf
         outs.claim(inn_path)
         outs.claim(sm_path, produced=args.smooth)
-        outs.claim(args.output.with_suffix(".config.json"))
         figures = {}
         if args.plot:
             outs.claim_folder(args.plot)
@@ -174,8 +202,22 @@ def run(args) -> int:
         return _run(args, outs, inn_path, sm_path, figures)
 
 
+def _kfgins_span(imu, kf):
+    """KF-GINS's processing interval: the first sample at or after starttime gives the
+    initial state's time; the run takes the samples after it, up to endtime."""
+    t = imu.t_s
+    i0 = int(np.searchsorted(t, kf.start_s, side="left"))
+    if i0 >= len(t) - 1:
+        raise ValueError(f"starttime {kf.start_s:.10g} s is not before the IMU record's end ({t[-1]:.10g} s)")
+    sel = (t > t[i0]) & (t <= (kf.end_s if kf.end_s is not None else t[-1]))
+    return float(t[i0]), io.ImuRecord(t_s=t[sel], gyro=imu.gyro[sel], accel=imu.accel[sel], kind=imu.kind,
+                                      source=imu.source)
+
+
 def _run(args, outs, inn_path, sm_path, figures) -> int:
-    imu = read_imu(args.imu, args.imu_format, args.gps_week)
+    kf = args.kfgins
+    imu = (read_imu(args.imu, args.imu_format, args.gps_week) if kf is None else
+           io.read_kfgins_imu(args.imu, kf.imu_columns, args.gps_week))
     gnss = read_gnss(args.gnss, args.gnss_format, args.gps_week)
     baro = read_optional(io.BaroRecord, args.baro)
     odo = read_optional(io.OdometerRecord, args.odometer)
@@ -192,11 +234,20 @@ def _run(args, outs, inn_path, sm_path, figures) -> int:
         # the multi-sample coning/sculling corrections are formed from increments: the
         # trapezoid over each interval (what the filter's rate input assumes too)
         imu = imu.to_increments()
-    cfg = FilterConfig(imu=imu_noise(args.grade, args.noise, args.noise_file), filter=args.filter, input=imu.kind,
+    noise = imu_noise(args.grade, args.noise, args.noise_file) if kf is None else kf.noise
+    scale = {} if kf is None else {"scale_factors": True, "gyro_scale_std": kf.scale_std[0],
+                                   "accel_scale_std": kf.scale_std[1], "gyro_scale_tau_s": kf.correlation_s,
+                                   "accel_scale_tau_s": kf.correlation_s}
+    cfg = FilterConfig(imu=noise, filter=args.filter, input=imu.kind,
                        propagation_interval_s=args.propagation_interval,
                        gnss_lever_arm_m=tuple(args.lever_arm), zupt=args.zupt, nhc=args.nhc,
-                       odometer_mount=args.odometer_mount, subsamples=args.subsamples)
-    if args.initial:
+                       odometer_mount=args.odometer_mount, subsamples=args.subsamples, **scale)
+    if kf is not None:
+        t0, rec = _kfgins_span(imu, kf)
+        init = kfgins_initial_state(kf, t0, len(SENSOR_NAMES))
+        print(f"KF-GINS configuration {args.kfgins_config}: {len(rec)} IMU samples from {t0:.10g} s, "
+              f"GNSS {args.gnss}, outputs in {kf.output}")
+    elif args.initial:
         init = _initial_from_options(args, imu, truth, cfg)
         rec = imu
     else:
@@ -220,13 +271,14 @@ def _run(args, outs, inn_path, sm_path, figures) -> int:
         print(f"{len(windows)} simulated GNSS outages of {args.outages[0]:g} s (KF-GINS's protocol: the "
               f"{len(gnss) - len(g_used)} fixes strictly inside them removed)")
     nav = IntegratedNavigator(cfg, init)
-    outs.write_text(args.output.with_suffix(".config.json"), _effective_config(args, cfg, init, windows))
+    config_path = args.output.with_suffix(".config.json") if kf is None else kfgins_outputs(kf.output)["config"]
+    outs.write_text(config_path, _effective_config(args, cfg, init, windows))
     try:
         # checked above, on the whole record ("warn": the alignment may have taken its start)
         sol = nav.run(rec, g_used, baro, odo, smoother=args.smooth, progress=args.progress, checks="warn")
     except FilterError as exc:
         sol = exc.partial
-        _write(outs, args.output, sol, quiet=True)
+        _write_solution(args, outs, sol, quiet=True)
         _write_innovations(outs, inn_path, sol)
         why = cause(exc)
         outs.keep_partial(f"the filter stopped at IMU sample {exc.index} of {args.imu}: {why}; the "
@@ -234,7 +286,7 @@ def _run(args, outs, inn_path, sm_path, figures) -> int:
         print(f"error: {why}; the {len(sol)} samples before it are in "
               f"{', '.join(map(str, outs.partial))} ({outs.outcome().split('; ', 1)[1]})", file=sys.stderr)
         return 1
-    _write(outs, args.output, sol)
+    _write_solution(args, outs, sol)
     _write_innovations(outs, inn_path, sol)
     counts = {k: int(np.sum(sol.innovations["status"] == v)) for k, v in
               (("accepted", 0), ("gated", 1), ("singular", 2), ("stale", 3), ("forced", 4))}

@@ -76,6 +76,16 @@ def _check_cosim(args) -> str | None:
 
 
 def _check_integrate(args) -> str | None:
+    given = [x for x in (args.imu, args.gnss, args.output) if x is not None]
+    if args.kfgins_config is not None:
+        clash = [o for o, v in (("IMU GNSS OUT", given), ("--initial", args.initial), ("--static", args.static),
+                                ("--noise", args.noise), ("--noise-file", args.noise_file),
+                                ("--grade", args.grade != "tactical"), ("--imu-errors", args.imu_errors)) if v]
+        if clash:
+            return (f"--kfgins-config gives the files, the initial state and the noise: leave out "
+                    f"{', '.join(clash)}")
+    elif len(given) != 3:
+        return "the following arguments are required: IMU GNSS OUT (or --kfgins-config KF-GINS.yaml)"
     if args.outages is not None:
         dur, per, first = args.outages
         if not (dur > 0 and per >= dur and first >= 0):
@@ -200,9 +210,14 @@ def _integrate(sub) -> argparse.ArgumentParser:
     p = sub.add_parser("integrate", help="integrated navigation (INS/GNSS EKF or UKF, optional RTS "
                        "smoother) of recorded IMU and GNSS files",
                        description="Integrated navigation of recorded files (docs/estimation.md).")
-    p.add_argument("imu", type=pathlib.Path, help="IMU file")
-    p.add_argument("gnss", type=pathlib.Path, help="GNSS file")
-    p.add_argument("output", type=pathlib.Path, help="solution CSV to write")
+    p.add_argument("imu", type=pathlib.Path, nargs="?", default=None, help="IMU file")
+    p.add_argument("gnss", type=pathlib.Path, nargs="?", default=None, help="GNSS file")
+    p.add_argument("output", type=pathlib.Path, nargs="?", default=None, help="solution CSV to write")
+    p.add_argument("--kfgins-config", type=pathlib.Path, default=None, metavar="KF-GINS.yaml",
+                   help="run a KF-GINS configuration file as it is (its IMU and GNSS paths, time span, initial "
+                        "state and stds, IMU noise, bias and scale parameters, antenna lever arm) and write "
+                        "KF-GINS's output files (KF_GINS_Navresult.nav, KF_GINS_IMU_ERR.txt, KF_GINS_STD.txt) "
+                        "in its outputpath; no IMU GNSS OUT then")
     p.add_argument("--imu-format", choices=("csv", "kfgins", "rtk_walk"), default="csv",
                    help="csv: gfins_fmi.io ImuRecord CSV; kfgins: KF-GINS IMU text/.bin (increments, "
                         "front-right-down); rtk_walk: the rtk_walk CSV (rates in g and rad/s)")

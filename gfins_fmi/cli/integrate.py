@@ -21,6 +21,7 @@ import json
 import os
 import pathlib
 import sys
+import time
 
 import numpy as np
 
@@ -48,14 +49,26 @@ from gfins_fmi.nav.strapdown import NavState, quat_to_euler
 __all__ = ["run"]
 
 
-def _write(outs, path, sol, extra_note="", quiet=False):
+def _sensor_columns(cfg, all_states: bool) -> list[int]:
+    """The sensor estimates written: the biases, and the states the configuration enables
+    (the others stay exactly 0: ten all-zero columns by default before), or all."""
+    keep = list(range(6))
+    for on, idx in ((cfg.scale_factors, range(6, 12)), (cfg.baro_bias, [12]), (cfg.odometer_scale, [13]),
+                    (cfg.odometer_mount, [14, 15])):
+        if on or all_states:
+            keep += list(idx)
+    return keep
+
+
+def _write(outs, path, sol, extra_note="", quiet=False, all_states=False):
     """The solution table: position, velocity and attitude in degrees, the 1-sigma (attitude
-    in degrees), the sensor estimates."""
+    in degrees), the estimates of the sensor states the filter has."""
     to_deg = 180.0 / np.pi
     e = sol.euler_rad * to_deg
-    table = np.column_stack([sol.t_s, sol.lat_rad * to_deg, sol.lon_rad * to_deg, sol.h_m, sol.v_n_m_s, e,
-                             sol.std[:, 0:6], sol.std[:, 6:9] * to_deg, sol.sensors])
-    outs.write_table(path, integrated_columns(SENSOR_NAMES), [table[:, j] for j in range(table.shape[1])])
+    keep = _sensor_columns(sol.config, all_states)
+    cols = [sol.t_s, sol.lat_rad * to_deg, sol.lon_rad * to_deg, sol.h_m, *sol.v_n_m_s.T, *e.T,
+            *sol.std[:, 0:6].T, *(sol.std[:, 6:9] * to_deg).T, *(sol.sensors[:, k] for k in keep)]
+    outs.write_table(path, integrated_columns([SENSOR_NAMES[k] for k in keep]), cols)
     if not quiet:
         print(f"{len(sol)} samples{extra_note} -> {path}")
 
@@ -63,7 +76,7 @@ def _write(outs, path, sol, extra_note="", quiet=False):
 def _write_solution(args, outs, sol, quiet=False):
     """Our solution table, or with --kfgins-config KF-GINS's three files."""
     if args.kfgins is None:
-        _write(outs, args.output, sol, quiet=quiet)
+        _write(outs, args.output, sol, quiet=quiet, all_states=args.all_states)
         return
     files = kfgins_outputs(args.kfgins.output)
     write_kfgins_outputs(outs, files, sol)
@@ -214,14 +227,35 @@ def _kfgins_span(imu, kf):
                                       source=imu.source)
 
 
+class _Stage:
+    """With --progress: what the run is doing and how long it took, one line each on
+    stderr (reading and writing take most of a run's time; the filter has its bar)."""
+
+    def __init__(self, on: bool, what: str):
+        self.on, self.what = on, what
+
+    def __enter__(self):
+        if self.on:
+            self.t0 = time.perf_counter()
+            print(f"gfins integrate: {self.what} ...", file=sys.stderr, flush=True)
+        return self
+
+    def __exit__(self, *exc):
+        if self.on and exc[0] is None:
+            print(f"gfins integrate: {self.what}: {time.perf_counter() - self.t0:.2f} s", file=sys.stderr,
+                  flush=True)
+
+
 def _run(args, outs, inn_path, sm_path, figures) -> int:
     kf = args.kfgins
-    imu = (read_imu(args.imu, args.imu_format, args.gps_week) if kf is None else
-           io.read_kfgins_imu(args.imu, kf.imu_columns, args.gps_week))
-    gnss = read_gnss(args.gnss, args.gnss_format, args.gps_week)
-    baro = read_optional(io.BaroRecord, args.baro)
-    odo = read_optional(io.OdometerRecord, args.odometer)
-    truth = read_truth(args.truth, args.gps_week)
+    with _Stage(args.progress, f"reading {args.imu}"):
+        imu = (read_imu(args.imu, args.imu_format, args.gps_week) if kf is None else
+               io.read_kfgins_imu(args.imu, kf.imu_columns, args.gps_week))
+    with _Stage(args.progress, "reading the GNSS and the other records"):
+        gnss = read_gnss(args.gnss, args.gnss_format, args.gps_week)
+        baro = read_optional(io.BaroRecord, args.baro)
+        odo = read_optional(io.OdometerRecord, args.odometer)
+        truth = read_truth(args.truth, args.gps_week)
     # records the run could not use: refused before it (two time scales, most likely)
     problems = unusable_measurements(record_start_s(imu), float(imu.t_s[-1]), gnss=gnss, barometer=baro,
                                      odometer=odo, truth=truth)
@@ -286,8 +320,9 @@ def _run(args, outs, inn_path, sm_path, figures) -> int:
         print(f"error: {why}; the {len(sol)} samples before it are in "
               f"{', '.join(map(str, outs.partial))} ({outs.outcome().split('; ', 1)[1]})", file=sys.stderr)
         return 1
-    _write_solution(args, outs, sol)
-    _write_innovations(outs, inn_path, sol)
+    with _Stage(args.progress, "writing the solution"):
+        _write_solution(args, outs, sol)
+        _write_innovations(outs, inn_path, sol)
     counts = {k: int(np.sum(sol.innovations["status"] == v)) for k, v in
               (("accepted", 0), ("gated", 1), ("singular", 2), ("stale", 3), ("forced", 4))}
     print(f"updates: {counts} -> {inn_path}")
@@ -295,7 +330,8 @@ def _run(args, outs, inn_path, sm_path, figures) -> int:
     if args.smooth:
         try:
             sm = sol.smooth(progress=args.progress)
-            _write(outs, sm_path, sm, " (smoothed)")
+            with _Stage(args.progress, "writing the smoothed solution"):
+                _write(outs, sm_path, sm, " (smoothed)", all_states=args.all_states)
         except (ValueError, FilterError, OSError) as exc:
             _failed_after_solution(outs, "the smoother", exc)
     try:

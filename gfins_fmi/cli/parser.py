@@ -290,6 +290,9 @@ def _integrate(sub) -> argparse.ArgumentParser:
     p.add_argument("--zupt", action="store_true", help="zero-velocity updates at detected standstill")
     p.add_argument("--nhc", action="store_true", help="non-holonomic constraints (ground vehicles)")
     p.add_argument("--plot", type=pathlib.Path, default=None, help="folder for figures")
+    p.add_argument("--all-states", action="store_true",
+                   help="write every sensor state's column (default: the biases and the states the "
+                        "configuration enables; a disabled state's column is all zeros)")
     p.add_argument("--progress", action="store_true", help="progress bar over reading, filtering, "
                    "smoothing and writing")
     _command(p, "integrate", check=_check_integrate)

@@ -31,7 +31,9 @@ from gfins_fmi.cli import Failed
 from gfins_fmi.cli.files import cause, compensated, outputs, read_gnss, read_imu, read_optional, read_truth
 from gfins_fmi.cli.initial import from_initial_option, record_start_s
 from gfins_fmi.cli.kfgins_config import initial_state as kfgins_initial_state
-from gfins_fmi.cli.kfgins_config import kfgins_outputs, read_kfgins_config, write_kfgins_outputs
+from gfins_fmi.cli.kfgins_config import (kfgins_outputs, kfgins_tables, open_kfgins_writers, read_kfgins_config,
+                                         write_kfgins_outputs)
+from gfins_fmi.cli.integrate_stream import STREAM_CHUNK, ImuChunks, Scores, solution_table, time_slice
 from gfins_fmi.cli.parser import INITIAL_STD_DEFAULTS
 from gfins_fmi.cli.noise import imu_noise
 from gfins_fmi.estimation.noise_file import read_imu_errors
@@ -43,32 +45,16 @@ from gfins_fmi.estimation.evaluation import (NavErrors, gnss_outage_drift, gnss_
                                              without_outages)
 from gfins_fmi.estimation.measurement_checks import unusable_measurements
 from gfins_fmi.estimation.navigator import IntegratedNavigator
-from gfins_fmi.io.columns import INNOVATION_COLUMNS, integrated_columns
+from gfins_fmi.io.columns import INNOVATION_COLUMNS
 from gfins_fmi.nav.strapdown import NavState, quat_to_euler
 
 __all__ = ["run"]
 
 
-def _sensor_columns(cfg, all_states: bool) -> list[int]:
-    """The sensor estimates written: the biases, and the states the configuration enables
-    (the others stay exactly 0: ten all-zero columns by default before), or all."""
-    keep = list(range(6))
-    for on, idx in ((cfg.scale_factors, range(6, 12)), (cfg.baro_bias, [12]), (cfg.odometer_scale, [13]),
-                    (cfg.odometer_mount, [14, 15])):
-        if on or all_states:
-            keep += list(idx)
-    return keep
-
-
 def _write(outs, path, sol, extra_note="", quiet=False, all_states=False):
     """The solution table: position, velocity and attitude in degrees, the 1-sigma (attitude
     in degrees), the estimates of the sensor states the filter has."""
-    to_deg = 180.0 / np.pi
-    e = sol.euler_rad * to_deg
-    keep = _sensor_columns(sol.config, all_states)
-    cols = [sol.t_s, sol.lat_rad * to_deg, sol.lon_rad * to_deg, sol.h_m, *sol.v_n_m_s.T, *e.T,
-            *sol.std[:, 0:6].T, *(sol.std[:, 6:9] * to_deg).T, *(sol.sensors[:, k] for k in keep)]
-    outs.write_table(path, integrated_columns([SENSOR_NAMES[k] for k in keep]), cols)
+    outs.write_table(path, *solution_table(sol, all_states))
     if not quiet:
         print(f"{len(sol)} samples{extra_note} -> {path}")
 
@@ -84,15 +70,21 @@ def _write_solution(args, outs, sol, quiet=False):
         print(f"{len(sol)} samples -> {files['nav']}, {files['imu_err'].name}, {files['std'].name}")
 
 
-def _write_innovations(outs, path, sol):
-    """The innovation log: one row per update, its kind and outcome by name; Python's
-    notation for the numbers (the log's format since before TableWriter)."""
+#: the innovation log's column types
+_INNOVATION_DTYPES = [np.float64, str, str, np.int64, np.float64] + [np.float64] * 6
+
+
+def _innovation_columns(sol) -> list:
     inn = sol.innovations
     kinds = np.array([MEAS_TYPES[int(x)] for x in inn["type"]], dtype=str)
     status = np.array([UPDATE_STATUS[int(x)] for x in inn["status"]], dtype=str)
-    cols = [inn["t_s"], kinds, status, inn["m"], inn["nis"], *inn["r"].T, *inn["s_std"].T]
-    outs.write_table(path, INNOVATION_COLUMNS, cols,
-                     [np.float64, str, str, np.int64, np.float64] + [np.float64] * 6, float_format="repr")
+    return [inn["t_s"], kinds, status, inn["m"], inn["nis"], *inn["r"].T, *inn["s_std"].T]
+
+
+def _write_innovations(outs, path, sol):
+    """The innovation log: one row per update, its kind and outcome by name; Python's
+    notation for the numbers (the log's format since before TableWriter)."""
+    outs.write_table(path, INNOVATION_COLUMNS, _innovation_columns(sol), _INNOVATION_DTYPES, float_format="repr")
 
 
 def _input(path) -> dict | None:
@@ -126,10 +118,10 @@ def _effective_config(args, cfg, init, windows) -> str:
     return json.dumps(doc, indent=1, default=float) + "\n"
 
 
-def _outage_windows(args, gnss, rec):
+def _outage_windows(args, gnss, t_end_s):
     """The simulated outages of --outages, refused when none falls inside the record."""
     dur, per, first = args.outages
-    t0, t1 = float(gnss.t_s[0]), float(min(gnss.t_s[-1], rec.t_s[-1]))
+    t0, t1 = float(gnss.t_s[0]), float(min(gnss.t_s[-1], t_end_s))
     windows = kfgins_outage_windows(t0, t1, dur, per, first)
     # an outage with no fix strictly inside removes nothing and scores nothing
     tg = np.asarray(gnss.t_s)
@@ -248,16 +240,25 @@ class _Stage:
 
 def _run(args, outs, inn_path, sm_path, figures) -> int:
     kf = args.kfgins
-    with _Stage(args.progress, f"reading {args.imu}"):
-        imu = (read_imu(args.imu, args.imu_format, args.gps_week) if kf is None else
-               io.read_kfgins_imu(args.imu, kf.imu_columns, args.gps_week))
+    # a KF-GINS IMU record with a given initial state is read, filtered and written in chunks
+    streamed = (args.imu_format == "kfgins" and (kf is not None or args.initial is not None) and not args.smooth
+                and not args.plot and not args.imu_errors)
+    chunks = None
+    with _Stage(args.progress, f"reading {args.imu}" + (" (its first chunk)" if streamed else "")):
+        if streamed:
+            chunks = ImuChunks(args.imu, kf.imu_columns if kf else 7, args.gps_week, STREAM_CHUNK)
+            imu, t_end = chunks.first, chunks.t_end
+        else:
+            imu = (read_imu(args.imu, args.imu_format, args.gps_week) if kf is None else
+                   io.read_kfgins_imu(args.imu, kf.imu_columns, args.gps_week))
+            t_end = float(imu.t_s[-1])
     with _Stage(args.progress, "reading the GNSS and the other records"):
         gnss = read_gnss(args.gnss, args.gnss_format, args.gps_week)
         baro = read_optional(io.BaroRecord, args.baro)
         odo = read_optional(io.OdometerRecord, args.odometer)
         truth = read_truth(args.truth, args.gps_week)
     # records the run could not use: refused before it (two time scales, most likely)
-    problems = unusable_measurements(record_start_s(imu), float(imu.t_s[-1]), gnss=gnss, barometer=baro,
+    problems = unusable_measurements(record_start_s(imu), t_end, gnss=gnss, barometer=baro,
                                      odometer=odo, truth=truth)
     if problems:
         raise ValueError(f"{problems[0]}; nothing was run")
@@ -279,11 +280,17 @@ def _run(args, outs, inn_path, sm_path, figures) -> int:
     if kf is not None:
         t0, rec = _kfgins_span(imu, kf)
         init = kfgins_initial_state(kf, t0, len(SENSOR_NAMES))
-        print(f"KF-GINS configuration {args.kfgins_config}: {len(rec)} IMU samples from {t0:.10g} s, "
+        if kf.end_s is not None:
+            t_end = min(t_end, kf.end_s)
+        print(f"KF-GINS configuration {args.kfgins_config}: IMU samples from {t0:.10g} s to {t_end:.10g} s, "
               f"GNSS {args.gnss}, outputs in {kf.output}")
+        if streamed:
+            chunks.keep(t0, kf.end_s)
     elif args.initial:
         init = _initial_from_options(args, imu, truth, cfg)
         rec = imu
+        if streamed:
+            chunks.keep(init.nav.t_s, None)
     else:
         static = args.static or 5.0
         sp = align_static_then_gnss(imu, gnss, (imu.t_s[0], imu.t_s[0] + static),
@@ -300,13 +307,16 @@ def _run(args, outs, inn_path, sm_path, figures) -> int:
     windows = None
     g_used = gnss
     if args.outages:
-        windows = _outage_windows(args, gnss, rec)
+        windows = _outage_windows(args, gnss, t_end if rec is None or streamed else float(rec.t_s[-1]))
         g_used = without_outages(gnss, windows)
         print(f"{len(windows)} simulated GNSS outages of {args.outages[0]:g} s (KF-GINS's protocol: the "
               f"{len(gnss) - len(g_used)} fixes strictly inside them removed)")
     nav = IntegratedNavigator(cfg, init)
     config_path = args.output.with_suffix(".config.json") if kf is None else kfgins_outputs(kf.output)["config"]
     outs.write_text(config_path, _effective_config(args, cfg, init, windows))
+    if streamed:
+        return _stream(args, outs, nav, chunks, g_used, baro, odo, Scores(gnss, g_used, truth, windows, cfg.gnss_lever_arm_m),
+                       inn_path, cfg)
     try:
         # checked above, on the whole record ("warn": the alignment may have taken its start)
         sol = nav.run(rec, g_used, baro, odo, smoother=args.smooth, progress=args.progress, checks="warn")
@@ -337,6 +347,75 @@ def _run(args, outs, inn_path, sm_path, figures) -> int:
     try:
         _summary(args, outs, figures, sol, sm, gnss, truth, windows, cfg)
     except (ValueError, TypeError, OSError, ImportError) as exc:
+        _failed_after_solution(outs, "the summary", exc)
+    outs.commit()
+    return 0
+
+
+def _stream(args, outs, nav, chunks, gnss, baro, odo, scores, inn_path, cfg) -> int:
+    """The run a chunk at a time: each chunk with the measurements of its own span
+    (lo, hi], written and scored as it passes; the memory does not grow with the record."""
+    kf = args.kfgins
+    if kf is None:
+        writers = {"ours": None}      # opened with the first chunk: its columns follow the configuration
+    else:
+        writers = open_kfgins_writers(outs, kfgins_outputs(kf.output))
+    inn = outs.table(inn_path, INNOVATION_COLUMNS, _INNOVATION_DTYPES, float_format="repr")
+    counts = dict.fromkeys(("accepted", "gated", "singular", "stale", "forced"), 0)
+    rows, lo = 0, nav.t_s
+
+    def write(sol):
+        nonlocal rows
+        if kf is None:
+            names, cols = solution_table(sol, args.all_states)
+            if writers["ours"] is None:
+                writers["ours"] = outs.table(args.output, names)
+            writers["ours"].write(cols)
+        else:
+            for k, cols in kfgins_tables(sol).items():
+                writers[k].write(cols)
+        inn.write(_innovation_columns(sol))
+        rows += len(sol)
+        for k, v in zip(counts, range(5)):
+            counts[k] += int(np.sum(sol.innovations["status"] == v))
+
+    bar = None
+    if args.progress:
+        from tqdm import tqdm   # lazy: tqdm only with a progress bar
+        bar = tqdm(total=round(max(chunks.t_end - lo, 0.0), 3), unit="s", desc="read, filter, write (record seconds)")
+    try:
+        for k, rec in enumerate(chunks):
+            hi = float(rec.t_s[-1]) + 1e-9      # the navigator's own cut: measurements up to the last sample
+            parts = [time_slice(r, lo, hi) for r in (gnss, baro, odo)]
+            try:
+                sol = nav.run(rec, *parts, checks="warn" if k == 0 else "off")
+            except FilterError as exc:
+                write(exc.partial)
+                why = cause(exc)
+                where = rows - len(exc.partial) + exc.index
+                outs.keep_partial(f"the filter stopped at IMU sample {where} of {args.imu}: {why}; the "
+                                  f"{rows} rows here are the solution before it")
+                print(f"error: {why}; the {rows} samples before it are in "
+                      f"{', '.join(map(str, outs.partial))} ({outs.outcome().split('; ', 1)[1]})", file=sys.stderr)
+                return 1
+            write(sol)
+            scores.add(sol)
+            if bar:
+                bar.update(min(round(hi - lo, 3), bar.total - bar.n))
+            lo = hi
+    finally:
+        if bar:
+            bar.close()
+    for w in [*writers.values(), inn]:
+        if w is not None:
+            w.commit()
+    where = args.output if kf is None else kfgins_outputs(kf.output)["nav"]
+    print(f"{rows} samples -> {where} (read, filtered and written in chunks of {STREAM_CHUNK})")
+    print(f"updates: {counts} -> {inn_path}")
+    try:
+        for line in scores.lines():
+            print(line)
+    except (ValueError, TypeError) as exc:
         _failed_after_solution(outs, "the summary", exc)
     outs.commit()
     return 0

@@ -39,7 +39,7 @@ from gfins_fmi.nav.imu_errors import ImuNoise
 from gfins_fmi.nav.strapdown import NavState, euler_to_quat
 
 __all__ = ["KfginsRun", "read_kfgins_config", "initial_state", "kfgins_outputs", "write_kfgins_outputs",
-           "KFGINS_DECIMALS"]
+           "kfgins_tables", "open_kfgins_writers", "KFGINS_DECIMALS", "KFGINS_TEXT", "KFGINS_COLUMNS"]
 
 #: KF-GINS's text numbers: ``%-15.9lf`` (src/fileio/filesaver.cc)
 KFGINS_DECIMALS = 9
@@ -166,21 +166,35 @@ def _yaw_deg(heading_rad):
     return np.where(y > 180.0, y - 360.0, y)
 
 
-def write_kfgins_outputs(outs, files: dict, sol) -> None:
-    """The solution as KF-GINS's three text files, through the run's output set."""
+#: the writers' keywords of KF-GINS's text files (TableWriter)
+KFGINS_TEXT = {"decimals": KFGINS_DECIMALS, "separator": " ", "header": False}
+#: the columns of each output file (KF-GINS writes no header: names for our writer only)
+KFGINS_COLUMNS = {"nav": 11, "imu_err": 13, "std": 22}
+
+
+def kfgins_tables(sol) -> dict:
+    """The rows of ``sol`` as KF-GINS's three files' columns, by kind."""
     e = sol.euler_rad
     v = ned_to_enu(sol.v_n_m_s)                       # (N, E, D) from (E, N, U): the same swap
     nav = [np.zeros(len(sol)), sol.t_s, np.degrees(sol.lat_rad), np.degrees(sol.lon_rad), sol.h_m,
            v[:, 0], v[:, 1], v[:, 2], np.degrees(e[:, 2]), np.degrees(e[:, 1]), _yaw_deg(e[:, 0])]
-    text = {"decimals": KFGINS_DECIMALS, "separator": " ", "header": False}
-    outs.write_table(files["nav"], [f"c{i}" for i in range(11)], nav, **text)
     s = sol.sensors
     bg, ba = frd_to_rfu(s[:, 0:3]) / DEG_H, frd_to_rfu(s[:, 3:6]) / MGAL   # RFU -> FRD: the same swap, z negated
     sg, sa = s[:, [7, 6, 8]] * 1e6, s[:, [10, 9, 11]] * 1e6
     err = [sol.t_s, *bg.T, *ba.T, *sg.T, *sa.T]
-    outs.write_table(files["imu_err"], [f"c{i}" for i in range(13)], err, **text)
     st = sol.std
     nan = np.full(len(sol), np.nan)
     std = [sol.t_s, st[:, 4], st[:, 3], st[:, 5], st[:, 1], st[:, 0], st[:, 2],
            *(np.degrees(st[:, i]) for i in (7, 6, 8)), *([nan] * 12)]
-    outs.write_table(files["std"], [f"c{i}" for i in range(22)], std, **text)
+    return {"nav": nav, "imu_err": err, "std": std}
+
+
+def open_kfgins_writers(outs, files: dict) -> dict:
+    """TableWriters of the run's output set for KF-GINS's three files, by kind."""
+    return {k: outs.table(files[k], [f"c{i}" for i in range(n)], **KFGINS_TEXT) for k, n in KFGINS_COLUMNS.items()}
+
+
+def write_kfgins_outputs(outs, files: dict, sol) -> None:
+    """The solution as KF-GINS's three text files, through the run's output set."""
+    for k, cols in kfgins_tables(sol).items():
+        outs.write_table(files[k], [f"c{i}" for i in range(KFGINS_COLUMNS[k])], cols, **KFGINS_TEXT)

@@ -205,18 +205,21 @@ def test_a_failure_after_the_solution_is_written_exits_1_and_keeps_it(kf_drive, 
     error (exit 2, "gfins integrate: error:") and the solution went with it. Now exit 1,
     "failed:", and the solution, its innovations and configuration are kept."""
     import gfins_fmi.cli.integrate as integrate
+    import gfins_fmi.cli.integrate_stream as integrate_stream
     folder, d = kf_drive
 
     def broken(*a, **k):
         raise ValueError("a figure could not be drawn")
-    monkeypatch.setattr(integrate, "_summary", broken)
-    out = tmp_path / "sol.csv"
-    assert main(_args(folder, out, *_initial(d))) == 1
-    err = capsys.readouterr().err
-    assert err.startswith("gfins integrate: failed: the summary: a figure could not be drawn; the solution "
-                          "was kept (written: "), err
-    for name in ("sol.csv", "sol.innovations.csv", "sol.config.json"):
-        assert (tmp_path / name).is_file()
+    monkeypatch.setattr(integrate, "_summary", broken)            # the whole-record run (--smooth)
+    monkeypatch.setattr(integrate_stream.Scores, "lines", broken)  # the run in chunks
+    for i, extra in enumerate(([], ["--smooth"])):
+        out = tmp_path / f"sol{i}.csv"
+        assert main(_args(folder, out, *_initial(d), *extra)) == 1
+        err = capsys.readouterr().err
+        assert err.startswith("gfins integrate: failed: the summary: a figure could not be drawn; the solution "
+                              "was kept (written: "), err
+        for name in (f"sol{i}.csv", f"sol{i}.innovations.csv", f"sol{i}.config.json"):
+            assert (tmp_path / name).is_file()
     # a usage error stays 2
     with pytest.raises(SystemExit) as ei:
         main(_args(folder, out, "--position-std", "1,1,1"))
@@ -381,7 +384,38 @@ def test_progress_covers_reading_and_writing(kf_drive, tmp_path, capsys):
     """Before: --progress covered the filter (0.1-0.3 s) but not reading and writing (over
     80 % of the time). Now a line per stage with its time."""
     folder, d = kf_drive
-    assert main(_args(folder, tmp_path / "sol.csv", *_initial(d), "--progress")) == 0
+    # the whole record (--smooth): a line per stage
+    assert main(_args(folder, tmp_path / "sol.csv", *_initial(d), "--progress", "--smooth")) == 0
     err = capsys.readouterr().err
     for stage in (f"reading {folder / 'imu.txt'}", "reading the GNSS and the other records", "writing the solution"):
         assert re.search(rf"gfins integrate: {re.escape(stage)}: [\d.]+ s", err), err
+    # in chunks: one bar over reading, filtering and writing, in record seconds
+    assert main(_args(folder, tmp_path / "sol.csv", *_initial(d), "--progress")) == 0
+    err = capsys.readouterr().err
+    assert "read, filter, write (record seconds): 100%" in err and "warning" not in err, err
+
+
+def test_chunks_give_the_whole_records_result(kf_drive, tmp_path, capsys, monkeypatch):
+    """The run in chunks (issue 20: memory independent of the record's length) writes the
+    same files and prints the same summary as the whole record read at once, bit for bit:
+    chunks of 7001 samples (not a divisor of anything here) against one."""
+    import gfins_fmi.cli.integrate as integrate
+    folder, d = kf_drive
+    extra = [*_initial(d), "--truth", str(folder / "truth.nav"), "--outages", "30,100,100"]
+    outs = {}
+    for name, chunk in (("whole", 10 ** 9), ("chunks", 7001)):
+        monkeypatch.setattr(integrate, "STREAM_CHUNK", chunk)
+        out = tmp_path / f"{name}.csv"
+        assert main(_args(folder, out, *extra)) == 0
+        text = capsys.readouterr().out
+        outs[name] = (out.read_bytes(), out.with_suffix(".innovations.csv").read_bytes(),
+                      [x for x in text.splitlines() if x.startswith("filter:")])
+    assert outs["whole"][0] == outs["chunks"][0]
+    assert outs["whole"][1] == outs["chunks"][1]
+    assert outs["whole"][2] == outs["chunks"][2] and len(outs["whole"][2]) == 2
+    # and without a truth: the residuals, with fixes between two chunks
+    for name, chunk in (("whole", 10 ** 9), ("chunks", 7001)):
+        monkeypatch.setattr(integrate, "STREAM_CHUNK", chunk)
+        assert main(_args(folder, tmp_path / f"{name}2.csv", *_initial(d), "--outages", "30,100,100")) == 0
+        outs[name] = [x for x in capsys.readouterr().out.splitlines() if x.startswith("filter:")]
+    assert outs["whole"] == outs["chunks"] and len(outs["whole"]) == 2

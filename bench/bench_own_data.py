@@ -85,6 +85,72 @@ antlever: [ {LEVER[1]!r}, {LEVER[0]!r}, {-LEVER[2]!r} ]
     return cfg
 
 
+def make_static(folder: pathlib.Path, hours: float) -> pathlib.Path:
+    """A long record without a long simulation: a vehicle at rest for ``hours`` (level,
+    heading north, 30 deg N), 200 Hz increments of gravity and the Earth rate with
+    navigation-grade white noise (seeded), 1 Hz GNSS fixes (2 cm), written a chunk at a
+    time. The filter's work per sample does not depend on the motion; what is measured is
+    the pipeline's memory and throughput on 7.2 M samples."""
+    import polars as pl
+    from gfins_fmi.nav.earth import WGS84, gravity
+    lat, h, dt = np.radians(30.0), 20.0, 0.005
+    g = float(gravity(lat, h))
+    w = 7.292115e-5
+    n = int(round(hours * 3600 / dt))
+    rng = np.random.default_rng(5)
+    arw = np.radians(NAVIGATION.gyro_arw_deg_sqrt_h) / 60.0          # rad/sqrt(s)
+    vrw = NAVIGATION.accel_vrw_ug_sqrt_hz * 9.80665e-6 / np.sqrt(2.0)  # m/s/sqrt(s)
+    with open(folder / "imu.txt", "wb") as f:
+        for lo in range(0, n, 1_000_000):
+            m = min(n, lo + 1_000_000) - lo
+            t = (lo + 1 + np.arange(m)) * dt
+            dth = np.tile([w * np.cos(lat) * dt, 0.0, -w * np.sin(lat) * dt], (m, 1)) + rng.normal(0, arw * np.sqrt(dt), (m, 3))
+            dv = np.tile([0.0, 0.0, -g * dt], (m, 1)) + rng.normal(0, vrw * np.sqrt(dt), (m, 3))
+            pl.DataFrame({"t": t, **{f"g{i}": dth[:, i] for i in range(3)}, **{f"a{i}": dv[:, i] for i in range(3)}}
+                         ).write_csv(f, include_header=False, separator=" ", float_precision=15)
+    k = int(hours * 3600)
+    tg = np.arange(1, k + 1, dtype=float)
+    dn, de, du = rng.normal(0, 0.02, (3, k))
+    RM = WGS84.a * (1 - WGS84.e2) / (1 - WGS84.e2 * np.sin(lat) ** 2) ** 1.5
+    RN = WGS84.a / np.sqrt(1 - WGS84.e2 * np.sin(lat) ** 2)
+    gn = np.column_stack([tg, np.degrees(lat + dn / (RM + h)), np.degrees(np.radians(114.0) + de / ((RN + h) * np.cos(lat))),
+                          h + du, np.full(k, 0.02), np.full(k, 0.02), np.full(k, 0.04)])
+    np.savetxt(folder / "gnss.txt", gn, fmt=KFGINS_GNSS_FORMAT)
+    (folder / "out").mkdir(exist_ok=True)
+    N = NAVIGATION
+    vrw_h = float(N.accel_vrw_ug_sqrt_hz * 9.80665e-6 / np.sqrt(2.0) * 60.0)
+    ab = float(N.accel_bias_instability_ug * 9.80665e-6 / 1e-5)
+    cfg = folder / "kf-gins.yaml"
+    cfg.write_text(f"""imupath: "{folder / 'imu.txt'}"
+gnsspath: "{folder / 'gnss.txt'}"
+outputpath: "{folder / 'out'}"
+imudatalen: 7
+imudatarate: 200
+starttime: 0.0
+endtime: -1
+initpos: [ 30.0, 114.0, {h} ]
+initvel: [ 0.0, 0.0, 0.0 ]
+initatt: [ 0.0, 0.0, 0.0 ]
+initgyrbias: [ 0, 0, 0 ]
+initaccbias: [ 0, 0, 0 ]
+initgyrscale: [ 0, 0, 0 ]
+initaccscale: [ 0, 0, 0 ]
+initposstd: [ 0.005, 0.004, 0.008 ]
+initvelstd: [ 0.003, 0.004, 0.004 ]
+initattstd: [ 0.003, 0.003, 0.023 ]
+imunoise:
+  arw: [{N.gyro_arw_deg_sqrt_h}, {N.gyro_arw_deg_sqrt_h}, {N.gyro_arw_deg_sqrt_h}]
+  vrw: [{vrw_h!r}, {vrw_h!r}, {vrw_h!r}]
+  gbstd: [{N.gyro_bias_instability_deg_h}, {N.gyro_bias_instability_deg_h}, {N.gyro_bias_instability_deg_h}]
+  abstd: [{ab!r}, {ab!r}, {ab!r}]
+  gsstd: [300.0, 300.0, 300.0]
+  asstd: [300.0, 300.0, 300.0]
+  corrtime: 1.0
+antlever: [ 0.0, 0.0, 0.0 ]
+""")
+    return cfg
+
+
 def timed(argv: list[str]) -> dict:
     """The command under /usr/bin/time -v: wall s, user + system s, peak RSS MiB."""
     r = subprocess.run(["/usr/bin/time", "-v", sys.executable, "-m", "gfins_fmi.cli", *argv],
@@ -103,13 +169,27 @@ def timed(argv: list[str]) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--minutes", type=float, default=30.0)
+    ap.add_argument("--static-hours", type=float, default=None,
+                    help="instead: a record at rest of this many hours (memory and throughput on long records)")
     ap.add_argument("--folder", type=pathlib.Path, default=None)
     args = ap.parse_args()
     folder = args.folder or pathlib.Path(tempfile.mkdtemp(prefix="gfins_own_data_"))
     folder.mkdir(parents=True, exist_ok=True)
     cfg = folder / "kf-gins.yaml"
     if not cfg.exists():
-        cfg = make(folder, args.minutes)
+        cfg = make(folder, args.minutes) if args.static_hours is None else make_static(folder, args.static_hours)
+    if args.static_hours is not None:
+        n = sum(1 for _ in open(folder / "imu.txt"))
+        print(f"{n} IMU samples ({n / 200 / 3600:.2f} h at 200 Hz) in {folder}; load: {os.getloadavg()}")
+        for name, argv in (("kfgins-config (.nav, IMU error, std text)", ["integrate", "--kfgins-config", str(cfg)]),
+                           ("Parquet out", ["integrate", str(folder / "imu.txt"), str(folder / "gnss.txt"),
+                                            str(folder / "sol.parquet"), "--imu-format", "kfgins", "--gnss-format",
+                                            "kfgins", "--grade", "navigation", "--initial", "30,114,20,0,0,0"])):
+            t = timed(argv)
+            print(f"{name}: wall {t['wall_s']:.2f} s, CPU {t['cpu_s']:.2f} s, peak {t['peak_mib']:.0f} MiB, "
+                  f"{n / t['cpu_s'] / 1e3:.0f} k samples per CPU second, {n / t['wall_s'] / 1e3:.0f} k per wall second")
+        print(f"load after: {os.getloadavg()}")
+        return
     n = sum(1 for _ in open(folder / "imu.txt"))
     print(f"{n} IMU samples ({n / 200 / 60:.1f} min at 200 Hz) in {folder}; load: {os.getloadavg()}")
     runs = {

@@ -138,7 +138,10 @@ def _initial_from_options(args, imu, truth, cfg) -> InitialState:
     --initial-velocity and the 1-sigma options (defaults: INITIAL_STD_DEFAULTS), printed."""
     t0 = record_start_s(imu)
     if args.initial == "truth":
-        ref = reference_at(truth, np.array([t0]))
+        tr = np.asarray(truth.t_s)
+        # a start one interval before the first increment can land a rounding off the truth's first row
+        t_ref = min(max(t0, tr[0]), tr[-1]) if tr[0] - 1e-6 <= t0 <= tr[-1] + 1e-6 else t0
+        ref = reference_at(truth, np.array([t_ref]))
         if not ref["inside"][0] or ref["v"] is None or ref["q"] is None:
             raise ValueError(f"--initial truth: the truth file {args.truth} does not cover the record's start "
                              f"{t0:.10g} s with a position, velocity and attitude: give --initial "

@@ -25,8 +25,9 @@ from gfins_fmi.io.tables import TableReader
 
 __all__ = ["ImuChunks", "time_slice", "Scores", "sensor_columns", "solution_table", "STREAM_CHUNK"]
 
-#: IMU samples per chunk: the navigator's own C-call chunk, so the cut changes nothing
-STREAM_CHUNK = 200_000
+#: IMU samples per chunk (a cut changes nothing: the result is the whole record's); 5e4
+#: samples make ~15 MB of solution and ~25 MB of text per chunk
+STREAM_CHUNK = 50_000
 
 
 def sensor_columns(cfg, all_states: bool) -> list[int]:
@@ -105,7 +106,8 @@ class ImuChunks:
             for lo in range(0, len(table), self.chunk):
                 yield np.array(table[lo:lo + self.chunk])
             return
-        with TableReader(self.path, chunk_rows=self.chunk, what="KF-GINS IMU", whitespace=True) as r:
+        with TableReader(self.path, chunk_rows=self.chunk, what="KF-GINS IMU", whitespace=True,
+                         block_bytes=4 << 20) as r:
             if r.n_columns < 7:
                 raise ValueError(f"{self.path}: {r.n_columns} columns; a KF-GINS IMU file has 7 (time, 3 angle "
                                  "and 3 velocity increments, forward-right-down) or more")

@@ -94,8 +94,9 @@ class _TextSource:
 
     format = "csv"
 
-    def __init__(self, path: pathlib.Path, header: bool, what: str, header_hint: str, whitespace: bool = False):
-        self.path, self.what, self.whitespace = path, what, whitespace
+    def __init__(self, path: pathlib.Path, header: bool, what: str, header_hint: str, whitespace: bool = False,
+                 block_bytes: int = _TEXT_BLOCK_BYTES):
+        self.path, self.what, self.whitespace, self.block_bytes = path, what, whitespace, block_bytes
         self.header_message = ("the first data line holds text ({text}) where numbers were "
                                f"expected: {header_hint}")
         self.n_rows = None
@@ -140,7 +141,7 @@ class _TextSource:
         with open(self.path, "rb") as f:
             f.seek(offset)
             while True:
-                buf = f.read(_TEXT_BLOCK_BYTES)
+                buf = f.read(self.block_bytes)
                 if buf:
                     cut = buf.rfind(b"\n") + 1
                     if cut == 0:          # a line longer than a block: read on
@@ -402,6 +403,8 @@ class TableReader:
         The format, whatever the file's name (default: from the name).
     whitespace : bool
         Text: fields separated by runs of spaces or tabs (KF-GINS's files), not commas.
+    block_bytes : int, optional
+        Text: bytes parsed at a time (default 16 MiB; less memory, a little more time).
 
     Attributes
     ----------
@@ -421,7 +424,7 @@ class TableReader:
 
     def __init__(self, path, *, header: bool = False, chunk_rows: int = DEFAULT_CHUNK_ROWS,
                  what: str = "table", header_hint: str | None = None, format: str | None = None,
-                 whitespace: bool = False):
+                 whitespace: bool = False, block_bytes: int | None = None):
         self.path = pathlib.Path(path)
         self.chunk_rows = _chunk_rows(chunk_rows)
         if not self.path.is_file():
@@ -429,7 +432,7 @@ class TableReader:
         self.format = checked_format(self.path, format)
         if self.format == "csv":
             hint = header_hint or "if it is a line of column names, read it with header=True"
-            self._src = _TextSource(self.path, header, what, hint, whitespace)
+            self._src = _TextSource(self.path, header, what, hint, whitespace, block_bytes or _TEXT_BLOCK_BYTES)
         elif self.format == "parquet":
             self._src = _ParquetSource(self.path, self.chunk_rows)
         else:

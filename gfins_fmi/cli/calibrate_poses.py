@@ -11,7 +11,7 @@ from gfins_fmi.calibration.poses import calibrate_poses
 from gfins_fmi.calibration.poses_report import (UNITS, parameter_table, plot_pose_calibration, pose_rows,
                                                 turn_rows)
 from gfins_fmi.calibration.still import StillDetector
-from gfins_fmi.cli.files import outputs, read_imu
+from gfins_fmi.cli.files import read_imu, run_writing
 from gfins_fmi.estimation.noise_file import imu_errors_text
 from gfins_fmi.io.records import ImuRecord
 from gfins_fmi.io.tables import TableReader
@@ -44,18 +44,8 @@ def _tables(args):
 
 
 def run(args) -> int:
-    with outputs(args.record) as outs:
-        for path in (args.report, args.output):
-            if path:
-                outs.claim(path)
-        if args.table:
-            for _, path in _tables(args):
-                outs.claim(path)
-        if args.plot:
-            outs.claim_folder(args.plot)
-        status = _run(args, outs)
-        outs.commit()
-        return status
+    tables = [path for _, path in _tables(args)] if args.table else []
+    return run_writing(_run, args, [args.record], [args.report, args.output, *tables], args.plot)
 
 
 def _run(args, outs) -> int:

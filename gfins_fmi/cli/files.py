@@ -19,7 +19,7 @@ from gfins_fmi.io.output_set import OutputSet
 from gfins_fmi.io.tables import TableReader
 
 __all__ = ["TimeColumn", "Refused", "outputs", "record_reader", "stream", "nav_columns",
-           "read_imu", "read_gnss", "read_optional", "read_truth", "cause",
+           "read_imu", "read_gnss", "read_optional", "read_truth", "cause", "run_writing",
            "compensated", "compensated_block"]
 
 
@@ -132,6 +132,21 @@ def outputs(*inputs) -> OutputSet:
     """The set of files a command writes; ``inputs``: its input files (None skipped),
     which no output may be."""
     return OutputSet(inputs)
+
+
+def run_writing(run, args, inputs=(), files=(), folder=None) -> int:
+    """``run(args, outs)`` with the command's outputs as one set: ``files`` (None skipped)
+    and the figure ``folder`` claimed before the run, the set committed when it returns
+    (nothing of it kept if it raises)."""
+    with outputs(*inputs) as outs:
+        for path in files:
+            if path:
+                outs.claim(path)
+        if folder:
+            outs.claim_folder(folder)
+        status = run(args, outs)
+        outs.commit()
+        return status
 
 
 class Refused(Exception):

@@ -16,7 +16,7 @@ import numpy as np
 from gfins_fmi.analysis.allan import AllanAccumulator, averaging_factors
 from gfins_fmi.analysis.noise_id import fit_noise_terms
 from gfins_fmi.analysis.noise_report import identified_toml, imu_noise_of, plot_allan, terms_table
-from gfins_fmi.cli.files import outputs, read_imu
+from gfins_fmi.cli.files import read_imu, run_writing
 from gfins_fmi.estimation.noise_file import write_noise_file
 from gfins_fmi.io.tables import TableReader
 from gfins_fmi.nav.imu_errors import ImuNoise
@@ -84,15 +84,7 @@ class _Stream:
 
 
 def run(args) -> int:
-    with outputs(args.record) as outs:
-        for path in (args.output, args.table):
-            if path:
-                outs.claim(path)
-        if args.plot:
-            outs.claim_folder(args.plot)
-        status = _run(args, outs)
-        outs.commit()
-        return status
+    return run_writing(_run, args, [args.record], [args.output, args.table], args.plot)
 
 
 def _run(args, outs) -> int:

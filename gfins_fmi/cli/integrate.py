@@ -250,6 +250,8 @@ def _run(args, outs, inn_path, sm_path, figures) -> int:
     with _Stage(args.progress, f"reading {args.imu}" + (" (its first chunk)" if streamed else "")):
         if streamed:
             chunks = ImuChunks(args.imu, kf.imu_columns if kf else 7, args.gps_week, STREAM_CHUNK)
+            if kf is not None:
+                chunks.start_at(kf.start_s)
             imu, t_end = chunks.first, chunks.t_end
         else:
             imu = (read_imu(args.imu, args.imu_format, args.gps_week) if kf is None else

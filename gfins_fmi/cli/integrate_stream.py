@@ -25,9 +25,9 @@ from gfins_fmi.io.tables import TableReader
 
 __all__ = ["ImuChunks", "time_slice", "Scores", "sensor_columns", "solution_table", "STREAM_CHUNK"]
 
-#: IMU samples per chunk (a cut changes nothing: the result is the whole record's); 5e4
-#: samples make ~15 MB of solution and ~25 MB of text per chunk
-STREAM_CHUNK = 50_000
+#: IMU samples per chunk, a multiple of every --subsamples (a cut changes nothing: the result
+#: is the whole record's); 4.8e4 samples make ~15 MB of solution and ~25 MB of text a chunk
+STREAM_CHUNK = 48_000
 
 
 def sensor_columns(cfg, all_states: bool) -> list[int]:
@@ -96,6 +96,21 @@ class ImuChunks:
             self.first = next(gen)
         finally:
             gen.close()       # its file closed now, not when collected
+
+    def start_at(self, start_s: float) -> None:
+        """``first`` := the first chunk that reaches ``start_s`` (KF-GINS's starttime may
+        lie minutes into the file)."""
+        if self.first.t_s[-1] >= start_s:
+            return
+        gen = self._raw()
+        try:
+            for rec in gen:
+                if rec.t_s[-1] >= start_s:
+                    self.first = rec
+                    return
+        finally:
+            gen.close()
+        raise ValueError(f"starttime {start_s:.10g} s is not before the IMU record's end ({self.t_end:.10g} s)")
 
     def keep(self, lo: float, hi: float | None) -> None:
         self.lo, self.hi = lo, (np.inf if hi is None else hi)

@@ -127,7 +127,7 @@ class _CsvSink:
         polars formats the chunk)."""
         m = len(arrays[0])
         k = len(arrays)
-        rows = max(1, min(m, _FIXED_BLOCK_VALUES // k))
+        rows = max(1, _FIXED_BLOCK_VALUES // k)     # a block's rows, whatever this chunk's length
         if getattr(self, "_buf", None) is None:
             self._cap = rows * k * 40
             self._buf = ffi.new("char[]", self._cap)

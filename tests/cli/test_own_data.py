@@ -419,3 +419,41 @@ def test_chunks_give_the_whole_records_result(kf_drive, tmp_path, capsys, monkey
         assert main(_args(folder, tmp_path / f"{name}2.csv", *_initial(d), "--outages", "30,100,100")) == 0
         outs[name] = [x for x in capsys.readouterr().out.splitlines() if x.startswith("filter:")]
     assert outs["whole"] == outs["chunks"] and len(outs["whole"]) == 2
+
+
+def test_kfgins_starttime_past_the_first_chunk(kf_drive, tmp_path, capsys, monkeypatch):
+    """KF-GINS's starttime minutes into the file: the run in chunks starts in the chunk
+    that holds it and writes what the whole record read at once writes."""
+    import gfins_fmi.cli.integrate as integrate
+    folder, d = kf_drive
+    k = int(np.searchsorted(d.truth.t_s, 100.0))
+    text = _kfgins_yaml(folder, d, "OUT")
+    tr = d.truth
+    e = [float(x) for x in np.degrees(tr.euler_rad[k])]
+    v = [float(x) for x in tr.v_n_m_s[k]]
+    lines = []
+    for line in text.splitlines():
+        key = line.split(":")[0]
+        if key == "starttime":
+            line = f"starttime: {float(tr.t_s[k])!r}"
+        elif key == "initpos":
+            line = (f"initpos: [ {float(np.degrees(tr.lat_rad[k]))!r}, {float(np.degrees(tr.lon_rad[k]))!r}, "
+                    f"{float(tr.h_m[k])!r} ]")
+        elif key == "initvel":
+            line = f"initvel: [ {v[1]!r}, {v[0]!r}, {-v[2]!r} ]"
+        elif key == "initatt":
+            line = f"initatt: [ {e[2]!r}, {e[1]!r}, {e[0]!r} ]"
+        lines.append(line)
+    navs = {}
+    for name, chunk in (("whole", 10 ** 9), ("chunks", 7001)):
+        out = tmp_path / name
+        out.mkdir()
+        cfg = tmp_path / f"{name}.yaml"
+        cfg.write_text("\n".join(lines).replace('outputpath: "OUT"', f'outputpath: "{out}"') + "\n")
+        monkeypatch.setattr(integrate, "STREAM_CHUNK", chunk)
+        assert main(["integrate", "--kfgins-config", str(cfg)]) == 0
+        capsys.readouterr()
+        navs[name] = (out / "KF_GINS_Navresult.nav").read_bytes()
+    assert navs["whole"] == navs["chunks"]
+    first = float(navs["chunks"].split(b"\n")[0].split()[1])
+    assert first == pytest.approx(float(tr.t_s[k]) + 0.005, abs=1e-6)

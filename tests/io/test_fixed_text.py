@@ -55,7 +55,9 @@ def test_table_writer_fixed_decimals_falls_back_beyond_the_range(tmp_path):
     with TableWriter(path, ["a", "b"], decimals=9, separator=" ", header=False) as w:
         w.write([np.array([1.25, -2.0]), np.array([30.4447873701, 0.0])])
         w.write([np.array([1e30]), np.array([1.0])])
+        w.write([np.arange(300000.0), np.zeros(300000)])   # a longer chunk than the first (the buffer)
         w.commit()
     lines = path.read_text().splitlines()
     assert lines[:2] == ["1.250000000 30.444787370", "-2.000000000 0.000000000"]
     assert float(lines[2].split()[0]) == 1e30 and lines[2].split()[1] == "1.000000000"
+    assert len(lines) == 300003 and lines[-1] == "299999.000000000 0.000000000"

@@ -29,12 +29,14 @@ from gfins_fmi import io
 from gfins_fmi._version import __version__
 from gfins_fmi.cli import Failed
 from gfins_fmi.cli.files import cause, compensated, outputs, read_gnss, read_imu, read_optional, read_truth
+from gfins_fmi.cli.config_file import apply_config, config_template
 from gfins_fmi.cli.initial import from_initial_option, record_start_s
 from gfins_fmi.cli.kfgins_config import initial_state as kfgins_initial_state
 from gfins_fmi.cli.kfgins_config import (kfgins_outputs, kfgins_tables, open_kfgins_writers, read_kfgins_config,
                                          write_kfgins_outputs)
 from gfins_fmi.cli.integrate_stream import STREAM_CHUNK, ImuChunks, Scores, solution_table, time_slice
-from gfins_fmi.cli.parser import INITIAL_STD_DEFAULTS
+from gfins_fmi.cli.integrate_options import INITIAL_STD_DEFAULTS, check_integrate
+from gfins_fmi.cli.parser import build_parser
 from gfins_fmi.cli.noise import imu_noise
 from gfins_fmi.estimation.noise_file import read_imu_errors
 from gfins_fmi.estimation.alignment import align_static_then_gnss
@@ -105,7 +107,7 @@ def _effective_config(args, cfg, init, windows) -> str:
         "inputs": {k: _input(getattr(args, k)) for k in ("imu", "gnss", "baro", "odometer", "truth",
                                                              "kfgins_config")},
         "options": {k: (str(v) if isinstance(v, pathlib.Path) else v) for k, v in sorted(vars(args).items())
-                    if k not in ("check", "module", "function", "kfgins")},
+                    if k not in ("check", "module", "function", "kfgins", "given_options", "config_applied")},
         "filter": dataclasses.asdict(cfg),
         "initial": {"t_s": float(nav.t_s), "lat_deg": float(np.degrees(nav.lat_rad)),
                     "lon_deg": float(np.degrees(nav.lon_rad)), "h_m": float(nav.h_m),
@@ -178,7 +180,26 @@ def _bias_stds(args) -> dict:
     return out
 
 
+def _configured(args) -> None:
+    """--config: the file's values where the command line gave none, then the checks of
+    the combinations (at parse time without a file) on the result."""
+    parser = build_parser()[1]["integrate"]
+    defaults = {a.dest: a.default for a in parser._actions}   # argparse's own list of the options
+    args.given_options = sorted(k for k, v in vars(args).items() if k in defaults and v != defaults[k])
+    args.filter_settings = {}
+    if args.config is not None:
+        apply_config(parser, args, set(args.given_options))
+        args.config_applied = True
+        problem = check_integrate(args)
+        if problem:
+            raise ValueError(problem)
+
+
 def run(args) -> int:
+    if args.print_config:
+        print(config_template(build_parser()[1]["integrate"]), end="")
+        return 0
+    _configured(args)
     kf = None
     if args.kfgins_config:
         # a KF-GINS configuration file as it is: its paths, settings and output files
@@ -208,6 +229,26 @@ def run(args) -> int:
                 figures[name] = outs.claim(args.plot / f"integrate_{name}.png",
                                            produced=name == "filter" or args.smooth)
         return _run(args, outs, inn_path, sm_path, figures)
+
+
+#: options -> the FilterConfig field they set
+_OPTION_FIELDS = {"filter": "filter", "propagation_interval": "propagation_interval_s", "lever_arm": "gnss_lever_arm_m",
+                  "zupt": "zupt", "nhc": "nhc", "odometer_mount": "odometer_mount", "subsamples": "subsamples"}
+
+
+def _filter_settings(args, noise, kind, scale) -> dict:
+    """FilterConfig's arguments: the options, the configuration file's [filter] table where
+    the command line did not give the option that sets the same field."""
+    given = set(getattr(args, "given_options", ()))
+    kw = {f: getattr(args, o) for o, f in _OPTION_FIELDS.items()}
+    kw["gnss_lever_arm_m"] = tuple(kw["gnss_lever_arm_m"])
+    for k, v in (getattr(args, "filter_settings", None) or {}).items():
+        opt = next((o for o, f in _OPTION_FIELDS.items() if f == k), None)
+        if k in ("imu", "input"):
+            raise ValueError(f"[filter] {k}: set by the noise options/block and the IMU record, not here")
+        if opt is None or opt not in given:
+            kw[k] = tuple(v) if isinstance(v, list) else v
+    return dict(kw, imu=noise, input=kind, **scale)
 
 
 def _kfgins_span(imu, kf):
@@ -278,10 +319,7 @@ def _run(args, outs, inn_path, sm_path, figures) -> int:
     scale = {} if kf is None else {"scale_factors": True, "gyro_scale_std": kf.scale_std[0],
                                    "accel_scale_std": kf.scale_std[1], "gyro_scale_tau_s": kf.correlation_s,
                                    "accel_scale_tau_s": kf.correlation_s}
-    cfg = FilterConfig(imu=noise, filter=args.filter, input=imu.kind,
-                       propagation_interval_s=args.propagation_interval,
-                       gnss_lever_arm_m=tuple(args.lever_arm), zupt=args.zupt, nhc=args.nhc,
-                       odometer_mount=args.odometer_mount, subsamples=args.subsamples, **scale)
+    cfg = FilterConfig(**_filter_settings(args, noise, imu.kind, scale))
     if kf is not None:
         t0, rec = _kfgins_span(imu, kf)
         init = kfgins_initial_state(kf, t0, len(SENSOR_NAMES))

@@ -457,3 +457,87 @@ def test_kfgins_starttime_past_the_first_chunk(kf_drive, tmp_path, capsys, monke
     assert navs["whole"] == navs["chunks"]
     first = float(navs["chunks"].split(b"\n")[0].split()[1])
     assert first == pytest.approx(float(tr.t_s[k]) + 0.005, abs=1e-6)
+
+
+# ---- the configuration file -------------------------------------------------------------------
+
+def test_a_configuration_file_runs_like_its_options_and_a_run_repeats(kf_drive, tmp_path, capsys):
+    """Before: every setting on the command line, the filter's other settings only from
+    Python. Now --config FILE.toml: options by name (through their own parsers: units,
+    bounds), a [filter] table of the settings table, paths relative to the file; the
+    command line overrides it; a run's OUT.config.json repeats it exactly; --print-config
+    writes the template; a setting that is not one is refused by name."""
+    folder, d = kf_drive
+    init = _initial(d)
+    cfg = tmp_path / "run.toml"
+    (tmp_path / "data").symlink_to(folder)
+    cfg.write_text(f"""imu = "data/imu.txt"
+gnss = "data/gnss.txt"
+output = "a.csv"
+imu_format = "kfgins"
+gnss-format = "kfgins"
+grade = "navigation"
+lever_arm = [-0.3, 0.2, 1.2]
+initial = "{init[1]}"
+initial_velocity = "{init[3]}"
+position_std = [0.005, 0.004, 0.008]
+
+[filter]
+propagation_interval_s = 0.05
+""")
+    assert main(["integrate", "--config", str(cfg)]) == 0
+    a = tmp_path / "a.csv"
+    args = _args(folder, tmp_path / "b.csv", *init, "--position-std", "0.005,0.004,0.008",
+                 "--propagation-interval", "0.05")
+    assert main(args) == 0
+    assert a.read_bytes() == (tmp_path / "b.csv").read_bytes()
+    doc = json.loads(a.with_suffix(".config.json").read_text())
+    assert doc["filter"]["propagation_interval_s"] == 0.05 and doc["filter"]["gnss_lever_arm_m"] == [-0.3, 0.2, 1.2]
+    # the run repeated from its own OUT.config.json (into another output)
+    replay = tmp_path / "replay.json"
+    replay.write_text(a.with_suffix(".config.json").read_text())
+    assert main(["integrate", "--config", str(replay), str(folder / "imu.txt"), str(folder / "gnss.txt"),
+                 str(tmp_path / "c.csv")]) == 0
+    assert (tmp_path / "c.csv").read_bytes() == a.read_bytes()
+    # the command line overrides the file
+    assert main(["integrate", "--config", str(cfg), "--lever-arm", "0,0,0", "--propagation-interval", "0.2"]) == 0
+    doc = json.loads(a.with_suffix(".config.json").read_text())
+    assert doc["filter"]["gnss_lever_arm_m"] == [0.0, 0.0, 0.0] and doc["filter"]["propagation_interval_s"] == 0.2
+    capsys.readouterr()
+    cfg.write_text(cfg.read_text() + "propagation_interval = 0.1\n")   # an option's name inside [filter]
+    assert main(["integrate", "--config", str(cfg)]) == 2
+    assert "[filter] propagation_interval: not a filter setting" in capsys.readouterr().err
+    assert main(["integrate", "--print-config"]) == 0
+    template = capsys.readouterr().out
+    assert "# lever_arm = " in template and "[filter]" in template and "# gate_probability" in template
+
+
+def test_the_noise_block_inside_the_configuration_file(kf_drive, tmp_path, capsys):
+    """The noise block (issue 23's [imu]/[noise] tables, as gfins noise writes them) folded
+    into the configuration file: read by its one reader, the same run as --noise-file."""
+    from gfins_fmi.estimation.noise_file import noise_text
+    from gfins_fmi.nav.imu_errors import ImuNoise
+    folder, d = kf_drive
+    init = _initial(d)
+    noise = ImuNoise(gyro_arw_deg_sqrt_h=0.004, accel_vrw_ug_sqrt_hz=80.0, gyro_bias_instability_deg_h=0.03,
+                     accel_bias_instability_ug=20.0, gyro_correlation_time_s=1800.0, accel_correlation_time_s=1800.0)
+    (tmp_path / "noise.toml").write_text(noise_text(noise))
+    cfg = tmp_path / "run.toml"
+    cfg.write_text(f'''imu_format = "kfgins"
+gnss_format = "kfgins"
+lever_arm = "-0.3,0.2,1.2"
+initial = "{init[1]}"
+initial_velocity = "{init[3]}"
+
+[inputs]        # TOML cannot hold a key imu beside the noise block's table [imu]
+imu = "{folder / 'imu.txt'}"
+gnss = "{folder / 'gnss.txt'}"
+output = "a.csv"
+
+''' + noise_text(noise))
+    assert main(["integrate", "--config", str(cfg)]) == 0
+    assert main(_args(folder, tmp_path / "b.csv", *init, "--noise-file", str(tmp_path / "noise.toml"))) == 0
+    assert (tmp_path / "a.csv").read_bytes() == (tmp_path / "b.csv").read_bytes()
+    doc = json.loads((tmp_path / "a.config.json").read_text())
+    assert doc["filter"]["imu"]["gyro_arw_deg_sqrt_h"] == 0.004
+    capsys.readouterr()

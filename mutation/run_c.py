@@ -3,6 +3,9 @@
 mutation/c_mutants.toml to a private copy of the tree, rebuilds the C tests
 incrementally and runs them with ctest.
 
+A mutant of a Python file (``file`` under gfins_fmi/) is not built: it runs only in the
+second stage below, with its own ``tests``.
+
 Outcome of a mutant:
   killed      a C test failed (the names of the failing tests are recorded)
   compiler    the build failed (warnings are errors): killed by the compiler
@@ -48,6 +51,7 @@ class Mutant:
     original: str
     replacement: str
     why: str
+    tests: str = ""     # pytest arguments of its Python stage (Python mutants: required)
 
 
 def load_mutants(path: Path = HERE / "c_mutants.toml") -> list[Mutant]:
@@ -88,6 +92,11 @@ def check_list(mutants: list[Mutant], root: Path = ROOT) -> list[str]:
             apply(p.read_text(), m)
         except ValueError as exc:
             problems.append(str(exc))
+        if m.file.endswith(".py") and not m.tests:
+            problems.append(f"mutant {m.id}: a Python mutant needs its tests (pytest arguments)")
+        for word in m.tests.split():
+            if word.startswith("tests/") and not (root / word.split("::")[0]).is_file():
+                problems.append(f"mutant {m.id}: no test file {word.split('::')[0]}")
     return problems
 
 
@@ -114,7 +123,8 @@ def copy_tree(dst: Path) -> None:
     files = subprocess.run(["git", "ls-files", "-co", "--exclude-standard"], cwd=ROOT,
                            capture_output=True, text=True, check=True).stdout.split("\n")
     for f in files:
-        if not f or f.startswith(("mutation/", "docs/", "bench/", "examples/")):
+        # bench/ and examples/ too: some tests load a study or an example from there
+        if not f or f.startswith(("mutation/", "docs/")):
             continue
         src = ROOT / f
         if not src.is_file():
@@ -204,15 +214,24 @@ def main(argv=None) -> int:
         print("the unmutated tree fails its C tests:\n" + log[-4000:], file=sys.stderr)
         return 2
     py = None
-    if args.pytest:
+    baseline_ok = {}          # Python-stage test selections that pass on the unmutated copy
+
+    def python_tests(m):
+        """The Python stage of mutant m (its own tests, else --pytest; "" for none), checked
+        once per selection on the unmutated copy."""
+        sel = m.tests or args.pytest
+        if sel and sel not in baseline_ok:
+            outcome, why, t_py = _python_stage(py, sel, 600.0)
+            if outcome != "survived":
+                raise SystemExit(f"the Python stage fails on the unmutated copy: {sel}: {why}")
+            print(f"Python stage: {sel} ({t_py:.0f} s unmutated)", flush=True)
+            baseline_ok[sel] = t_py
+        return sel
+
+    if args.pytest or any(m.tests for m in mutants):
         py = _python_stage_setup(args, cmake, gen, src)
         if py is None:
             return 2
-        outcome, why, t_py = _python_stage(py, args.pytest, 600.0)
-        if outcome != "survived":
-            print(f"the Python stage fails on the unmutated copy: {why}", file=sys.stderr)
-            return 2
-        print(f"Python stage: {args.pytest} ({t_py:.0f} s unmutated)", flush=True)
     limit = args.timeout or max(60.0, 4.0 * t_test)
     print(f"baseline: build {t_build:.0f} s, ctest {t_test:.1f} s; limit per mutant {limit:.0f} s",
           flush=True)
@@ -223,26 +242,31 @@ def main(argv=None) -> int:
         if args.budget and time.monotonic() - t_start > args.budget:
             print(f"budget reached: {len(mutants) - i} mutants not run", flush=True)
             break
+        sel = python_tests(m) if py is not None else ""
         path = src / m.file
         original = path.read_text()
         path.write_text(apply(original, m))
         try:
-            rc, log, tb = _run(build, 900)
-            if rc != 0:
-                outcome, tests, tt = "compiler", [], 0.0
-                err = [ln for ln in log.splitlines() if "error" in ln][:1]
-                tests = [e.strip()[:160] for e in err]
+            if m.file.endswith(".py"):           # nothing to build: the Python stage only
+                tb = 0.0
+                outcome, tests, tt = _python_stage(py, sel, limit)
             else:
-                rc, log, tt = _run([*test, "--timeout", str(int(limit))], limit + 60)
-                if rc is None or "Timeout" in log:
-                    outcome, tests = "timeout", failed_tests(log)
-                elif rc != 0:
-                    outcome, tests = "killed", failed_tests(log)
+                rc, log, tb = _run(build, 900)
+                if rc != 0:
+                    outcome, tests, tt = "compiler", [], 0.0
+                    err = [ln for ln in log.splitlines() if "error" in ln][:1]
+                    tests = [e.strip()[:160] for e in err]
                 else:
-                    outcome, tests = "survived", []
-                    if py is not None:
-                        outcome, tests, t_py = _python_stage(py, args.pytest, limit)
-                        tt += t_py
+                    rc, log, tt = _run([*test, "--timeout", str(int(limit))], limit + 60)
+                    if rc is None or "Timeout" in log:
+                        outcome, tests = "timeout", failed_tests(log)
+                    elif rc != 0:
+                        outcome, tests = "killed", failed_tests(log)
+                    else:
+                        outcome, tests = "survived", []
+                        if sel:
+                            outcome, tests, t_py = _python_stage(py, sel, limit)
+                            tt += t_py
         finally:
             path.write_text(original)
         r = dict(id=m.id, file=m.file, outcome=outcome, by=tests, build_s=round(tb, 1),
@@ -266,26 +290,29 @@ def main(argv=None) -> int:
 
 
 def _python_stage_setup(args, cmake, gen, src):
-    """A second build of the copy with the cffi module only; the package is imported
+    """A second build of the copy with the cffi module and the FMUs; the package is imported
     from the copy (python -S: without the site hooks, so an editable install of the
     checkout cannot redirect the import; site-packages on PYTHONPATH for numpy & co)."""
     import sysconfig
     pybld = args.work / "pybuild"
+    # the cffi module and the FMUs (tests/fmi runs them: a mutant of an FMU model is
+    # judged by the Python FMU tests too)
     rc, log, _ = _run([cmake, "-S", str(src), "-B", str(pybld), *gen, "-DCMAKE_BUILD_TYPE=Release",
                        "-DCMAKE_C_FLAGS_RELEASE=-O1 -DNDEBUG -Wno-maybe-uninitialized",
                        "-DGFINS_BUILD_TESTS=OFF", "-DGFINS_BUILD_PYTHON=ON",
-                       "-DGFINS_BUILD_FMUS=OFF", f"-DPython_EXECUTABLE={sys.executable}"], 600)
-    build = [cmake, "--build", str(pybld), "-j", str(args.jobs), "--target", "_core"]
+                       "-DGFINS_BUILD_FMUS=ON", f"-DPython_EXECUTABLE={sys.executable}"], 600)
+    build = [cmake, "--build", str(pybld), "-j", str(args.jobs)]
     if rc == 0:
         rc, log, _ = _run(build, 1800)
     if rc != 0:
         print("the cffi module does not build in the copy:\n" + log[-4000:], file=sys.stderr)
         return None
     so = sorted(pybld.glob("_core*.so"))[0]
-    link = src / "gfins_fmi" / so.name
-    if link.is_symlink() or link.exists():
-        link.unlink()
-    link.symlink_to(so)
+    for target, name in ((so, so.name), (pybld / "fmus", "fmus")):
+        link = src / "gfins_fmi" / name
+        if link.is_symlink() or link.exists():
+            link.unlink()
+        link.symlink_to(target)
     pkg = args.work / "pypkg"
     pkg.mkdir(exist_ok=True)
     if not (pkg / "gfins_fmi").exists():
@@ -299,8 +326,10 @@ def _python_stage(py, pytest_args, limit):
     rc, log, tb = _run(py["build"], 900)
     if rc != 0:
         return "compiler", [], tb
+    # one process (-o addopts= drops pyproject's -n 2: under xdist -x ends with exit code
+    # 2, "interrupted", like a crash), stopping at the first failure
     cmd = [sys.executable, "-S", "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider",
-           *pytest_args.split()]
+           "-o", "addopts=", *pytest_args.split()]
     t0 = time.monotonic()
     p = subprocess.Popen(cmd, cwd=py["cwd"], env=py["env"], stdout=subprocess.PIPE,
                          stderr=subprocess.STDOUT, text=True, start_new_session=True)

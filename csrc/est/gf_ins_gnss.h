@@ -541,6 +541,21 @@ gf_status gf_ins_rotate_heading(double *q_bn, double *v_n_m_s, double dpsi_rad);
 gf_status gf_ins_error_model(const gf_ins_filter *f, const double *f_b_m_s2,
                              const double *w_ib_b_rad_s, double *F, double *G, double *q);
 
+/* The error state dx1 (n_states), one propagation interval T_s later, of the hypothesis
+ * "the filter's nominal corrected by dx0" (as gf_ins_apply_error corrects it): both the
+ * hypothesis and the nominal are moved by one step of the mechanization with the
+ * interval's compensated increments dtheta_rad, dv_m_s (the hypothesis' with its own
+ * sensor errors), and dx1 is the hypothesis' error about the moved nominal; the sensor
+ * states decay by exp(-T / tau). This is the UKF's time update of one sigma point; its
+ * derivative in dx0 is the transition matrix that the EKF's Phi = I + F T + (F T)^2 / 2
+ * approximates (tests/c/test_ins_propagate.c differentiates it). The filter is not
+ * changed. Errors: GF_ERR_NULL_POINTER, GF_ERR_BAD_PARAMETER (a layout out of range,
+ * T_s not finite and > 0), GF_ERR_NONFINITE_INPUT (dx0, increments), GF_ERR_DIVERGED
+ * (the mechanization refused a state). */
+gf_status gf_ins_propagate_error(const gf_ins_filter *f, const double *dx0,
+                                 const double *dtheta_rad, const double *dv_m_s, double T_s,
+                                 double *dx1);
+
 /* Rauch-Tung-Striebel smoothing of a forward run's epochs (backward pass, all epochs
  * in one call): xs (count x n) receives the smoothed error of each epoch's posterior
  * nominal (subtract it, gf_ins_apply_error), Ps (count x n(n+1)/2, may alias

@@ -237,11 +237,13 @@ static gf_status propagate_ekf(gf_ins_filter *f, gf_ins_epochs *ep)
 }
 
 /* one coarse mechanization step of a hypothesis over the interval, with the interval's
- * compensated increments corrected for the hypothesis' sensor errors */
-static gf_status coarse_step(const gf_ins_filter *f, const nav_hyp *hy, const double dth[3],
-                             const double dv[3], double T, nav_hyp *out)
+ * compensated increments corrected for the hypothesis' sensor errors about the estimates
+ * sens (those the increments were compensated with); base: the nominal's mechanization
+ * state (its configuration and Earth-rate sign) */
+static gf_status coarse_step(const gf_sins_state *base, const double *sens, const nav_hyp *hy,
+                             const double dth[3], const double dv[3], double T, nav_hyp *out)
 {
-    gf_sins_state s = f->nav0;
+    gf_sins_state s = *base;
     s.cfg.input = GF_SINS_INPUT_INCREMENTS;
     s.cfg.coning = 0;
     s.have_prev = 0;          /* the Earth-rate sign is the nominal's (reverse filtering) */
@@ -251,10 +253,10 @@ static gf_status coarse_step(const gf_ins_filter *f, const nav_hyp *hy, const do
     /* true increment = (1 + s)^-1 ... to first order: compensated - db T - ds (.) compensated */
     double g[3], a[3];
     for (int i = 0; i < 3; ++i) {
-        const double dbg = hy->s[S_BG + i] - f->sensors0[S_BG + i];
-        const double dba = hy->s[S_BA + i] - f->sensors0[S_BA + i];
-        const double dsg = hy->s[S_SG + i] - f->sensors0[S_SG + i];
-        const double dsa = hy->s[S_SA + i] - f->sensors0[S_SA + i];
+        const double dbg = hy->s[S_BG + i] - sens[S_BG + i];
+        const double dba = hy->s[S_BA + i] - sens[S_BA + i];
+        const double dsg = hy->s[S_SG + i] - sens[S_SG + i];
+        const double dsa = hy->s[S_SA + i] - sens[S_SA + i];
         g[i] = dth[i] - dbg * T - dsg * dth[i];
         a[i] = dv[i] - dba * T - dsa * dv[i];
     }
@@ -276,28 +278,12 @@ static double gm_decay(double tau_s, double T)
     return tau_s > 0.0 ? exp(-T / tau_s) : 1.0;
 }
 
-static gf_status propagate_ukf(gf_ins_filter *f, gf_ins_epochs *ep)
+/* exp(-T / tau) of every state over an interval T (1 for the navigation states and the
+ * random constants) */
+static void state_decay(const gf_ins_filter *f, double T, double *decay)
 {
-    const int n = f->n_states, np = 2 * n + 1;
-    const double T = f->acc_T_s;
     const gf_ins_noise *nz = &f->cfg.noise;
-    double X[(2 * NMAX + 1) * NMAX], Y[(2 * NMAX + 1) * NMAX];
-    gf_status st = gf_ukf_sigma_points(&f->kf, &f->ukf_w, X);
-    if (st != GF_OK)
-        return GF_ERR_DIVERGED;
-    /* the nominal moved by the same coarse step */
-    nav_hyp nom0, nom1;
-    const double zero[NMAX] = {0};
-    ins_hyp_from_state(f, &f->nav0, f->sensors0, zero, &nom0);
-    st = coarse_step(f, &nom0, f->acc_dtheta_rad, f->acc_dv_m_s, T, &nom1);
-    if (st != GF_OK)
-        return st;
-    gf_sins_state nom1_state = f->nav0;
-    st = gf_sins_set_navigation(&nom1_state, nom1.q, nom1.v, nom1.lat, nom1.lon, nom1.h);
-    if (st != GF_OK)
-        return GF_ERR_DIVERGED;
-    double decay[NMAX];
-    for (int i = 0; i < n; ++i)
+    for (int i = 0; i < f->n_states; ++i)
         decay[i] = 1.0;
     for (int i = 0; i < 3; ++i) {
         decay[IBG + i] = gm_decay(nz->gyro_bias_tau_s, T);
@@ -313,15 +299,82 @@ static gf_status propagate_ukf(gf_ins_filter *f, gf_ins_epochs *ep)
         decay[f->idx_odo] = gm_decay(nz->odometer_scale_tau_s, T);
     for (int i = 0; f->idx_mount >= 0 && i < 2; ++i)
         decay[f->idx_mount + i] = gm_decay(nz->odometer_mount_tau_s, T);
+}
+
+/* the nominal (nav, sens) moved by the coarse step: nom1 as a hypothesis and as a
+ * mechanization state */
+static gf_status move_nominal(const gf_ins_filter *f, const gf_sins_state *nav,
+                              const double *sens, const double dth[3], const double dv[3],
+                              double T, gf_sins_state *nom1_state)
+{
+    nav_hyp nom0, nom1;
+    const double zero[NMAX] = {0};
+    ins_hyp_from_state(f, nav, sens, zero, &nom0);
+    gf_status st = coarse_step(nav, sens, &nom0, dth, dv, T, &nom1);
+    if (st != GF_OK)
+        return st;
+    *nom1_state = *nav;
+    st = gf_sins_set_navigation(nom1_state, nom1.q, nom1.v, nom1.lat, nom1.lon, nom1.h);
+    return st == GF_OK ? GF_OK : GF_ERR_DIVERGED;
+}
+
+/* one point of the UKF's time update: dx0 about (nav, sens) -> dx1 about the moved
+ * nominal nom1 */
+static gf_status move_point(const gf_ins_filter *f, const gf_sins_state *nav, const double *sens,
+                            const gf_sins_state *nom1, const double *decay, const double *dx0,
+                            const double dth[3], const double dv[3], double T, double *dx1)
+{
+    nav_hyp h0, h1;
+    ins_hyp_from_state(f, nav, sens, dx0, &h0);
+    const gf_status st = coarse_step(nav, sens, &h0, dth, dv, T, &h1);
+    if (st != GF_OK)
+        return st;
+    ins_error_from_hyp(f, nom1, sens, &h1, dx1);
+    for (int i = IBG; i < f->n_states; ++i)
+        dx1[i] = decay[i] * dx0[i];
+    return GF_OK;
+}
+
+gf_status gf_ins_propagate_error(const gf_ins_filter *f, const double *dx0,
+                                 const double *dtheta_rad, const double *dv_m_s, double T_s,
+                                 double *dx1)
+{
+    if (!f || !dx0 || !dtheta_rad || !dv_m_s || !dx1)
+        return GF_ERR_NULL_POINTER;
+    if (!ins_layout_is_valid(f) || !(T_s > 0.0) || !isfinite(T_s))
+        return GF_ERR_BAD_PARAMETER;
+    if (!gf_all_finite(dx0, (size_t)f->n_states) || !gf_all_finite(dtheta_rad, 3) ||
+        !gf_all_finite(dv_m_s, 3))
+        return GF_ERR_NONFINITE_INPUT;
+    gf_sins_state nom1;
+    gf_status st = move_nominal(f, &f->nav, f->sensors, dtheta_rad, dv_m_s, T_s, &nom1);
+    if (st != GF_OK)
+        return st;
+    double decay[NMAX];
+    state_decay(f, T_s, decay);
+    return move_point(f, &f->nav, f->sensors, &nom1, decay, dx0, dtheta_rad, dv_m_s, T_s, dx1);
+}
+
+static gf_status propagate_ukf(gf_ins_filter *f, gf_ins_epochs *ep)
+{
+    const int n = f->n_states, np = 2 * n + 1;
+    const double T = f->acc_T_s;
+    double X[(2 * NMAX + 1) * NMAX], Y[(2 * NMAX + 1) * NMAX];
+    gf_status st = gf_ukf_sigma_points(&f->kf, &f->ukf_w, X);
+    if (st != GF_OK)
+        return GF_ERR_DIVERGED;
+    /* the nominal moved by the same coarse step */
+    gf_sins_state nom1_state;
+    st = move_nominal(f, &f->nav0, f->sensors0, f->acc_dtheta_rad, f->acc_dv_m_s, T, &nom1_state);
+    if (st != GF_OK)
+        return st;
+    double decay[NMAX];
+    state_decay(f, T, decay);
     for (int p = 0; p < np; ++p) {
-        nav_hyp h0, h1;
-        ins_hyp_from_state(f, &f->nav0, f->sensors0, X + p * n, &h0);
-        st = coarse_step(f, &h0, f->acc_dtheta_rad, f->acc_dv_m_s, T, &h1);
+        st = move_point(f, &f->nav0, f->sensors0, &nom1_state, decay, X + p * n,
+                        f->acc_dtheta_rad, f->acc_dv_m_s, T, Y + p * n);
         if (st != GF_OK)
             return st;
-        ins_error_from_hyp(f, &nom1_state, f->sensors0, &h1, Y + p * n);
-        for (int i = IBG; i < n; ++i)
-            Y[p * n + i] = decay[i] * X[p * n + i];
     }
     double qd[NMAX], Q[NMAX * NMAX];
     process_noise(f, qd);

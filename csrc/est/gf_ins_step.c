@@ -161,6 +161,8 @@ static gf_status ins_step(gf_ins_filter *f, double t_s, const double *gyro_in, c
         gf_v3_copy(a, f->f_b_m_s2);
         f->t_s = t_s;
         f->nav.time_s = t_s;
+        if (f->cfg.zupt && f->n_imu == 0)
+            standstill_update(f, 0.0);   /* seeds the detector's averages with this sample */
         for (size_t j = 0; j < n_meas && st == GF_OK; ++j) {
             gf_ins_meas ms;
             ins_meas_directed(f, MS(j), &ms);

@@ -4,7 +4,9 @@
  * fmpy, FMI 2.0 and 3.0, against the Python batch API). Sensor data: the vehicle truth
  * of turn_drive.h (15 s: rest, start, a 180 deg turn) with GNSS at 1 Hz on samples, a GNSS
  * epoch delivered 0.2 s late every 100 samples (stale), barometer and odometer at 10 Hz
- * valid inside the sample intervals; barometer bias, odometer scale and NHC on.
+ * valid inside the sample intervals (and a barometer sample delivered with each GNSS epoch,
+ * valid before it: the FMU must sort what one step brings); all 25 states (scale factors, barometer bias,
+ * odometer scale and boresight) and NHC on, every parameter a value of its own.
  *   1. EKF and UKF: the FMU equals gf_ins_init + gf_ins_step called directly with the
  *      same P0 and the same measurements, bit for bit (navigation, std, sensor errors,
  *      per-kind NIS and status);
@@ -56,6 +58,10 @@ static Delivery delivery(int k)
         d.baro = 1;
         d.baro_t = k * H_S - 0.004;
     }
+    if (k > 0 && k % 100 == 0) {            /* with the GNSS epoch, valid before it */
+        d.baro = 1;
+        d.baro_t = k * H_S - 0.006;
+    }
     if (k > 0 && k % 10 == 7) {
         d.odo = 1;
         d.odo_t = k * H_S - 0.006;
@@ -63,21 +69,46 @@ static Delivery delivery(int k)
     return d;
 }
 
-static const double kPosStd[3] = {0.5, 0.5, 1.0}, kVelStd[3] = {0.05, 0.05, 0.1};
+/* every axis its own std: an east/north swap of an input cannot hide */
+static const double kPosStd[3] = {0.5, 0.6, 1.0}, kVelStd[3] = {0.05, 0.06, 0.1};
 #define BARO_BIAS_M 0.3
 #define BARO_STD_M 0.5
 #define ODO_STD_M_S 0.05
+
+static const double kGnssLever[3] = {0.31, 1.27, 1.61};
+
+/* the antenna at kGnssLever of truth row x: position (lat, lon, h) p + C l and velocity
+ * v + C (w_eb x l), w_eb = w_ib - C^T w_ie (the measurement model of gf_ins_gnss.h, the
+ * truth's own rates) */
+static void antenna(const gf_vehicle_sample *x, double pos[3], double vel[3])
+{
+    double cl[3], w_ie_b[3], w_eb[3], wl[3], cwl[3];
+    gf_q_rotate(x->q_bn, kGnssLever, cl);
+    gf_earth e;
+    CHECK(gf_earth_update(&e, x->lat_rad, x->h_m, NULL, 1.0) == GF_OK, "earth");
+    pos[0] = x->lat_rad + cl[1] / (e.R_M_m + x->h_m);
+    pos[1] = x->lon_rad + cl[0] / ((e.R_N_m + x->h_m) * e.cos_lat);
+    pos[2] = x->h_m + cl[2];
+    const double w_ie[3] = {0.0, GF_WGS84_OMEGA_IE_RAD_S * cos(x->lat_rad),
+                            GF_WGS84_OMEGA_IE_RAD_S * sin(x->lat_rad)};
+    const double qc[4] = {x->q_bn[0], -x->q_bn[1], -x->q_bn[2], -x->q_bn[3]};
+    gf_q_rotate(qc, w_ie, w_ie_b);
+    gf_v3_sub(x->gyro_rad_s, w_ie_b, w_eb);
+    gf_v3_cross(w_eb, kGnssLever, wl);
+    gf_q_rotate(x->q_bn, wl, cwl);
+    gf_v3_add(x->v_n_m_s, cwl, vel);
+}
 
 static size_t core_meas(int k, gf_ins_meas *m)
 {
     const Delivery d = delivery(k);
     size_t n = 0;
     if (d.gnss) {
-        const gf_vehicle_sample *x = &g_truth[d.gnss_from];
-        m[n++] = (gf_ins_meas){GF_INS_MEAS_GNSS_POS, d.gnss_t, {x->lat_rad, x->lon_rad, x->h_m},
+        double pos[3], vel[3];
+        antenna(&g_truth[d.gnss_from], pos, vel);
+        m[n++] = (gf_ins_meas){GF_INS_MEAS_GNSS_POS, d.gnss_t, {pos[0], pos[1], pos[2]},
                                {kPosStd[0], kPosStd[1], kPosStd[2]}};
-        m[n++] = (gf_ins_meas){GF_INS_MEAS_GNSS_VEL, d.gnss_t,
-                               {x->v_n_m_s[0], x->v_n_m_s[1], x->v_n_m_s[2]},
+        m[n++] = (gf_ins_meas){GF_INS_MEAS_GNSS_VEL, d.gnss_t, {vel[0], vel[1], vel[2]},
                                {kVelStd[0], kVelStd[1], kVelStd[2]}};
     }
     if (d.baro)
@@ -86,6 +117,14 @@ static size_t core_meas(int k, gf_ins_meas *m)
     if (d.odo)
         m[n++] = (gf_ins_meas){GF_INS_MEAS_ODO, d.odo_t, {g_truth[k].speed_m_s, 0, 0},
                                {ODO_STD_M_S, 0, 0}};
+    /* gf_ins_step takes them sorted by time (stable: kinds in the order above at equal
+     * times), as the FMU must hand them over */
+    for (size_t i = 1; i < n; ++i)
+        for (size_t j = i; j > 0 && m[j - 1].t_s > m[j].t_s; --j) {
+            const gf_ins_meas x = m[j];
+            m[j] = m[j - 1];
+            m[j - 1] = x;
+        }
     return n;
 }
 
@@ -98,12 +137,13 @@ static void fmu_inputs(fmi2Component c, int k)
     set_int(c, "baro_valid", d.baro);
     set_int(c, "odo_valid", d.odo);
     if (d.gnss) {
-        const gf_vehicle_sample *x = &g_truth[d.gnss_from];
+        double pos[3], vel[3];
+        antenna(&g_truth[d.gnss_from], pos, vel);
         set_real(c, "gnss_time_s", d.gnss_t);
-        set_real(c, "gnss_lat_rad", x->lat_rad);
-        set_real(c, "gnss_lon_rad", x->lon_rad);
-        set_real(c, "gnss_h_m", x->h_m);
-        set_vec(c, "gnss_vel_enu_m_s", x->v_n_m_s, 3);
+        set_real(c, "gnss_lat_rad", pos[0]);
+        set_real(c, "gnss_lon_rad", pos[1]);
+        set_real(c, "gnss_h_m", pos[2]);
+        set_vec(c, "gnss_vel_enu_m_s", vel, 3);
         set_vec(c, "gnss_pos_std_m", kPosStd, 3);
         set_vec(c, "gnss_vel_std_m_s", kVelStd, 3);
     }
@@ -121,15 +161,31 @@ static void fmu_inputs(fmi2Component c, int k)
 
 /* ---- configuration: the same numbers to the FMU and to the core ----------------------- */
 
-static const double kStd0Vel = 0.1, kStd0Pos[3] = {1.0, 2.0, 3.0}, kStd0Att[3] = {0.01, 0.01, 0.05};
-static const double kStd0Bg = 1e-4, kStd0Ba = 1e-2, kStd0Baro = 1.0, kStd0Odo = 0.01;
+/* Every parameter below has a value different from every other (every axis of a vector
+ * too), so that the FMU reading one parameter into another's place (issue 25: the gyro
+ * scale-factor P0 taken from the accelerometer's) changes the run; all 25 states on. */
+static const double kStd0Vel[3] = {0.1, 0.11, 0.12}, kStd0Pos[3] = {1.0, 2.0, 3.0};
+static const double kStd0Att[3] = {0.01, 0.011, 0.05}, kStd0Bg[3] = {1e-4, 1.1e-4, 1.2e-4};
+static const double kStd0Ba[3] = {1e-2, 1.1e-2, 1.2e-2}, kStd0Sg[3] = {3e-4, 3.1e-4, 3.2e-4};
+static const double kStd0Sa[3] = {4e-4, 4.1e-4, 4.2e-4}, kStd0Mount[2] = {0.021, 0.023};
+static const double kStd0Baro = 1.3, kStd0Odo = 0.014;
+static const double kSensors0[GF_INS_N_SENSORS] = {
+    1.1e-6, -1.3e-6, 1.7e-6, 2.3e-3, -2.9e-3, 3.1e-3, 1.9e-5, -2.1e-5, 2.7e-5,
+    -3.3e-5, 3.4e-5, -4.1e-5, 0.27, 0.0047, 0.0013, -0.0019};
+/* the odometer point below the IMU, nearly on its forward axis, and a boresight of less
+ * than a milliradian: the truth's forward speed is the odometer's to 1e-3 m/s in the turn
+ * and the NHC hold to that (their stds: 0.05 and 0.1 m/s) */
+static const double kOdoLever[3] = {1e-3, 2e-3, -0.4};
+static const double kOdoMount[2] = {6.1e-4, -8.3e-4};
 
 static void core_config(gf_ins_config *c, int filter)
 {
     gf_ins_config_default(c);
     c->filter = filter;
+    c->scale_factors = 1;
     c->baro_bias = 1;
     c->odometer_scale = 1;
+    c->odometer_mount = 1;
     c->nhc = 1;
     c->gate_probability = 0.9999;
     c->gate_reset_count = 5;          /* the FMU's default (FilterConfig's) */
@@ -137,13 +193,20 @@ static void core_config(gf_ins_config *c, int filter)
     c->noise.accel_vrw_m_s_sqrt_s = 1e-3;
     c->noise.gyro_bias_std_rad_s = 1e-5;
     c->noise.gyro_bias_tau_s = 3600.0;
-    c->noise.accel_bias_std_m_s2 = 1e-3;
-    c->noise.accel_bias_tau_s = 3600.0;
+    c->noise.accel_bias_std_m_s2 = 1.1e-3;
+    c->noise.accel_bias_tau_s = 3100.0;
+    c->noise.gyro_scale_std = 1.3e-3;
+    c->noise.gyro_scale_tau_s = 5100.0;
+    c->noise.accel_scale_std = 1.7e-3;
+    c->noise.accel_scale_tau_s = 4700.0;
     c->noise.baro_bias_std_m = 1.0;
-    c->noise.baro_bias_tau_s = 3600.0;
+    c->noise.baro_bias_tau_s = 2900.0;
     c->noise.odometer_scale_std = 0.01;
-    c->noise.gyro_scale_std = 1e-3;   /* unused (no scale states), set as the FMU's default */
-    c->noise.accel_scale_std = 1e-3;
+    c->noise.odometer_mount_std_rad = 0.031;
+    c->noise.odometer_mount_tau_s = 6100.0;
+    memcpy(c->gnss_lever_arm_m, kGnssLever, sizeof kGnssLever);
+    memcpy(c->odometer_lever_arm_m, kOdoLever, sizeof kOdoLever);
+    memcpy(c->odometer_mount_rad, kOdoMount, sizeof kOdoMount);
 }
 
 static fmi2Component open_ready(int filter, int skip)
@@ -153,32 +216,45 @@ static fmi2Component open_ready(int filter, int skip)
     fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0);
     fmi2EnterInitializationMode(c);
     set_int(c, "filter", filter);
+    set_int(c, "scale_factors", 1);
     set_int(c, "baro_bias", 1);
     set_int(c, "odometer_scale", 1);
+    set_int(c, "odometer_mount", 1);
     set_int(c, "nhc", 1);
     set_real(c, "gate_probability", 0.9999);
     set_real(c, "gyro_arw_rad_sqrt_s", 1e-4);
     set_real(c, "accel_vrw_m_s_sqrt_s", 1e-3);
     set_real(c, "gyro_bias_std_rad_s", 1e-5);
     set_real(c, "gyro_bias_tau_s", 3600.0);
-    set_real(c, "accel_bias_std_m_s2", 1e-3);
-    set_real(c, "accel_bias_tau_s", 3600.0);
+    set_real(c, "accel_bias_std_m_s2", 1.1e-3);
+    set_real(c, "accel_bias_tau_s", 3100.0);
+    set_real(c, "gyro_scale_std", 1.3e-3);
+    set_real(c, "gyro_scale_tau_s", 5100.0);
+    set_real(c, "accel_scale_std", 1.7e-3);
+    set_real(c, "accel_scale_tau_s", 4700.0);
     set_real(c, "baro_bias_std_m", 1.0);
-    set_real(c, "baro_bias_tau_s", 3600.0);
+    set_real(c, "baro_bias_tau_s", 2900.0);
     set_real(c, "odometer_scale_std", 0.01);
     set_real(c, "odometer_scale_tau_s", 0.0);
+    set_real(c, "odometer_mount_std_rad", 0.031);
+    set_real(c, "odometer_mount_tau_s", 6100.0);
+    set_vec(c, "gnss_lever_arm_m", kGnssLever, 3);
+    set_vec(c, "odometer_lever_arm_m", kOdoLever, 3);
+    set_vec(c, "odometer_mount_rad", kOdoMount, 2);
+    set_vec(c, "sensors0", kSensors0, GF_INS_N_SENSORS);
     set_vec(c, "q0", x0->q_bn, 4);
     set_vec(c, "v0", x0->v_n_m_s, 3);
     set_real(c, "lat0", x0->lat_rad);
     set_real(c, "lon0", x0->lon_rad);
     set_real(c, "h0", x0->h_m);
-    const double v3[3] = {kStd0Vel, kStd0Vel, kStd0Vel}, bg[3] = {kStd0Bg, kStd0Bg, kStd0Bg};
-    const double ba[3] = {kStd0Ba, kStd0Ba, kStd0Ba};
-    set_vec(c, "std0_vel", v3, 3);
+    set_vec(c, "std0_vel", kStd0Vel, 3);
     set_vec(c, "std0_pos", kStd0Pos, 3);
     set_vec(c, "std0_att", kStd0Att, 3);
-    set_vec(c, "std0_gyro_bias", bg, 3);
-    set_vec(c, "std0_accel_bias", ba, 3);
+    set_vec(c, "std0_gyro_bias", kStd0Bg, 3);
+    set_vec(c, "std0_accel_bias", kStd0Ba, 3);
+    set_vec(c, "std0_gyro_scale", kStd0Sg, 3);
+    set_vec(c, "std0_accel_scale", kStd0Sa, 3);
+    set_vec(c, "std0_odo_mount", kStd0Mount, 2);
     set_real(c, "std0_baro_bias", kStd0Baro);
     set_real(c, "std0_odo_scale", kStd0Odo);
     set_int(c, "skip_steps", skip);
@@ -224,7 +300,7 @@ static void core_run(int filter, int k0)
     gf_ins_config cfg;
     core_config(&cfg, filter);
     int32_t n = 0;
-    CHECK(gf_ins_state_count(&cfg, &n) == GF_OK && n == 17, "17 states");
+    CHECK(gf_ins_state_count(&cfg, &n) == GF_OK && n == 25, "25 states");
     /* P0: the initial std per block, position metres -> (dlat, dlon) with gf_earth */
     static double P0[GF_INS_MAX_STATES * GF_INS_MAX_STATES];
     memset(P0, 0, sizeof P0);
@@ -232,15 +308,18 @@ static void core_run(int filter, int k0)
     CHECK(gf_earth_update(&e, x0->lat_rad, x0->h_m, NULL, 1.0) == GF_OK, "earth");
     const double dlat = kStd0Pos[1] / (e.R_M_m + x0->h_m);
     const double dlon = kStd0Pos[0] / ((e.R_N_m + x0->h_m) * e.cos_lat);
-    const double sd[17] = {kStd0Vel, kStd0Vel, kStd0Vel, dlat, dlon, kStd0Pos[2],
-                           kStd0Att[0], kStd0Att[1], kStd0Att[2], kStd0Bg, kStd0Bg, kStd0Bg,
-                           kStd0Ba, kStd0Ba, kStd0Ba, kStd0Baro, kStd0Odo};
+    /* the state order of gf_ins_gnss.h: dv, dp, phi, dbg, dba, dsg, dsa, baro, odo, mount */
+    const double sd[25] = {kStd0Vel[0], kStd0Vel[1], kStd0Vel[2], dlat, dlon, kStd0Pos[2],
+                           kStd0Att[0], kStd0Att[1], kStd0Att[2], kStd0Bg[0], kStd0Bg[1],
+                           kStd0Bg[2], kStd0Ba[0], kStd0Ba[1], kStd0Ba[2], kStd0Sg[0],
+                           kStd0Sg[1], kStd0Sg[2], kStd0Sa[0], kStd0Sa[1], kStd0Sa[2],
+                           kStd0Baro, kStd0Odo, kStd0Mount[0], kStd0Mount[1]};
     for (int i = 0; i < n; ++i)
         P0[i * n + i] = sd[i] * sd[i];
     static gf_ins_filter f;
     int32_t bad = -1;
     CHECK(gf_ins_init(&f, &cfg, k0 * H_S, x0->q_bn, x0->v_n_m_s, x0->lat_rad, x0->lon_rad,
-                      x0->h_m, NULL, P0, &bad) == GF_OK && bad == 0, "core init");
+                      x0->h_m, kSensors0, P0, &bad) == GF_OK && bad == 0, "core init");
     double nis[7];
     int status[7];
     for (int i = 0; i < 7; ++i) {
@@ -394,7 +473,7 @@ static void test_refusals(void)
     expect_refused("lat0", "lat0", 1.56, 0, "parameter lat0 = 1.56 rad");
     expect_refused("skip_steps", "skip_steps", -1, 1, "skip_steps = -1 must be >= 0");
     expect_refused("odometer_mount_rad", "odometer_mount_rad[2]", 2.0, 0,
-                   "parameter odometer_mount_rad = [0, 2] rad refused: must be finite and inside");
+                   "parameter odometer_mount_rad = [0.00061, 2] rad refused: must be finite and inside");
 
     /* a measurement valid after the sample it came with; then a non-finite GNSS input:
      * errors, the outputs keep the last good sample */
@@ -560,7 +639,7 @@ static void test_damaged_states(int filter)
     const StatePatch patches[] = {
         PATCH('i', filter.n_states, 36, "filter"),
         PATCH('i', filter.idx_baro, 40, "filter"),
-        PATCH('i', filter.idx_sg, 15, "filter"),
+        PATCH('i', filter.idx_sg, 16, "filter"),
         PATCH('z', filter.kf.n, 36, "filter"),
         PATCH('z', filter.ukf_w.n, 14, "filter"),
         PATCH('i', filter.hist_head, 500, "filter"),

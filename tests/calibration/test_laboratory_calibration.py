@@ -79,3 +79,59 @@ def test_plan_that_cannot_determine_a_parameter_names_it():
     with pytest.raises(ValueError, match="cannot determine the accelerometer x-axis parameters "
                                          "scale, K2, N_xy"):
         cal.calibrate(data)
+
+
+def test_stds_and_residuals_are_those_of_the_sensor_model():
+    """The reported std of every parameter is sqrt(diag(sigma^2 (J^T J)^-1)) and the residual
+    rms that of y - model, with the sensor model written out here from its documentation,
+        accelerometer i: y = (1+s) u + K2 u^2 + b,  u = f_i + N_ij f_j + N_il f_l - r (w_j^2 + w_l^2)
+        gyro i:          y = (1+s) (w_i + N_ij w_j + N_il w_l) + b
+    and J taken by central differences at the reported estimate (the models are quadratic
+    in the parameters: the differences are exact but for round-off, ~1e-10 relative with
+    these steps). Tolerance 1e-6 relative: the estimate goes through the datasheet units
+    and back."""
+    rng = np.random.default_rng(7)
+    e = gf.ImuErrors.random(rng, **DATASHEET)
+    data = cal.simulate(e, cal.test_plan(), rng)
+    res = cal.calibrate(data)
+    f, w = data.plan.f_m_s2, data.plan.omega_rad_s
+    ug, ppm, arcsec, deg_h = 9.80665e-6, 1e-6, np.pi / 180 / 3600, np.pi / 180 / 3600
+    k2_unit = 1e-6 / 9.80665                       # ug/g^2 -> 1/(m/s^2)
+
+    def fit_check(model, names, units, steps, y, sigma):
+        p = np.array([res.estimate[n] * u for n, u in zip(names, units)])
+        J = np.empty((len(y), len(p)))
+        for k, h in enumerate(steps):
+            dp = np.zeros(len(p))
+            dp[k] = h
+            J[:, k] = (model(p + dp) - model(p - dp)) / (2 * h)
+        std = sigma * np.sqrt(np.diag(np.linalg.inv(J.T @ J)))
+        np.testing.assert_allclose([res.std[n] * u for n, u in zip(names, units)], std, rtol=1e-6)
+        return y - model(p)
+
+    ra, rg = [], []
+    for i, ax in enumerate("xyz"):
+        j, l = [x for x in range(3) if x != i]
+        mis = [f"[{ax}{'xyz'[j]}]", f"[{ax}{'xyz'[l]}]"]
+        cen = w[:, j] ** 2 + w[:, l] ** 2
+
+        def accel(p, i=i, j=j, l=l, cen=cen):
+            b, s, k2, nj, nl, r = p
+            u = f[:, i] + nj * f[:, j] + nl * f[:, l] - r * cen
+            return (1 + s) * u + k2 * u * u + b
+
+        def gyro(p, i=i, j=j, l=l):
+            b, s, nj, nl = p
+            return (1 + s) * (w[:, i] + nj * w[:, j] + nl * w[:, l]) + b
+        ra.append(fit_check(accel, [f"accel_bias_ug[{ax}]", f"accel_scale_ppm[{ax}]",
+                                    f"accel_k2_ug_g2[{ax}]"] +
+                            [f"accel_misalignment_arcsec{m}" for m in mis] + [f"lever_arm_cm[{ax}]"],
+                            [ug, ppm, k2_unit, arcsec, arcsec, 0.01],
+                            [1e-4, 1e-4, 1e-6, 1e-4, 1e-4, 1e-4],
+                            data.accel_mean_m_s2[:, i], data.accel_sigma_m_s2))
+        rg.append(fit_check(gyro, [f"gyro_bias_deg_h[{ax}]", f"gyro_scale_ppm[{ax}]"] +
+                            [f"gyro_misalignment_arcsec{m}" for m in mis],
+                            [deg_h, ppm, arcsec, arcsec], [1e-6, 1e-4, 1e-4, 1e-4],
+                            data.gyro_mean_rad_s[:, i], data.gyro_sigma_rad_s))
+    assert res.residual_rms_accel_m_s2 == pytest.approx(np.sqrt(np.mean(np.square(ra))), rel=1e-6)
+    assert res.residual_rms_gyro_rad_s == pytest.approx(np.sqrt(np.mean(np.square(rg))), rel=1e-6)

@@ -8,6 +8,8 @@ reduction.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 from scipy.linalg import expm
@@ -62,7 +64,9 @@ def _filter_at(lat, h, v, euler, **cfg_kw):
 
 @pytest.mark.parametrize("state", STATES)
 @pytest.mark.parametrize("opts", [{}, {"scale_factors": True, "baro_bias": True, "odometer_scale": True,
-                                       "odometer_mount": True, "odometer_mount_tau_s": 900.0}])
+                                       "odometer_mount": True, "odometer_mount_tau_s": 900.0,
+                                       "gyro_scale_tau_s": 5100.0, "accel_scale_std": 7e-4,
+                                       "accel_scale_tau_s": 4700.0, "odometer_scale_tau_s": 6100.0}])
 def test_c_error_model_is_the_definition(state, opts):
     """The C filter's F and G equal error_models.ins_error_matrices (the definition)."""
     lat, h, v, euler, fb, wb = state
@@ -70,7 +74,7 @@ def test_c_error_model_is_the_definition(state, opts):
     F_c, G_c, q_c = nav.error_model(fb, wb)
     tau = {"bg": 300.0, "ba": 600.0}
     if opts:
-        tau.update({"baro": 3600.0, "odo_mount": 900.0})
+        tau.update({"baro": 3600.0, "odo_mount": 900.0, "sg": 5100.0, "sa": 4700.0, "odo": 6100.0})
     F_py, G_py = ins_error_matrices(lat, h, v, list(nav._f.nav.q_bn), fb, wb,
                                     scale_states=bool(opts), baro_state=bool(opts),
                                     odo_state=bool(opts), odo_mount_state=bool(opts), tau_s=tau)
@@ -85,6 +89,15 @@ def test_c_error_model_is_the_definition(state, opts):
     np.testing.assert_allclose(q_c[:6], [vrw ** 2] * 3 + [arw ** 2] * 3, rtol=1e-12)
     np.testing.assert_allclose(q_c[6:9], 2 * (1 * DEG_H) ** 2 / 300, rtol=1e-12)
     np.testing.assert_allclose(q_c[9:12], 2 * (100 * UG) ** 2 / 600, rtol=1e-12)
+    if opts:
+        # every sensor state's own 2 sigma^2 / tau (0: a random constant, tau = 0), from
+        # the configuration's values, which differ from block to block
+        c = nav.config
+        gm = [(c.gyro_scale_std, c.gyro_scale_tau_s)] * 3 + [(c.accel_scale_std, c.accel_scale_tau_s)] * 3 \
+            + [(c.baro_bias_std_m, c.baro_bias_tau_s), (c.odometer_scale_std, c.odometer_scale_tau_s)] \
+            + [(c.odometer_mount_std_rad, c.odometer_mount_tau_s)] * 2
+        want = [2 * s * s / tau if tau > 0 else 0.0 for s, tau in gm]
+        np.testing.assert_allclose(q_c[12:], want, rtol=1e-12, atol=0)
 
 
 @pytest.mark.parametrize("state", STATES[:2])
@@ -191,3 +204,23 @@ def test_bad_arguments():
                                       ptr(F, 81)) == lib.GF_ERR_BAD_SIZE
     assert lib.gf_ins_nav_error_model(ptr(q, 4), ptr(v, 3), 0.2, 0.0, ffi.NULL, 9, 0, 3, 6,
                                       ptr(F, 81)) == lib.GF_ERR_NULL_POINTER
+
+
+def test_definition_refuses_the_poles_and_decays_each_block_alone():
+    """ins_error_matrices: a latitude at or beyond +-90 deg refused; each block's
+    correlation time sets the decay -1/tau of its own states only (a block without one is
+    a random constant: 0 on its diagonal), so a block cannot spill into its neighbour."""
+    q, v, fb, wb = [1.0, 0, 0, 0], np.zeros(3), np.array([0.1, 0.2, 9.8]), np.array([0.01, 0.02, 0.03])
+    for lat in (math.pi / 2, -1.6, 3.0):
+        with pytest.raises(ValueError, match="lat_rad must be inside"):
+            ins_error_matrices(lat, 0.0, v, q, fb, wb)
+    names = ["bg", "ba", "sg", "sa", "baro", "odo", "odo_mount"]
+    for given in names:
+        F, _ = ins_error_matrices(0.6, 10.0, v, q, fb, wb, scale_states=True, baro_state=True,
+                                  odo_state=True, odo_mount_state=True, tau_s={given: 50.0})
+        diag = np.diag(F)[9:]
+        k0 = {"bg": 0, "ba": 3, "sg": 6, "sa": 9, "baro": 12, "odo": 13, "odo_mount": 14}[given]
+        k1 = k0 + {"baro": 1, "odo": 1, "odo_mount": 2}.get(given, 3)
+        want = np.zeros(len(diag))
+        want[k0:k1] = -1.0 / 50.0
+        np.testing.assert_array_equal(diag, want, err_msg=given)

@@ -283,3 +283,115 @@ def test_delayed_measurements(exact_drive, latency_s):
     # the error state is taken as constant over the delay; with exact data it stays ~0
     assert np.abs(log["r"][log["type"] == lib.GF_INS_MEAS_GNSS_POS]).max() < 2e-3
     assert np.abs(log["r"][log["type"] == lib.GF_INS_MEAS_GNSS_VEL]).max() < 2e-3
+
+
+@pytest.mark.parametrize("kind", ["increments", "rates"])
+def test_sensor_estimates_compensate_every_axis(exact_drive, kind):
+    """Raw samples made from the exact ones with a bias and a scale factor on every axis
+    of both sensors, all different (raw = (1 + s) true + b, b integrated over the interval
+    for increments), and the filter told them as its initial sensor estimates: its free
+    inertial run (no measurements) is the run of the exact samples with zero estimates,
+    to the round-off of the compensation (1 + s)^-1 ((1 + s) x) ~ 2 eps relative per
+    sample (measured over 60 s: 1.8e-15 of the largest velocity, 3e-16 on q; bounds 1e-12
+    and 1e-14). A gyro scale used for the accelerometer, a bias of the wrong sensor or
+    sign, or one axis for another moves the velocity by ~0.1 m/s within seconds; without
+    the estimates: 2.2 m/s."""
+    tr, imu = exact_drive
+    n = 6000
+    bg, ba = np.array([1.1e-4, -1.3e-4, 1.7e-4]), np.array([0.023, -0.029, 0.031])
+    sg, sa = np.array([1.9e-3, -2.3e-3, 2.9e-3]), np.array([-3.1e-3, 3.7e-3, -4.1e-3])
+    sensors = np.r_[bg, ba, sg, sa, 0.0, 0.0, 0.0, 0.0]
+    if kind == "increments":
+        t, g, a = imu.t_s[:n], imu.gyro[:n], imu.accel[:n]
+        dt = np.diff(np.r_[tr.t_s[0], t])[:, None]
+        raw = Rec(t_s=t, gyro=(1 + sg) * g + bg * dt, accel=(1 + sa) * a + ba * dt, kind=kind)
+        exact = Rec(t_s=t, gyro=g, accel=a, kind=kind)
+    else:
+        sl = slice(0, 10 * n, 10)
+        t, g, a = tr.t_s[sl], tr.gyro_rad_s[sl], tr.accel_m_s2[sl]
+        raw = Rec(t_s=t, gyro=(1 + sg) * g + bg, accel=(1 + sa) * a + ba, kind=kind)
+        exact = Rec(t_s=t, gyro=g, accel=a, kind=kind)
+    cfg = quiet_config(input=kind, scale_factors=True)
+    nav0 = gf.NavState.from_trajectory(tr, 0)
+    with_errors = IntegratedNavigator(cfg, InitialState(nav0, sensors=sensors)).run(raw)
+    clean = IntegratedNavigator(cfg, InitialState(nav0)).run(exact)
+    scale = np.abs(clean.v_n_m_s).max()
+    assert np.abs(with_errors.v_n_m_s - clean.v_n_m_s).max() < 1e-12 * scale
+    assert np.abs(with_errors.q_bn - clean.q_bn).max() < 1e-14
+    # and without the estimates the errors show: the check can fail
+    blind = IntegratedNavigator(cfg, InitialState(nav0)).run(raw)
+    assert np.abs(blind.v_n_m_s - clean.v_n_m_s).max() > 0.1
+
+
+def test_gate_rejects_then_forces_after_its_count(exact_drive):
+    """gate_reset_count = 3: GNSS position epochs 60 m off are rejected by the gate; the
+    fourth in a row is applied (forced); an accepted epoch starts the count again. Epochs
+    (b: bad, g: good): b b g b b b b -> rejected, rejected, accepted, rejected, rejected,
+    rejected, forced."""
+    tr, imu = exact_drive
+    k = np.arange(1003, 7004, 1000)                  # 7 epochs, 1 Hz
+    g = gnss_record(tr, k, std=(0.5, 0.5, 1.0))
+    bad = np.array([1, 1, 0, 1, 1, 1, 1], bool)
+    g.lat_rad = g.lat_rad + bad * 60.0 / 6.37e6     # 60 m north, 120 sigma
+    cfg = quiet_config(gate_probability=0.9999, gate_reset_count=3)
+    sol = start(tr, cfg, position_std_m=0.5, velocity_std_m_s=0.05,
+                attitude_std_rad=1e-3).run(imu, Rec(t_s=g.t_s, lat_rad=g.lat_rad, lon_rad=g.lon_rad,
+                                                    h_m=g.h_m, pos_std_m=g.pos_std_m))
+    st = sol.innovations_of("gnss_pos")["status"]
+    assert list(st) == [lib.GF_INS_REJECTED_GATE] * 2 + [lib.GF_INS_ACCEPTED] + \
+        [lib.GF_INS_REJECTED_GATE] * 3 + [lib.GF_INS_FORCED], list(st)
+
+
+def test_nhc_keeps_its_own_interval(exact_drive):
+    """NHC updates come every nhc_interval_s (0.3 s here), whatever the ZUPT interval
+    (0.1 s): the log's NHC times are 0.3 s apart."""
+    tr, imu = exact_drive
+    cfg = quiet_config(nhc=True, nhc_interval_s=0.3, zupt_interval_s=0.1, propagation_interval_s=0.1)
+    sol = start(tr, cfg).run(Rec(t_s=imu.t_s[:1000], gyro=imu.gyro[:1000], accel=imu.accel[:1000],
+                                 kind="increments"))
+    dt = np.diff(sol.innovations_of("nhc")["t_s"])
+    assert len(dt) > 20 and np.allclose(dt, 0.3, atol=1e-9), dt[:5]
+
+
+@pytest.mark.parametrize("yaw_rate, still", [(0.005, True), (0.02, False)])
+def test_standstill_needs_a_small_mean_rate(yaw_rate, still):
+    """At rest on the ground turning about the vertical at a constant rate: the specific
+    force is steady, so only the gyro thresholds decide; standstill_gyro_rad_s = 0.01
+    rad/s: 0.005 rad/s is standstill, 0.02 rad/s is not (it is below the accelerometer's
+    threshold 0.05 and below 3 x 0.01, so only the mean-rate test refuses it)."""
+    lat = 0.6
+    n, dt = 400, 0.01
+    g = np.array([0.0, 0.0, 9.80])
+    w_ie = np.array([0.0, OMEGA * np.cos(lat), OMEGA * np.sin(lat)])
+    gyro = np.tile(w_ie + [0.0, 0.0, yaw_rate], (n, 1))      # level: body = ENU at the start
+    accel = np.tile(g, (n, 1))
+    t = dt * np.arange(1, n + 1)
+    nav0 = gf.NavState(np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3), lat, 2.0, 50.0, 0.0)
+    cfg = quiet_config(input="rates", zupt=True, standstill_gyro_rad_s=0.01,   # the detector
+                       standstill_accel_std_m_s2=0.05, standstill_window_s=0.5)    # runs with zupt
+    sol = IntegratedNavigator(cfg, InitialState(nav0)).run(
+        Rec(t_s=np.r_[0.0, t[:-1]], gyro=gyro, accel=accel, kind="rates"))
+    assert bool(sol.standstill[-1]) is still
+    assert (len(sol.innovations_of("zupt")) > 0) is still
+
+
+@pytest.mark.parametrize("kind", ["increments", "rates"])
+def test_standstill_is_found_one_window_after_the_start(kind):
+    """At rest from the start: the detector (exponential averages over
+    standstill_window_s = 0.5 s, seeded with the first sample) says standstill once the
+    IMU has been quiet for one window, at 0.5 s (+ one 10 ms sample), for increments and
+    rates alike. (Rates: the first sample only starts the record; the averages were not
+    seeded from it, so they rose from zero and |f|'s spread stayed above its threshold
+    for 5.3 s.)"""
+    lat, n, dt = 0.6, 200, 0.01
+    w_ie = np.array([0.0, OMEGA * np.cos(lat), OMEGA * np.sin(lat)])
+    f = np.array([0.0, 0.0, 9.8])
+    nav0 = gf.NavState(np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3), lat, 2.0, 50.0, 0.0)
+    if kind == "rates":
+        rec = Rec(t_s=dt * np.arange(n), gyro=np.tile(w_ie, (n, 1)), accel=np.tile(f, (n, 1)), kind=kind)
+    else:
+        rec = Rec(t_s=dt * np.arange(1, n + 1), gyro=np.tile(w_ie * dt, (n, 1)),
+                  accel=np.tile(f * dt, (n, 1)), kind=kind)
+    sol = IntegratedNavigator(quiet_config(input=kind, zupt=True), InitialState(nav0)).run(rec)
+    first = sol.t_s[np.argmax(sol.standstill)]
+    assert sol.standstill.any() and 0.5 - 1e-9 <= first <= 0.5 + dt + 1e-9, (kind, first)

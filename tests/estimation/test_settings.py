@@ -192,3 +192,81 @@ def test_gnss_position_std_floor(exact_drive_records):
     assert not np.array_equal(a.std, c.std)
     d = run(dataclasses.replace(cfg, gnss_position_std_floor_m=(1e-4, 1e-4, 1e-4)), exact)
     assert np.array_equal(d.std, b.std)
+
+
+def test_bias_noise_from_the_datasheet_terms_in_closed_form():
+    """noise_si's bias terms, written out: a rate random walk K enters as the stationary
+    variance K^2 tau / 2 of a first-order Gauss-Markov process driven by white noise of
+    PSD K^2 with the same correlation time, added in variance to the bias instability;
+    tau = 3600 s when only K is given; neither term: no bias noise (tau 0). Units:
+    deg/h/sqrt(h) -> rad/s/sqrt(s) is (pi/180/3600)/60, 1 ug = 9.80665e-6 m/s^2.
+    Relative 1e-14: the same few operations in another order."""
+    from gfins_fmi.nav.imu_errors import ImuNoise
+    deg_h, ug = math.pi / 180 / 3600, 9.80665e-6
+    kg, ka = 5.0 * deg_h / 60.0, 2.0 * ug
+
+    def si(**kw):
+        return FilterConfig(imu=ImuNoise(**kw)).noise_si()
+    both = si(gyro_bias_instability_deg_h=3.0, gyro_correlation_time_s=200.0,
+              gyro_rrw_deg_h_sqrt_h=5.0, accel_bias_instability_ug=40.0,
+              accel_correlation_time_s=300.0, accel_rrw_ug_sqrt_s=2.0)
+    only_rw = si(gyro_rrw_deg_h_sqrt_h=5.0, accel_rrw_ug_sqrt_s=2.0)
+    only_bi = si(gyro_bias_instability_deg_h=3.0, gyro_correlation_time_s=200.0,
+                 accel_bias_instability_ug=40.0, accel_correlation_time_s=300.0)
+    neither = si(gyro_correlation_time_s=200.0, accel_correlation_time_s=300.0)
+    for got, g_std, g_tau, a_std, a_tau in [
+            (both, math.hypot(3.0 * deg_h, kg * math.sqrt(100.0)), 200.0,
+             math.hypot(40.0 * ug, ka * math.sqrt(150.0)), 300.0),
+            (only_rw, kg * math.sqrt(1800.0), 3600.0, ka * math.sqrt(1800.0), 3600.0),
+            (only_bi, 3.0 * deg_h, 200.0, 40.0 * ug, 300.0),
+            (neither, 0.0, 0.0, 0.0, 0.0)]:
+        assert got["gyro_bias_tau_s"] == g_tau and got["accel_bias_tau_s"] == a_tau
+        assert math.isclose(got["gyro_bias_std_rad_s"], g_std, rel_tol=1e-14, abs_tol=0.0)
+        assert math.isclose(got["accel_bias_std_m_s2"], a_std, rel_tol=1e-14, abs_tol=0.0)
+
+
+def test_filter_config_bounds_at_their_edges():
+    """The Python checks at the edges of the table's bounds (the C core checks again; these
+    must refuse with the Python message): a count may be 0, subsamples 1..4, one number
+    for a 3-vector means all three axes but not for the 2-element boresight, whose angles
+    lie inside (-pi/2, pi/2)."""
+    assert FilterConfig(gate_reset_count=0).gate_reset_count == 0
+    assert FilterConfig(subsamples=1).subsamples == 1
+    for bad in (0, 5):
+        with pytest.raises(ValueError, match=rf"^FilterConfig.subsamples = {bad}: must be "):
+            FilterConfig(subsamples=bad)
+    assert FilterConfig(gnss_lever_arm_m=0.5).gnss_lever_arm_m == (0.5, 0.5, 0.5)
+    with pytest.raises(ValueError, match=r"^FilterConfig.odometer_mount_rad = 0.1 rad: must be .*\(2 values\)"):
+        FilterConfig(odometer_mount_rad=0.1)
+    assert FilterConfig(odometer_mount_rad=(1.5, -1.5)).odometer_mount_rad == (1.5, -1.5)
+    with pytest.raises(ValueError, match=r"^FilterConfig.odometer_mount_rad = .*: must be "):
+        FilterConfig(odometer_mount_rad=(1.6, 0.0))
+
+
+def test_a_one_number_block_refuses_several():
+    nav = NavState(np.array([1.0, 0, 0, 0]), np.zeros(3), 0.61, 1.9, 320.0, 0.0)
+    cfg = FilterConfig(baro_bias=True, odometer_scale=True)
+    for name in ("baro_bias_std_m", "odometer_scale_std"):
+        for value in ([1.0], [1.0, 2.0]):
+            with pytest.raises(ValueError, match=rf"InitialState.{name} must be one number"):
+                InitialState(nav, **{name: value}).std_blocks(cfg)
+
+
+def test_initial_std_limits_and_the_bias_hint():
+    """InitialState's largest 1-sigma per block is allowed, above it refused naming the
+    limit (issue 21); a bias std that defaults to an IMU model's bias instability of 0
+    is refused with the hint to give it, an explicit 0 without it."""
+    from gfins_fmi.nav.imu_errors import ImuNoise
+    nav = NavState(np.array([1.0, 0, 0, 0]), np.zeros(3), 0.61, 1.9, 320.0, 0.0)
+    cfg = FilterConfig()
+    assert InitialState(nav, position_std_m=1e7).std_blocks(cfg)["position_std_m"] == [1e7] * 3
+    assert InitialState(nav, attitude_std_rad=math.pi).std_blocks(cfg)["attitude_std_rad"] == [math.pi] * 3
+    with pytest.raises(ValueError, match=r"InitialState.position_std_m = .* is above 1e\+07 m"):
+        InitialState(nav, position_std_m=(1.0, 2e7, 1.0)).std_blocks(cfg)
+    bare = FilterConfig(imu=ImuNoise(gyro_arw_deg_sqrt_h=0.1, accel_vrw_ug_sqrt_hz=50.0))
+    with pytest.raises(ValueError, match=r"InitialState.gyro_bias_std_rad_s = .*: every element "
+                                         r"must be finite and > 0 \(it defaults to the IMU model"):
+        InitialState(nav, accel_bias_std_m_s2=1e-3).covariance(bare)
+    with pytest.raises(ValueError, match=r"InitialState.gyro_bias_std_rad_s = \[0.0, 0.0, 0.0\]: every element "
+                                         r"must be finite and > 0$"):
+        InitialState(nav, gyro_bias_std_rad_s=0.0, accel_bias_std_m_s2=1e-3).covariance(bare)

@@ -126,6 +126,8 @@ def _growth_from_simulation(g, strategy, w_star, dt=DT, seconds=30.0):
     A = numpy_outputs(g.u_m, g.theta, f, w, np.zeros((n, 3)))
     e0 = np.array([0.6, -0.48, 0.64]) * 1e-12
     with warnings.catch_warnings():
+        # the unstable loops are what this measures (allow_unstable=True): their warning
+        # is asserted in test_unstable_verdicts_are_refused_and_confirmed_by_simulation
         warnings.simplefilter("ignore", UnstableRateLoopWarning)
         solver = gf.RateSolver(g, strategy, w_star + e0, accel_noise_m_s2=1e-6,
                                allow_unstable=True)

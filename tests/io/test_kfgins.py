@@ -157,3 +157,39 @@ def test_kfgins_nav_truth(tmp_path):
     with pytest.raises(FileFormatError, match=r"t2.nav:2: the GPS week changes from 2019 to 2020"):
         read_kfgins_nav(write(tmp_path / "t2.nav",
                               "2019 604799.0 30 114 20 0 0 0 0 0 0\n2020 0.5 30 114 20 0 0 0 0 0 0\n"))
+
+
+def test_kfgins_arguments_and_files_at_their_limits(tmp_path):
+    """gps_week: 0 (the GPS epoch's week) is a week, -1, True and 2.5 are not; n_columns:
+    7 and more, not 6, True or 7.0; an empty .bin is refused like a truncated one; a text
+    file whose suffix sorts before '.bin' ('.asc') is text."""
+    path = write(tmp_path / "a.txt", KF_IMU)
+    np.testing.assert_array_equal(read_kfgins_imu(path, gps_week=0).t_s, [456300.005, 456300.010])
+    for bad in (-1, True, 2.5):
+        with pytest.raises(ValueError, match="gps_week must be a non-negative integer"):
+            read_kfgins_imu(path, gps_week=bad)
+    for bad in (6, True, 7.0):
+        with pytest.raises(ValueError, match="n_columns must be an integer >= 7"):
+            read_kfgins_imu(path, n_columns=bad)
+    (tmp_path / "z.bin").write_bytes(b"")
+    with pytest.raises(FileFormatError, match="0 bytes is not a whole number of 56-byte samples"):
+        read_kfgins_imu(tmp_path / "z.bin")
+    asc = read_kfgins_imu(write(tmp_path / "a.asc", KF_IMU))
+    np.testing.assert_array_equal(asc.gyro, RFU_GYRO)
+
+
+def test_kfgins_nav_position_columns_and_week_changes(tmp_path):
+    """Latitude, longitude and height from their own columns (values all different); a
+    week that changes back (2020, then 2019) is refused too, at the first line that
+    differs from the first week."""
+    r = read_kfgins_nav(write(tmp_path / "t.nav", "2019 456300.0 30.5 114.25 20.75 1.25 -2.5 0.375 "
+                                                  "10.0 -5.0 -30.0\n"))
+    np.testing.assert_allclose([r.lat_rad[0], r.lon_rad[0]], np.radians([30.5, 114.25]), rtol=2 * EPS)
+    assert r.h_m[0] == 20.75 and r.t_s[0] == 456300.0      # the seconds of week, column 2
+    with pytest.raises(FileFormatError, match=r"b.nav:2: the GPS week changes from 2020 to 2019"):
+        read_kfgins_nav(write(tmp_path / "b.nav", "2020 0.5 30 114 20 0 0 0 0 0 0\n"
+                                                  "2019 604799.0 30 114 20 0 0 0 0 0 0\n"))
+    with pytest.raises(FileFormatError, match=r"c.nav:2: the GPS week changes from 2019 to 2020"):
+        read_kfgins_nav(write(tmp_path / "c.nav", "2019 604799.0 30 114 20 0 0 0 0 0 0\n"
+                                                  "2020 0.5 30 114 20 0 0 0 0 0 0\n"
+                                                  "2021 0.6 30 114 20 0 0 0 0 0 0\n"))

@@ -125,10 +125,19 @@ def test_with_outages_removes_the_epochs_inside():
     np.testing.assert_array_equal(out.vel_enu_m_s, g.vel_enu_m_s[[0, 3, 4]])
     assert "outages [1001, 1002], [1004.5, 1010] s removed" in out.source
     assert len(g) == 6                                           # the original is unchanged
-    with pytest.raises(ValueError, match="lies outside the record.*add t_s\\[0\\]"):
+    with pytest.raises(ValueError, match=r"lies outside the record, which spans \[1000, 1005\] s.*"
+                                         r"add t_s\[0\]"):
         g.with_outages([(10.0, 20.0)])                           # seconds from the start
-    with pytest.raises(ValueError, match="finite t0_s < t1_s"):
-        g.with_outages([(1003.0, 1001.0)])
+    with pytest.raises(ValueError, match="lies outside the record"):
+        g.with_outages([(1005.5, 1010.0)])                       # wholly after the last epoch
+    with pytest.raises(ValueError, match="lies outside the record"):
+        g.with_outages([(990.0, 999.5)])                         # wholly before the first
+    # touching the record's ends is inside: the first or last epoch goes
+    np.testing.assert_array_equal(g.with_outages([(1005.0, 1010.0)]).t_s, g.t_s[:-1])
+    np.testing.assert_array_equal(g.with_outages([(990.0, 1000.0)]).t_s, g.t_s[1:])
+    for empty in [(1003.0, 1001.0), (1003.0, 1003.0)]:           # backwards, or no length
+        with pytest.raises(ValueError, match="finite t0_s < t1_s"):
+            g.with_outages([empty])
     with pytest.raises(ValueError, match="must be a pair"):
         g.with_outages([1001.0])
     with pytest.raises(RecordError, match="remove every epoch"):
@@ -148,7 +157,8 @@ def test_trapezoid_increments_are_exact_for_linear_rates(rng):
     assert inc.kind == "increments" and len(inc) == 199
     np.testing.assert_array_equal(inc.t_s, t[1:])
     assert np.abs(inc.gyro - exact).max() < 1e-15
-    assert inc.to_increments() is inc
+    assert np.abs(inc.accel - (exact + a * dt)).max() < 1e-15     # integral of 2a + b t
+    assert inc.to_increments() is inc and rec.to_rates() is rec
 
 
 def test_conversion_orders_of_accuracy():
@@ -179,6 +189,24 @@ def test_to_rates_first_interval():
         ImuRecord([1.0], np.ones((1, 3)), np.ones((1, 3)), "increments").to_rates()
     with pytest.raises(RecordError, match="at least two rate samples"):
         ImuRecord([1.0], np.ones((1, 3)), np.ones((1, 3)), "rates").to_increments()
+    one = ImuRecord([1.0, 1.5], np.ones((2, 3)), 4 * np.ones((2, 3)), "rates").to_increments()
+    np.testing.assert_array_equal(one.accel, [[2.0, 2.0, 2.0]])     # two samples: one interval
+    # two samples are enough for the default first interval; a given one must be > 0, finite
+    two = ImuRecord([1.0, 1.5], np.ones((2, 3)), 3 * np.ones((2, 3)), "increments")
+    np.testing.assert_array_equal(two.to_rates().accel[:, 2], [6.0, 6.0])
+    for bad in (0.0, -0.25, np.inf, np.nan):
+        with pytest.raises(ValueError, match="first_interval_s must be finite and > 0 s"):
+            inc.to_rates(first_interval_s=bad)
+
+
+def test_conversions_say_what_they_did_in_the_source():
+    """The conversion is appended to the record's source, or is the source when it had none."""
+    t = np.array([1.0, 1.5, 2.5])
+    for src, prefix in (("", ""), ("file x.csv", "file x.csv; ")):
+        rates = ImuRecord(t, np.ones((3, 3)), np.ones((3, 3)), "rates", src)
+        incs = ImuRecord(t, np.ones((3, 3)), np.ones((3, 3)), "increments", src)
+        assert rates.to_increments().source == prefix + "increments by the trapezoid"
+        assert incs.to_rates().source == prefix + "rates = increments / interval"
 
 
 def random_records(rng):

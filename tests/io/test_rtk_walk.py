@@ -15,6 +15,7 @@ import pytest
 
 from support.paths import rtk_walk_dir
 from gfins_fmi.io import FileFormatError, GnssRecord, load_rtk_walk, read_rtk_walk_imu, rtk_walk_mounting
+from gfins_fmi.io.rtk_walk import mounting_from_rpy
 
 GPS_EPOCH = datetime.datetime(1980, 1, 6)
 DEG = math.pi / 180
@@ -156,3 +157,51 @@ def test_rtk_walk_gnss_velocity_is_east_north_up(rtk_walk):
     mid = 0.5 * (gnss.vel_enu_m_s[1:] + gnss.vel_enu_m_s[:-1])
     assert np.corrcoef(east, mid[:, 0])[0, 1] > 0.9
     assert np.corrcoef(north, mid[:, 1])[0, 1] > 0.9
+
+
+def test_mounting_from_any_angles_is_grovess_matrix_in_rfu(rng):
+    """Groves' Euler_to_CTM (C = (Rz(yaw) Ry(pitch) Rx(roll))^T, typed in here from its
+    closed form) for random angles, then FRD -> RFU: mounting_from_rpy to 1e-15 (round-off;
+    no entry near 0 or +-1 for these angles, so nothing is snapped)."""
+    for _ in range(20):
+        phi, theta, psi = rng.uniform(-3.0, 3.0), rng.uniform(-1.4, 1.4), rng.uniform(-3.0, 3.0)
+        sf, cf, st, ct, sp, cp = (math.sin(phi), math.cos(phi), math.sin(theta), math.cos(theta),
+                                  math.sin(psi), math.cos(psi))
+        groves = np.array([[ct * cp, ct * sp, -st],
+                           [-cf * sp + sf * st * cp, cf * cp + sf * st * sp, sf * ct],
+                           [sf * sp + cf * st * cp, -sf * cp + cf * st * sp, cf * ct]])
+        assert np.abs(FRD_TO_RFU @ groves - mounting_from_rpy(phi, theta, psi)).max() < 1e-15
+
+
+def test_mounting_snaps_only_what_floating_point_cannot_give(tmp_path):
+    """Entries within 1e-15 of -1, 0 or +1 become exact; a small angle's sine (2e-8) stays."""
+    for yaw in (2e-8, math.pi - 2e-8):
+        c = mounting_from_rpy(0.0, 0.0, yaw)
+        s = math.sin(2e-8)
+        assert set(np.round(np.abs(c[np.abs(c) > 0.5]), 20)) == {1.0}     # exactly +-1
+        assert np.isclose(np.sort(np.abs(c[np.abs(c) < 0.5]))[-2:], s, rtol=1e-9).all()
+    # half a turn: sin(pi) = 1.2e-16 snapped, a signed permutation of the axes
+    assert set(mounting_from_rpy(math.pi, 0.0, 0.0).ravel()) <= {-1.0, 0.0, 1.0}
+
+
+def test_rtk_walk_mounting_and_unit_refusals(tmp_path):
+    path = write(tmp_path / "imu.csv", "1756402240.9610000,0.1,-0.2,1.0,0.01,0.02,0.03,0,0,0,0\n")
+    for bad in (np.eye(4)[:3, :], np.eye(2), np.full((3, 3), np.nan)):
+        with pytest.raises(ValueError, match="mounting must be a finite 3x3 rotation matrix"):
+            read_rtk_walk_imu(path, bad)
+    with pytest.raises(ValueError, match=r"mounting must be a rotation \(orthonormal"):
+        read_rtk_walk_imu(path, 1.01 * np.eye(3))                 # |C C^T - I| = 0.02
+    for g in (9.0, 9.7, 9.9, 9.95, 10.0):
+        with pytest.raises(ValueError, match="about 9.8"):
+            read_rtk_walk_imu(path, np.eye(3), g_m_s2=g)
+    r = read_rtk_walk_imu(path, np.diag([-1.0, -1.0, 1.0]), g_m_s2=9.71)
+    assert r.accel[0, 2] == 9.71 and "C_s^b = [[-1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0]]" in r.source
+    # a reflection (determinant -1) is refused; a rotation typed with a little round-off
+    # (|C C^T - I| = 2e-12, det = 1 - 3e-12 < 1) is accepted, as the tolerance 1e-9 says
+    with pytest.raises(ValueError, match=r"determinant \+1\); got .*det = -1"):
+        read_rtk_walk_imu(path, np.diag([1.0, 1.0, -1.0]))
+    near = read_rtk_walk_imu(path, (1.0 - 1e-12) * mounting_from_rpy(0.5, 0.25, 1.5))
+    assert np.isfinite(near.accel).all()
+    # the source text shows the matrix without negative zeros (-I's off-diagonal -0.0)
+    r = read_rtk_walk_imu(path, -np.diag([1.0, 1.0, -1.0]), g_m_s2=9.71)
+    assert "-0.0" not in r.source and "[[-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]" in r.source

@@ -57,15 +57,45 @@ def test_rtklib_week_form_and_no_header(tmp_path):
     np.testing.assert_allclose(r.t_s, [t0], rtol=0, atol=2.5e-7)
     assert not r.has_velocity and r.quality_counts() == {"single": 1}
     bare = read_rtklib_pos(write(tmp_path / "bare.pos", POS_LINES))
+    full = read_rtklib_pos(write(tmp_path / "full.pos", POS_HEADER + POS_LINES))
     assert bare.has_velocity and len(bare) == 2
+    for name in ("t_s", "lat_rad", "lon_rad", "h_m", "pos_std_m", "vel_enu_m_s", "vel_std_m_s",
+                 "quality"):    # every field as with the header (test_reader_conventions.py)
+        assert np.array_equal(getattr(bare, name), getattr(full, name)), name
     with pytest.raises(FileFormatError, match="velocity=True but the file has no velocity columns"):
         read_rtklib_pos(tmp_path / "w.pos", velocity=True)
+    # the record says which time form the file had
+    assert "GPST week/seconds" in r.source and "GPST calendar" in full.source
+
+
+def test_rtklib_header_lines_that_are_not_the_column_line(tmp_path):
+    """A '% GPST' line with nothing after it is not the column line (the next one is);
+    a column line written without a space after the '%' is one."""
+    alone = read_rtklib_pos(write(tmp_path / "a.pos", "%  GPST\n" + POS_HEADER + POS_LINES))
+    tight = read_rtklib_pos(write(tmp_path / "t.pos", POS_HEADER.replace("%  GPST", "%GPST") + POS_LINES))
+    ref = read_rtklib_pos(write(tmp_path / "r.pos", POS_HEADER + POS_LINES))
+    for rec in (alone, tight):
+        assert np.array_equal(rec.vel_enu_m_s, ref.vel_enu_m_s) and np.array_equal(rec.t_s, ref.t_s)
+    # and a velocity column order of the header's own, not RTKLIB's standard one, is followed
+    swapped = POS_HEADER.replace("vn(m/s) ve(m/s)", "ve(m/s) vn(m/s)")
+    sw = read_rtklib_pos(write(tmp_path / "s.pos", swapped + POS_LINES))
+    assert np.array_equal(sw.vel_enu_m_s[:, :2], ref.vel_enu_m_s[:, 1::-1])
+    # a tight column line is read as a header, not skipped (its own order followed too)
+    tight_sw = read_rtklib_pos(write(tmp_path / "ts.pos", swapped.replace("%  GPST", "%GPST")
+                                     + POS_LINES))
+    assert np.array_equal(tight_sw.vel_enu_m_s, sw.vel_enu_m_s)
 
 
 @pytest.mark.parametrize("text, match", [
     (POS_HEADER.replace("GPST", "UTC "), "times are in UTC: .* export the solution with the time system GPST"),
-    ("%  GPST  x-ecef(m) y-ecef(m) z-ecef(m) Q ns sdx(m)\n", "ECEF x/y/z: export latitude/longitude/height"),
-    ("% (lat/lon/height=WGS84/geodetic,Q=1:fix)\n" + POS_HEADER, "WGS84/geodetic: export WGS84 with ellipsoidal"),
+    (POS_HEADER.replace("GPST", "BJT "), "times are in BJT: .* export the solution with the time system GPST"),
+    # a blank line before the header: the header is still read (and its time system refused)
+    ("\n" + POS_HEADER.replace("GPST", "JST "), "times are in JST"),
+    ("%  GPST  x-ecef(m) y-ecef(m) z-ecef(m) Q ns sdx(m)\n", r"a.pos:1: .*ECEF x/y/z: export latitude/longitude/height"),
+    ("% program : RTKLIB\n%  GPST  x-ecef(m)\n", r"a.pos:2: .*ECEF x/y/z"),   # two words suffice
+    ("% (lat/lon/height=WGS84/geodetic,Q=1:fix)\n" + POS_HEADER,
+     r"a.pos:1: .*WGS84/geodetic: export WGS84 with ellipsoidal"),
+    ("% x\n% y\n% (lat/lon/height=Tokyo,Q=1:fix)\n", r"a.pos:3: .*Tokyo: export WGS84"),
     (POS_HEADER, "no epoch lines"),
     (POS_HEADER + POS_LINES.replace("1601.4310", "nan"), r"a.pos:3: h_m\[1\] = nan is not finite"),
     (POS_HEADER + POS_LINES.replace("0.0199", "0.0"), r"a.pos:3: pos_std_m\[1, 1\] = 0.0 m"),

@@ -58,11 +58,21 @@ def test_apply_refuses_ambiguous_and_missing_lines():
 
 def test_python_mutation_config_names_existing_files():
     run_py = _load("mutation_run_py", "run_py.py")
-    cfg, module, ranges = run_py.selection()   # exits naming a function that is gone
-    assert (ROOT / module).is_file(), f"mutation/cosmic-ray.toml names a missing module {module}"
-    assert cfg["cosmic-ray"]["module-path"] == module, "the two module names must agree"
-    assert ranges, "no functions selected for the Python mutation run"
-    for word in cfg["cosmic-ray"]["test-command"].split():
-        if word.startswith("tests/"):
+    _, targets = run_py.targets()   # exits naming a function that is gone
+    assert targets, "no targets for the Python mutation run"
+    names = {t["name"] for t in targets}
+    # issue 25: estimation/, calibration/ and io/ are in the run, each with its own tests
+    for folder in ("gfins_fmi/estimation/", "gfins_fmi/calibration/", "gfins_fmi/io/"):
+        assert any(t["module"].startswith(folder) for t in targets), f"no target in {folder}"
+    for t in targets:
+        assert (ROOT / t["module"]).is_file(), f"target {t['name']}: no module {t['module']}"
+        assert t["ranges"], f"target {t['name']}: no functions selected"
+        words = t["tests"].split()
+        assert words, f"target {t['name']}: no tests"
+        for word in words:
             path = word.split("::")[0]
-            assert (ROOT / path).is_file(), f"mutation/cosmic-ray.toml runs a missing {path}"
+            assert (ROOT / path).exists(), f"target {t['name']} runs a missing {path}"
+            # a module's mutants are judged by the tests of its own domain folder
+            domain = t["module"].split("/")[1].removesuffix(".py").lstrip("_")
+            assert path.startswith(("tests/" + domain, "tests/lib")), (t["name"], path)
+    assert len(names) == len(targets)

@@ -57,6 +57,7 @@ def attitude_error_rad(q_est, q_true) -> np.ndarray:
     s = np.sign(w)[:, None]
     norm_v = np.linalg.norm(v, axis=1)
     angle = 2 * np.arctan2(norm_v, np.abs(w))
+    # 0 / 0 where the rotation is zero: np.where takes 0 there
     with np.errstate(invalid="ignore", divide="ignore"):
         axis = np.where(norm_v[:, None] > 0, v / norm_v[:, None], 0.0)
     return s * axis * angle[:, None]

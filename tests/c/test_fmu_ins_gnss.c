@@ -74,17 +74,17 @@ static size_t core_meas(int k, gf_ins_meas *m)
     if (d.gnss) {
         const gf_vehicle_sample *x = &g_truth[d.gnss_from];
         m[n++] = (gf_ins_meas){GF_INS_MEAS_GNSS_POS, d.gnss_t, {x->lat_rad, x->lon_rad, x->h_m},
-                               {kPosStd[0], kPosStd[1], kPosStd[2]}};
+                               {kPosStd[0], kPosStd[1], kPosStd[2]}, {0, 0, 0}};
         m[n++] = (gf_ins_meas){GF_INS_MEAS_GNSS_VEL, d.gnss_t,
                                {x->v_n_m_s[0], x->v_n_m_s[1], x->v_n_m_s[2]},
-                               {kVelStd[0], kVelStd[1], kVelStd[2]}};
+                               {kVelStd[0], kVelStd[1], kVelStd[2]}, {0, 0, 0}};
     }
     if (d.baro)
         m[n++] = (gf_ins_meas){GF_INS_MEAS_BARO, d.baro_t, {g_truth[k].h_m + BARO_BIAS_M, 0, 0},
-                               {BARO_STD_M, 0, 0}};
+                               {BARO_STD_M, 0, 0}, {0, 0, 0}};
     if (d.odo)
         m[n++] = (gf_ins_meas){GF_INS_MEAS_ODO, d.odo_t, {g_truth[k].speed_m_s, 0, 0},
-                               {ODO_STD_M_S, 0, 0}};
+                               {ODO_STD_M_S, 0, 0}, {0, 0, 0}};
     return n;
 }
 

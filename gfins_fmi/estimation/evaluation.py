@@ -18,6 +18,7 @@ import numpy as np
 from gfins_fmi.estimation.error_model import ins_error_model
 from gfins_fmi.estimation.navigator import IntegratedNavigator
 from gfins_fmi.nav.earth import WGS84, attitude_error_rad
+from gfins_fmi.nav.earth import euler_to_quat as euler_to_quat_rows
 from gfins_fmi.nav.strapdown import euler_to_quat, quat_to_euler
 
 __all__ = ["NavErrors", "navigation_errors", "state_errors", "nees", "chi2_band",
@@ -46,7 +47,8 @@ def _quat_of(obj):
     e = _get(obj, "euler_rad")
     if e is None:
         return None
-    return euler_to_quat(e)
+    e = np.asarray(e, float)   # one row per epoch (a TruthRecord): the vectorised form
+    return euler_to_quat(e) if e.ndim == 1 else euler_to_quat_rows(*e.T)
 
 
 def _interp_quat(t_ref, q_ref, t):

@@ -60,6 +60,10 @@ def _check_align(args) -> str | None:
         return "static alignment needs --position LAT,LON,H"
     if args.mode == "motion" and (args.speed is None or args.initial is None):
         return "motion alignment needs a SPEED record and --initial LAT,LON,H,HEADING,PITCH,ROLL"
+    if args.mode == "transfer" and args.speed is None:
+        return "transfer alignment needs the master's navigation record: gfins align transfer SLAVE_IMU MASTER_NAV"
+    if args.mode != "transfer" and (args.simulate is not None or args.truth or args.truth_json or args.plot):
+        return "--simulate, --truth, --truth-json and --plot belong to transfer alignment"
     if args.disturbed and (args.mode != "static" or args.fine):
         return ("--disturbed is a static coarse alignment; the fine alignment's zero-velocity "
                 "updates assume a base at rest (leave out --fine)")
@@ -215,12 +219,16 @@ def _calibrate(sub) -> argparse.ArgumentParser:
 
 def _align(sub) -> argparse.ArgumentParser:
     p = sub.add_parser("align", help="initial alignment: static (levelling + gyrocompassing, fine "
-                       "alignment) or in motion with a speed sensor and forward-backward passes",
+                       "alignment), in motion with a speed sensor and forward-backward passes, or "
+                       "transfer alignment of a slave IMU against a master INS",
                        description="Initial alignment of recorded files (docs/alignment.md).")
-    p.add_argument("mode", choices=("static", "motion"))
-    p.add_argument("imu", type=pathlib.Path, help="IMU file (ImuRecord CSV / npz / parquet)")
-    p.add_argument("speed", type=pathlib.Path, nargs="?", default=None,
-                   help="motion: speed record (OdometerRecord: t_s, speed_m_s, std_m_s)")
+    p.add_argument("mode", choices=("static", "motion", "transfer"))
+    p.add_argument("imu", type=pathlib.Path, help="IMU file (ImuRecord CSV / npz / parquet); transfer: "
+                   "the slave's")
+    p.add_argument("speed", type=pathlib.Path, nargs="?", default=None, metavar="SPEED|MASTER_NAV",
+                   help="motion: speed record (OdometerRecord: t_s, speed_m_s, std_m_s); transfer: the "
+                        "master's navigation record (KF-GINS .nav, our navigation CSV with NAV_SOLUTION "
+                        "columns and optionally omega_x_rad_s.. its rate, or a TruthRecord CSV)")
     p.add_argument("--position", type=vector(3, "LAT,LON,H in deg, deg, m"), default=None,
                    metavar="LAT,LON,H", help="static: position (deg, deg, m)")
     p.add_argument("--window", type=vector(2, "T0,T1 in s"), default=None, metavar="T0,T1",
@@ -244,10 +252,57 @@ def _align(sub) -> argparse.ArgumentParser:
                    help="1-sigma turn-on gyro bias, deg/h (default: the grade's bias instability)")
     p.add_argument("--accel-bias", type=real("ug", at_least=0.0), default=None,
                    help="1-sigma turn-on accelerometer bias, ug (default: the grade's)")
-    p.add_argument("--grade", choices=GRADES, default="navigation", help="IMU noise model")
+    p.add_argument("--grade", choices=GRADES, default=None,
+                   help="IMU noise model (default navigation; transfer: consumer, the slave's)")
     p.add_argument("--output", type=pathlib.Path, default=None,
-                   help="motion: CSV of the state after each pass")
+                   help="motion: CSV of the state after each pass; transfer: CSV of the estimates and "
+                        "their 1-sigma over time")
     p.add_argument("--progress", action="store_true", help="report the passes as they run")
+    t = p.add_argument_group("transfer alignment (mode transfer; docs/alignment.md)")
+    t.add_argument("--matching", choices=("velocity", "velocity+attitude"), default="velocity+attitude",
+                   help="what the slave matches of the master (default velocity+attitude)")
+    t.add_argument("--master-position", action="store_true", help="the master's position too")
+    t.add_argument("--mount", type=vector(3, "HEADING,PITCH,ROLL in deg"), default=[0.0, 0.0, 0.0],
+                   metavar="H,P,R", help="nominal mounting of the slave's axes in the master's, deg "
+                   "(default 0,0,0)")
+    t.add_argument("--lever", type=vector(3, "X,Y,Z in m"), default=[0.0, 0.0, 0.0], metavar="X,Y,Z",
+                   help="nominal lever arm: the slave IMU from the master's, master axes, m (write "
+                        "--lever=-0.1,0,0 when it starts with -)")
+    t.add_argument("--time-offset", type=real("s"), default=0.0,
+                   help="nominal time offset: slave stamp - master stamp, s (default 0)")
+    t.add_argument("--fix", choices=("lever", "offset"), action="append", default=[],
+                   help="do not estimate the lever arm or the time offset (repeatable)")
+    t.add_argument("--flexure", type=vector(2, "STD_DEG,TAU_S"), default=None, metavar="STD_DEG,TAU_S",
+                   help="estimate a structural flexure of this std (deg) and correlation time (s)")
+    t.add_argument("--mount-std", type=real("deg", above=0.0), default=1.0,
+                   help="1-sigma of the nominal mounting (and of the start attitude), deg (default 1)")
+    t.add_argument("--lever-std", type=real("m", above=0.0), default=0.1,
+                   help="1-sigma of the nominal lever arm, m (default 0.1)")
+    t.add_argument("--offset-std", type=real("s", above=0.0), default=0.02,
+                   help="1-sigma of the nominal time offset, s (default 0.02)")
+    t.add_argument("--master-vel-std", type=real("m/s", above=0.0), default=0.02,
+                   help="the master's velocity error as measurement noise, m/s (default 0.02)")
+    t.add_argument("--master-att-std", type=vector(2, "TILT,HEADING in deg"), default=[0.0057, 0.0172],
+                   metavar="TILT,HEADING", help="the master's attitude error as measurement noise, deg "
+                   "(default 0.0057,0.0172: 0.1, 0.3 mrad)")
+    t.add_argument("--master-att-bias", type=vector(2, "TILT,HEADING in deg"), default=[0.0, 0.0],
+                   metavar="TILT,HEADING", help="the master's constant attitude error (its absolute "
+                   "accuracy), deg: added to the slave's attitude 1-sigma (default 0,0)")
+    t.add_argument("--truth", type=pathlib.Path, default=None,
+                   help="the slave's true navigation record (TruthRecord CSV): attitude errors and 3-sigma")
+    t.add_argument("--truth-json", type=pathlib.Path, default=None,
+                   help="the true mounting, lever arm, offset and biases (JSON: mount_deg, lever_arm_m, "
+                        "time_offset_s, gyro_bias_deg_h, accel_bias_mg; any of them)")
+    t.add_argument("--plot", type=pathlib.Path, default=None, help="the convergence figure (PNG)")
+    t.add_argument("--simulate", type=real("s", above=1.0), default=None, metavar="SECONDS",
+                   help="first write a simulated scenario of this length to SLAVE_IMU and MASTER_NAV "
+                        "(a MEMS slave mounted 20, -15, 25 arcmin off, 0.1 m away, 15 ms late, beside a "
+                        "navigation-grade INS on a car rolling its platform +-30 deg), its truth beside "
+                        "them (SLAVE_IMU.truth.csv, .truth.json)")
+    t.add_argument("--sim-seed", type=int, default=0, help="seed of --simulate (default 0)")
+    t.add_argument("--tolerance", type=real("arcmin", above=0.0), default=1.0,
+                   help="the mounting's heading and roll 1-sigma at the end below which it is aligned, "
+                        "arcmin (default 1)")
     _command(p, "align", check=_check_align)
     return p
 

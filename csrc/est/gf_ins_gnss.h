@@ -116,7 +116,8 @@
  *     master's rate w_em^m = w_im^m - C_n^m w_ie^n (C (a x r) = (C a) x (C r));
  *   master position: p_m = p + dir tau v - D r (the nominal's local ENU metres).
  * Their H is exact at the nominal (tests/c/test_ins_meas.c: no allowance); the attitude's
- * is the small-angle one, exact where D = C_meas. Without a measurement
+ * columns go through J_l^-1 of the residual (log's derivative away from 0: the first
+ * updates of an alignment see degrees). Without a measurement
  * (gf_ins_meas_model) the master's rate is taken as the slave's turned into master axes
  * and the attitude's reference is the nominal's own D. The master's own errors enter
  * as the measurement noise (std); the velocity's time-offset term uses the nominal's
@@ -480,6 +481,17 @@ typedef struct gf_ins_initial_std {
  * model, with dlon and a transport rate ~ tan L, is singular), or gf_earth_update's error for an absurd height. */
 gf_status gf_ins_initial_covariance(const gf_ins_config *cfg, double lat_rad, double h_m,
                                     const gf_ins_initial_std *std, double *P0, int32_t *bad);
+
+/* Transfer alignment's prior (gf_ins_master.c): a slave started from the master's
+ * attitude turned by the nominal mounting, C_s^n = C_m^n M(a_nominal), has the mounting's
+ * error as its attitude error, phi = G da with G = C_s^n [vee(M^T dM/da_k)]_k (a small
+ * change of the mounting angles turns the slave's axes), so P0 of gf_ins_initial_covariance
+ * (its attitude block then the master's own attitude uncertainty) becomes, in place,
+ * P_phi,phi += G P_aa G^T, P_phi,a = G P_aa (and its transpose): the prior that the
+ * slave's attitude and mounting errors cancel in the master's attitude. q_bn: the start
+ * attitude. Errors: GF_ERR_NULL_POINTER, GF_ERR_BAD_PARAMETER (configuration, or no
+ * mounting states), GF_ERR_NONFINITE_INPUT. */
+gf_status gf_ins_master_start_covariance(const gf_ins_config *cfg, const double *q_bn, double *P0);
 
 /* The gf_ins_initial_std member behind a block code of gf_ins_initial_covariance. */
 const char *gf_ins_initial_std_field(int32_t code);

@@ -276,33 +276,63 @@ void ins_master_att_predict(const ins_meas_ctx *c, const nav_hyp *hy, double *y)
     gf_q_to_rotvec(qe, y);
 }
 
+/* J_l^-1(y) of SO(3) (rows): log(exp([d x]) exp([y x])) = y + J_l^-1(y) d + O(d^2),
+ * J_l^-1 = I - [y x] / 2 + (1 / t^2 - (1 + cos t) / (2 t sin t)) [y x]^2, t = |y|
+ * (Barfoot, State Estimation for Robotics, 2017, eq. 7.77; the coefficient's series
+ * 1/12 + t^2/720 below 1e-4 rad) */
+static void left_jacobian_inverse(const double y[3], double J[3][3])
+{
+    const double t2 = gf_v3_dot(y, y), t = sqrt(t2);
+    const double k = t < 1e-4 ? 1.0 / 12.0 + t2 / 720.0
+                              : 1.0 / t2 - (1.0 + cos(t)) / (2.0 * t * sin(t));
+    m3 S;
+    skew3(y, S);
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+            double s2 = 0.0;
+            for (int l = 0; l < 3; ++l)
+                s2 += S[i][l] * S[l][j];
+            J[i][j] = (i == j ? 1.0 : 0.0) - 0.5 * S[i][j] + k * s2;
+        }
+}
+
 void ins_master_att_jacobian(const ins_meas_ctx *c, const nav_hyp *nom, double *H)
 {
     const gf_ins_filter *f = c->f;
     const int n = f->n_states;
     master_geo g;
     master_geo_of(c, nom, &g);
+    /* every column below is a small rotation of D on the left (n frame); at a residual
+     * y0 = log(D C_meas^T) away from 0 (the start of an alignment: degrees) log moves by
+     * J_l^-1(y0) of it: the columns are taken through it, so that H is the derivative of
+     * the prediction at the nominal, not only where D = C_meas */
+    double y0[3] = {0.0, 0.0, 0.0}, J[3][3];
+    if (c->ms)
+        ins_master_att_predict(c, nom, y0);
+    left_jacobian_inverse(y0, J);
     for (int i = 0; i < 3; ++i)
-        HH(i, IA + i) = -1.0;
+        for (int j = 0; j < 3; ++j)
+            HH(i, IA + j) = -J[i][j];
     if (f->idx_tmount >= 0 || f->idx_flex >= 0) {
         m3 dD[3];
         mount_derivatives(c, nom, &g, dD);
         double col[3][3];
-        for (int k = 0; k < 3; ++k) {           /* -vee(dD_k D^T) */
+        for (int k = 0; k < 3; ++k) {           /* -J vee(dD_k D^T) */
             m3 S;
             for (int i = 0; i < 3; ++i)
                 for (int j = 0; j < 3; ++j)
                     S[i][j] = dD[k][i][0] * g.D.m[j][0] + dD[k][i][1] * g.D.m[j][1] +
                               dD[k][i][2] * g.D.m[j][2];
-            col[0][k] = -0.5 * (S[2][1] - S[1][2]);
-            col[1][k] = -0.5 * (S[0][2] - S[2][0]);
-            col[2][k] = -0.5 * (S[1][0] - S[0][1]);
+            const double v[3] = {0.5 * (S[2][1] - S[1][2]), 0.5 * (S[0][2] - S[2][0]),
+                                 0.5 * (S[1][0] - S[0][1])};
+            for (int i = 0; i < 3; ++i)
+                col[i][k] = -(J[i][0] * v[0] + J[i][1] * v[1] + J[i][2] * v[2]);
         }
         put_angle_columns(f, H, col);
     }
     if (f->idx_toffset >= 0)
         for (int i = 0; i < 3; ++i)
-            HH(i, f->idx_toffset) = -g.dir * g.Wn[i];
+            HH(i, f->idx_toffset) = -g.dir * (J[i][0] * g.Wn[0] + J[i][1] * g.Wn[1] + J[i][2] * g.Wn[2]);
 }
 
 /* ---- master position (the nominal's local ENU metres) --------------------------------- */
@@ -365,4 +395,54 @@ void ins_master_pos_jacobian(const ins_meas_ctx *c, const nav_hyp *nom, double *
 int ins_master_pos_check(const gf_ins_meas *ms)
 {
     return fabs(ms->z[0]) < GF_HALF_PI;
+}
+
+/* ---- the prior of a start from the master's attitude (gf_ins_gnss.h) ------------------ */
+
+gf_status gf_ins_master_start_covariance(const gf_ins_config *cfg, const double *q_bn, double *P0)
+{
+    if (!cfg || !q_bn || !P0)
+        return GF_ERR_NULL_POINTER;
+    gf_ins_layout l;
+    if (gf_ins_state_layout(cfg, &l) != GF_OK || l.idx_tmount < 0)
+        return GF_ERR_BAD_PARAMETER;
+    if (!gf_all_finite(q_bn, 4))
+        return GF_ERR_NONFINITE_INPUT;
+    const int n = l.n_states, a0 = l.idx_tmount;
+    double q[4];
+    if (!gf_q_normalize(q_bn, q))
+        return GF_ERR_BAD_PARAMETER;
+    gf_mat3 C, M, dM[3];
+    gf_q_to_dcm(q, &C);
+    mount_matrices(cfg->master_mount_rad, &M, dM);
+    double G[3][3];   /* column k: the n-frame turn of the slave's axes per unit da_k */
+    for (int k = 0; k < 3; ++k) {
+        gf_mat3 S, Mt;
+        gf_m3_transpose(&M, &Mt);
+        gf_m3_mul(&Mt, &dM[k], &S);
+        const double v[3] = {0.5 * (S.m[2][1] - S.m[1][2]), 0.5 * (S.m[0][2] - S.m[2][0]),
+                             0.5 * (S.m[1][0] - S.m[0][1])};
+        double w[3];
+        gf_m3_mul_v3(&C, v, w);
+        for (int i = 0; i < 3; ++i)
+            G[i][k] = w[i];
+    }
+    double GP[3][3];   /* G P_aa */
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            GP[i][j] = G[i][0] * P0[(a0 + 0) * n + a0 + j] + G[i][1] * P0[(a0 + 1) * n + a0 + j] +
+                       G[i][2] * P0[(a0 + 2) * n + a0 + j];
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+            const double gpg = GP[i][0] * G[j][0] + GP[i][1] * G[j][1] + GP[i][2] * G[j][2];
+            P0[(IA + i) * n + IA + j] += gpg;
+            P0[(IA + i) * n + a0 + j] = GP[i][j];
+            P0[(a0 + j) * n + IA + i] = GP[i][j];
+        }
+    for (int i = 0; i < 3; ++i)       /* exactly symmetric (G P G^T is, up to rounding) */
+        for (int j = i + 1; j < 3; ++j) {
+            const double m = 0.5 * (P0[(IA + i) * n + IA + j] + P0[(IA + j) * n + IA + i]);
+            P0[(IA + i) * n + IA + j] = P0[(IA + j) * n + IA + i] = m;
+        }
+    return GF_OK;
 }

@@ -41,6 +41,7 @@ from gfins_fmi.estimation.fine_alignment import align_in_motion, fine_align
 from gfins_fmi.estimation.transfer import MasterErrors, TransferTruth, transfer_align
 from gfins_fmi.io.columns import ALIGNMENT_PASS_COLUMNS, TRANSFER_COLUMNS
 from gfins_fmi.io.navigation import read_navigation, write_navigation
+from gfins_fmi.sim.transfer import SlaveInstallation, simulate_transfer
 
 __all__ = ["run"]
 
@@ -121,7 +122,6 @@ _MG = 9.80665e-3
 def _simulate(args) -> None:
     """--simulate: the study's scenario (bench/study_transfer.py) written where the command
     then reads it, with its truth beside the slave's record."""
-    from gfins_fmi.sim.transfer import SlaveInstallation, simulate_transfer   # lazy: only with --simulate
     inst = SlaveInstallation(mount_rad=(20 * _ARCMIN, -15 * _ARCMIN, 25 * _ARCMIN), lever_arm_m=(0.1, 0.0, 0.0),
                              time_offset_s=0.015)
     sc = simulate_transfer(args.simulate, installation=inst, seed=args.sim_seed)
@@ -178,7 +178,7 @@ def _transfer(args) -> int:
     ms = args.mount_std * deg
     res = transfer_align(imu, master, config=cfg, master_rate_rad_s=rates, matching=args.matching,
                          position=args.master_position, master_errors=errors, progress=args.progress,
-                         attitude_std_rad=ms, gyro_bias_std_rad_s=gb, accel_bias_std_m_s2=ab, mount_std_rad=ms,
+                         attitude_std_rad=1e-3, gyro_bias_std_rad_s=gb, accel_bias_std_m_s2=ab, mount_std_rad=ms,
                          lever_std_m=args.lever_std, time_offset_std_s=args.offset_std)
     if rates is None:
         print("note: the master record has no rate columns: its angular rate is taken from its attitude "

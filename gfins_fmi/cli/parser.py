@@ -275,7 +275,8 @@ def _align(sub) -> argparse.ArgumentParser:
     t.add_argument("--flexure", type=vector(2, "STD_DEG,TAU_S"), default=None, metavar="STD_DEG,TAU_S",
                    help="estimate a structural flexure of this std (deg) and correlation time (s)")
     t.add_argument("--mount-std", type=real("deg", above=0.0), default=1.0,
-                   help="1-sigma of the nominal mounting (and of the start attitude), deg (default 1)")
+                   help="1-sigma of the nominal mounting, deg (default 1); the slave starts from the "
+                        "master's attitude turned by it, its attitude error the mounting's (+1 mrad)")
     t.add_argument("--lever-std", type=real("m", above=0.0), default=0.1,
                    help="1-sigma of the nominal lever arm, m (default 0.1)")
     t.add_argument("--offset-std", type=real("s", above=0.0), default=0.02,

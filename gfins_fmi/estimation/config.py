@@ -280,6 +280,11 @@ class InitialState:
     master_mount_std_rad: object = 0.02
     master_lever_std_m: object = 0.1
     master_time_offset_std_s: float = 0.02
+    #: the start attitude is a master's turned by the configured mounting (transfer
+    #: alignment): with mounting states, the attitude and mounting errors start correlated
+    #: (``gf_ins_master_start_covariance``) and ``attitude_std_rad`` is then the
+    #: uncertainty beyond the mounting's (the master's own attitude error)
+    attitude_from_master: bool = False
 
     def std_blocks(self, config: FilterConfig) -> dict:
         """The 1-sigma of every error block as ``gf_ins_initial_std`` holds it (its member
@@ -333,8 +338,13 @@ class InitialState:
         n = config.n_states
         P0 = np.empty((n, n))
         bad = ffi.new("int32_t *")
-        st = lib.gf_ins_initial_covariance(config._c(), float(nav.lat_rad), float(nav.h_m), std,
+        c = config._c()
+        st = lib.gf_ins_initial_covariance(c, float(nav.lat_rad), float(nav.h_m), std,
                                            ptr(P0, P0.size), bad)
+        if st == lib.GF_OK and self.attitude_from_master and config.master_mount:
+            q = np.ascontiguousarray(nav.q_bn, dtype=float)
+            check_status(lib.gf_ins_master_start_covariance(c, ptr(q, 4), ptr(P0, P0.size)),
+                         "gf_ins_master_start_covariance")
         if st == lib.GF_OK:
             return P0
         if bad[0]:

@@ -15,6 +15,7 @@
 
 #include "est/gf_ins_gnss.h"
 #include "gf_test.h"
+#include "base/gf_math.h"
 #include "nav/gf_sins.h"
 
 #define DEG (3.14159265358979323846 / 180.0)
@@ -226,8 +227,45 @@ static void test_measurement_checks(void)
               e[0].type == GF_INS_MEAS_MASTER_ATT && e[0].m == 3, "an attitude update is logged");
 }
 
+/* The attitude kind's H with a measurement 0.1 rad away from the prediction (an
+ * alignment's first epochs): central differences of its prediction with that
+ * measurement, the tolerance of test_ins_meas.c (1e-6 |H| + 1e3 eps / h). */
+static void test_attitude_jacobian_away_from_the_measurement(void)
+{
+    gf_ins_config c = transfer_config();
+    gf_ins_filter f;
+    CHECK(start(&f, &c) == GF_OK, "start");
+    for (int i = 0; i < 3; ++i)
+        f.w_ib_b_rad_s[i] = 0.2 * (i + 1);
+    const int n = f.n_states;
+    double e[3];
+    gf_quat_to_euler(f.nav.q_bn, e);
+    gf_ins_meas ms = {GF_INS_MEAS_MASTER_ATT, f.t_s, {e[0] + 0.3 + 0.07, e[1] - 0.06, e[2] + 0.08},
+                      {1e-4, 1e-4, 1e-4}, {0.1, -0.3, 0.2}};
+    double z0[3], H[3 * GF_INS_MAX_STATES], zp[3], zm[3], dx[GF_INS_MAX_STATES];
+    CHECK(gf_ins_meas_model(&f, GF_INS_MEAS_MASTER_ATT, &ms, NULL, z0, H, NULL) == GF_OK, "model");
+    CHECK(gf_v3_norm(z0) > 0.05, "the residual is large: %g", gf_v3_norm(z0));
+    double worst = 0.0;
+    for (int j = 0; j < n; ++j) {
+        const double h = j >= f.idx_tlever && j < f.idx_tlever + 3 ? 1e-4 : (j < 3 ? 1e-3 : 1e-5);
+        memset(dx, 0, sizeof dx);
+        dx[j] = h;
+        gf_ins_meas_model(&f, GF_INS_MEAS_MASTER_ATT, &ms, dx, zp, NULL, NULL);
+        dx[j] = -h;
+        gf_ins_meas_model(&f, GF_INS_MEAS_MASTER_ATT, &ms, dx, zm, NULL, NULL);
+        for (int i = 0; i < 3; ++i) {
+            const double cd = -(zp[i] - zm[i]) / (2.0 * h), hij = H[i * n + j];
+            const double tol = 1e-6 * fabs(hij) + 1e3 * 2.2e-16 * 2.0 / h;
+            CHECK(fabs(hij - cd) <= tol, "H[%d][%d] = %.12g, central difference %.12g", i, j, hij, cd);
+            worst = fmax(worst, fabs(hij - cd) / tol);
+        }
+    }
+    printf("master attitude 0.1 rad from its measurement: max |H - CD| / tol = %.3f\n", worst);
+}
+
 int main(void)
 {
+    test_attitude_jacobian_away_from_the_measurement();
     test_layout();
     test_flexure_stationary();
     test_reverse_signs();

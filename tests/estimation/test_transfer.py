@@ -149,7 +149,7 @@ def test_velocity_only_matching_reports_the_mounting_between_attitudes():
     sc = simulate_transfer(60.0, installation=INST, seed=11)
     cfg = FilterConfig(imu=MEMS_SLAVE, master_lever=True, master_time_offset=True)
     res = transfer_align(sc.slave_imu, sc.master, config=cfg, master_rate_rad_s=sc.master_rate_rad_s,
-                         matching="velocity", attitude_std_rad=0.02, gyro_bias_std_rad_s=1e-3,
+                         matching="velocity", gyro_bias_std_rad_s=1e-3,
                          accel_bias_std_m_s2=0.03)
     assert res.mount_derived
     err = res.mount_rad[-1] - np.asarray(INST.mount_rad)
@@ -169,7 +169,7 @@ def test_flexure_and_the_ukf(filter_):
                        propagation_interval_s=0.05)
     res = transfer_align(sc.slave_imu, sc.master, config=cfg, master_rate_rad_s=sc.master_rate_rad_s,
                          master_errors=MasterErrors((0.015, 0.015, 0.005), 2e-5, 1.0, (5e-6, 5e-6, 3e-4)),
-                         attitude_std_rad=0.02, gyro_bias_std_rad_s=1e-3, accel_bias_std_m_s2=0.03,
+                         gyro_bias_std_rad_s=1e-3, accel_bias_std_m_s2=0.03,
                          mount_std_rad=0.02, lever_std_m=0.1, time_offset_std_s=0.03)
     e = res.errors(TransferTruth(inst.mount_rad, inst.lever_arm_m, inst.time_offset_s))
     for name in ("mount_rad", "time_offset_s"):

@@ -19,7 +19,8 @@ from gfins_fmi.estimation import FilterConfig, InitialState, IntegratedNavigator
 from gfins_fmi.estimation.evaluation import chi2_band
 from gfins_fmi.estimation.transfer import (MasterErrors, TransferTruth, master_measurements,
                                            master_rate_from_attitude, transfer_align)
-from gfins_fmi.nav.earth import euler_to_quat
+from gfins_fmi.estimation.config import state_names
+from gfins_fmi.nav.earth import euler_to_quat, quat_multiply, quat_to_dcm
 from gfins_fmi.nav.imu_errors import ImuNoise
 from gfins_fmi.nav.strapdown import NavState, SinsConfig, Strapdown
 from gfins_fmi.sim.transfer import MEMS_SLAVE, SlaveInstallation, simulate_transfer
@@ -112,6 +113,44 @@ def test_master_rate_from_its_attitude(exact):
     err = np.abs(w - exact.master_rate_rad_s)[1:-1]
     assert err.max() < 6e-3, err.max()
     assert np.median(err) < 1e-6
+
+
+def test_start_from_the_master_correlates_attitude_and_mounting():
+    """A slave started from the master's attitude turned by the nominal mounting a has
+    the mounting's error as its attitude error: C_s^n(a + da) = C_m^n M(a + da) =
+    (I + [G da x]) C_s^n(a), and with the filter's phi (C_computed = (I - [phi x])
+    C_true) phi = G da, so P_phi,phi = P_att + G P_aa G^T and P_phi,a = G P_aa. Truth: G
+    by central differences of C_m^n M(a) (numpy rotations, not the C code) at a large
+    nominal mounting (10, -5, 20 deg: G far from a permutation); tolerance: the
+    difference's truncation, h^2 / 6 of the third derivative ~ 1e-12 relative."""
+    a0 = np.array([10.0, -5.0, 20.0]) * DEG
+    cfg = FilterConfig(master_mount=True, master_mount_rad=tuple(a0))
+    q_m = euler_to_quat(0.7, 0.1, -0.2)
+    q_s = quat_multiply(q_m, euler_to_quat(*a0))
+    nav = NavState(q_s, np.zeros(3), 0.5, 1.0, 100.0, 0.0)
+    std_a = np.array([0.02, 0.01, 0.03])
+    kw = dict(attitude_std_rad=1e-3, master_mount_std_rad=std_a, gyro_bias_std_rad_s=1e-3, accel_bias_std_m_s2=0.03)
+    P_ind = InitialState(nav, **kw).covariance(cfg)
+    P = InitialState(nav, attitude_from_master=True, **kw).covariance(cfg)
+    names = state_names(cfg)
+    ia, im = names.index("phi_E"), names.index("mount_heading")
+    Cm, h = quat_to_dcm(q_m), 1e-6
+    G = np.empty((3, 3))
+    for k in range(3):
+        d = np.zeros(3)
+        d[k] = h
+        R = (Cm @ quat_to_dcm(euler_to_quat(*(a0 + d)))) @ (Cm @ quat_to_dcm(euler_to_quat(*(a0 - d)))).T
+        G[:, k] = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]]) / 2 / (2 * h)
+    Paa = np.diag(std_a ** 2)
+    np.testing.assert_allclose(P[ia:ia + 3, im:im + 3], G @ Paa, rtol=0, atol=1e-9 * Paa.max())
+    np.testing.assert_allclose(P[im:im + 3, ia:ia + 3], (G @ Paa).T, rtol=0, atol=1e-9 * Paa.max())
+    np.testing.assert_allclose(P[ia:ia + 3, ia:ia + 3], P_ind[ia:ia + 3, ia:ia + 3] + G @ Paa @ G.T,
+                               rtol=0, atol=1e-9 * Paa.max())
+    assert np.array_equal(P, P.T)
+    assert np.linalg.eigvalsh(P).min() > 0
+    rest = np.ones(len(names), bool)
+    rest[ia:ia + 3] = rest[im:im + 3] = False
+    assert np.array_equal(P[np.ix_(rest, rest)], P_ind[np.ix_(rest, rest)])
 
 
 @pytest.fixture(scope="module")

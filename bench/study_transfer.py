@@ -19,6 +19,14 @@ bands; with --plot the figures of docs/alignment.md.
 
     python bench/study_transfer.py [--runs 100] [--seconds 100] [--workers 2]
                                    [--matching both|velocity|velocity+attitude] [--plot DIR]
+    python bench/study_transfer.py --manoeuvres [--runs 20] [--workers 2]
+    python bench/study_transfer.py --no-offset-state [--runs 20]   # the offset left out
+
+--manoeuvres: observability per manoeuvre (docs/alignment.md, "Transfer alignment"): the
+same installation and filter on a straight road, with the +-30 deg roll, with S-turns
+(+-90 deg of heading every 20 s) and with both, each matching; printed per state the RMS
+error and the median 1-sigma at the end against its prior 1-sigma (a state whose sigma
+stays near its prior is not observable in that manoeuvre).
 """
 from __future__ import annotations
 
@@ -34,7 +42,9 @@ from gfins_fmi.estimation import FilterConfig
 from gfins_fmi.estimation.evaluation import chi2_band
 from gfins_fmi.estimation.transfer import MasterErrors, TransferTruth, transfer_align
 from gfins_fmi.nav.imu_errors import DEG_H
-from gfins_fmi.sim.transfer import MEMS_SLAVE, SlaveInstallation, simulate_transfer
+from gfins_fmi.sim.rotation import RotationSchedule, rest
+from gfins_fmi.sim.transfer import MEMS_SLAVE, SlaveInstallation, roll_manoeuvre, simulate_transfer, straight_road
+from gfins_fmi.sim.vehicle import Segment, VehicleProfile
 
 DEG = np.pi / 180
 ARCMIN = DEG / 60
@@ -49,26 +59,52 @@ INSTALLATION = SlaveInstallation(mount_rad=(20 * ARCMIN, -15 * ARCMIN, 25 * ARCM
 #: slave's attitude inherits
 MASTER_ERRORS = MasterErrors(velocity_std_m_s=(0.015, 0.015, 0.005), attitude_std_rad=2e-5,
                              attitude_bias_std_rad=(5e-6, 5e-6, 3e-4))
-#: the slave filter's start: 1.2 deg on the mounting and the attitude, the biases'
-#: turn-on spread, 0.1 m on the lever arm, 30 ms on the offset
-INITIAL = dict(attitude_std_rad=0.02, velocity_std_m_s=0.1, position_std_m=1.0,
+#: the slave filter's start: the master's attitude turned by the nominal mounting, 1.2 deg
+#: on the mounting (its attitude error the mounting's, correlated, plus 1 mrad), the
+#: biases' turn-on spread, 0.1 m on the lever arm, 30 ms on the offset
+INITIAL = dict(attitude_std_rad=1e-3, velocity_std_m_s=0.1, position_std_m=1.0,
                gyro_bias_std_rad_s=200 * DEG_H, accel_bias_std_m_s2=3 * MG, mount_std_rad=0.02,
                lever_std_m=0.1, time_offset_std_s=0.03)
 
 
-def config(**kw) -> FilterConfig:
+def config(offset_state: bool = True, **kw) -> FilterConfig:
     """The slave filter: the slave's white noise, random-constant biases, every transfer
-    state but the flexure."""
-    return FilterConfig(imu=MEMS_SLAVE, master_mount=True, master_lever=True, master_time_offset=True,
-                        **kw)
+    state but the flexure (with ``offset_state`` False not the time offset either: its
+    nominal 0 then stays, the effect of an offset left out)."""
+    return FilterConfig(imu=MEMS_SLAVE, master_mount=True, master_lever=True,
+                        master_time_offset=offset_state, **kw)
+
+
+def s_turns(speed_m_s: float = 10.0) -> VehicleProfile:
+    """The straight road's car weaving: 5 s straight, then +90 deg of heading over 10 s,
+    10 s straight, -90 deg over 10 s, 10 s straight, repeated (heading rate up to 18
+    deg/s, lateral acceleration up to 3 m/s^2 at 10 m/s)."""
+    cycle = [Segment(10.0, dheading_rad=np.pi / 2), Segment(10.0), Segment(10.0, dheading_rad=-np.pi / 2),
+             Segment(10.0)]
+    road = straight_road(speed_m_s)
+    return VehicleProfile(speed0_m_s=speed_m_s, heading0_rad=road.heading0_rad, segments=[Segment(5.0)] + cycle * 5)
+
+
+#: manoeuvre name -> (host profile or None: the straight road, platform schedule or None: no roll)
+MANOEUVRES = {"straight road": (None, "level"), "roll +-30 deg": (None, None),
+              "S-turns": ("turns", "level"), "roll + S-turns": ("turns", None)}
+
+
+def _host_motion(manoeuvre: str):
+    prof, sched = MANOEUVRES[manoeuvre]
+    profile = s_turns() if prof == "turns" else None
+    schedule = RotationSchedule([rest(10.0)], repeat=True) if sched == "level" else None
+    return profile, schedule
 
 
 def make_task(seconds: float, matching: str, filter_: str = "ekf", installation=INSTALLATION,
-              master_model: str = "ins"):
+              master_model: str = "ins", manoeuvre: str = "roll +-30 deg", offset_state: bool = True):
     """The Monte-Carlo task: run k simulates its errors (the host's motion is shared) and
     aligns; it returns the errors and 1-sigma at the end and over time (every second)."""
-    host = simulate_transfer(seconds, installation=installation, seed=0).info["host"]
-    cfg = config(filter=filter_)
+    profile, schedule = _host_motion(manoeuvre)
+    motion = dict(profile=profile, schedule=schedule)
+    host = simulate_transfer(seconds, installation=installation, seed=0, **motion).info["host"]
+    cfg = config(offset_state, filter=filter_)
     errors = MASTER_ERRORS
     white = (errors.velocity_std_m_s, errors.attitude_std_rad, errors.position_std_m)
     if master_model == "white":    # the master's errors exactly as the filter models them
@@ -77,7 +113,7 @@ def make_task(seconds: float, matching: str, filter_: str = "ekf", installation=
     def task(k: int, rng: np.random.Generator) -> dict:
         seed = int(rng.integers(2 ** 31))
         sc = simulate_transfer(seconds, installation=installation, seed=seed, host=host,
-                               master_model=master_model, master_white=white)
+                               master_model=master_model, master_white=white, **motion)
         res = transfer_align(sc.slave_imu, sc.master, config=cfg, master_rate_rad_s=sc.master_rate_rad_s,
                              matching=matching, master_errors=errors, **INITIAL)
         truth = TransferTruth(installation.mount_rad, installation.lever_arm_m, installation.time_offset_s,
@@ -140,9 +176,10 @@ def summarize(r: dict, runs: int, matching: str, verbose: bool = True) -> dict:
 
 def run(runs: int = 100, seconds: float = 100.0, matching: str = "velocity+attitude", seed: int = 0,
         workers=None, scheduler=None, filter_: str = "ekf", progress: bool = False, verbose: bool = True,
-        master_model: str = "ins"):
+        master_model: str = "ins", manoeuvre: str = "roll +-30 deg", offset_state: bool = True):
     """The study for one matching: {figures} (summarize) and the stacked runs."""
-    task = make_task(seconds, matching, filter_, master_model=master_model)
+    task = make_task(seconds, matching, filter_, master_model=master_model, manoeuvre=manoeuvre,
+                     offset_state=offset_state)
     with montecarlo.executor(scheduler, workers) as ex:
         r = montecarlo.run(task, runs, seed=seed, executor=ex, progress=progress, desc=matching)
     return summarize(r, runs, matching, verbose), r
@@ -179,6 +216,33 @@ def plot(results: dict, path: pathlib.Path) -> None:
     plt.close(fig)
 
 
+#: the priors of INITIAL per state of the manoeuvre table (what "not observable" stays at)
+_PRIOR = {"mount": 0.02 / ARCMIN, "offset": 30.0, "lever": 0.1, "gyro": 200.0, "accel": 3.0}
+
+
+def observability(runs: int, seconds: float, seed: int, workers, scheduler) -> None:
+    """The manoeuvre table: per manoeuvre and matching, RMS error / median 1-sigma at the
+    end of the mounting (arcmin), time offset (ms), lever arm (m), gyro (deg/h) and
+    accelerometer (mg) biases."""
+    f = lambda a, p=2: "/".join(f"{x:.{p}g}" for x in np.atleast_1d(a))
+    print(f"priors (1-sigma): mounting {_PRIOR['mount']:.0f}', offset {_PRIOR['offset']:.0f} ms, lever arm "
+          f"{_PRIOR['lever']} m, gyro bias {_PRIOR['gyro']:.0f} deg/h, accel bias {_PRIOR['accel']:.0f} mg")
+    print("| manoeuvre | matching | mounting h/p/r (') | offset (ms) | lever x/y/z (m) | gyro bias x/y/z "
+          "(deg/h) | accel bias x/y/z (mg) |")
+    print("|---|---|---|---|---|---|---|")
+    for manoeuvre in MANOEUVRES:
+        for matching in ("velocity", "velocity+attitude"):
+            t0 = time.time()
+            o, _ = run(runs, seconds, matching, seed, workers, scheduler, verbose=False, manoeuvre=manoeuvre)
+            cell = lambda e, sg, p=2: f"{f(e, p)} / {f(sg, p)}"
+            print(f"| {manoeuvre} | {matching} | {cell(o['mount_rms_arcmin'], o['mount_sigma_arcmin'])} | "
+                  f"{cell(o['offset_rms_ms'], o['offset_sigma_ms'])} | {cell(o['lever_rms_m'], o['lever_sigma_m'])} | "
+                  f"{cell(o['gyro_rms_deg_h'], o['gyro_sigma_deg_h'])} | {cell(o['accel_rms_mg'], o['accel_sigma_mg'])} |",
+                  flush=True)
+            print(f"  ({time.time() - t0:.1f} s wall; mounting inside 3 sigma {100 * o['mount_inside_3sigma']:.0f}%, "
+                  f"NEES {o['nees_mount']:.2f})", file=sys.stderr)
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--runs", type=int, default=100)
@@ -192,13 +256,20 @@ def main(argv=None) -> int:
     p.add_argument("--scheduler", default=None, help="a dask.distributed scheduler's address")
     p.add_argument("--plot", type=pathlib.Path, default=None, help="folder for the figure")
     p.add_argument("--progress", action="store_true")
+    p.add_argument("--no-offset-state", action="store_true",
+                   help="the time offset not estimated (its effect: the nominal 0 against the true 15 ms)")
+    p.add_argument("--manoeuvres", action="store_true",
+                   help="the observability table per manoeuvre (use --runs 20)")
     a = p.parse_args(argv)
+    if a.manoeuvres:
+        observability(a.runs, a.seconds, a.seed, a.workers, a.scheduler)
+        return 0
     kinds = ("velocity", "velocity+attitude") if a.matching == "both" else (a.matching,)
     stacked = {}
     for m in kinds:
         t0 = time.time()
         _, stacked[m] = run(a.runs, a.seconds, m, a.seed, a.workers, a.scheduler, a.filter, a.progress,
-                            master_model=a.master)
+                            master_model=a.master, offset_state=not a.no_offset_state)
         print(f"({time.time() - t0:.1f} s wall)", file=sys.stderr)
     if a.plot and len(stacked) == 2:
         a.plot.mkdir(parents=True, exist_ok=True)

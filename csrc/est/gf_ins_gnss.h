@@ -104,10 +104,12 @@
  * the instant the slave stamps t_m + tau, so the prediction from the filter's state at
  * t_m is carried forward by tau (in the filter's direction of time, dir tau after
  * gf_ins_reverse) with the nominal's rates (their errors times tau are second order):
- *   R_tau = exp([wbar dir tau x]), wbar = (w_ib^s + C_s^m^T w_im^m) / 2 (slave axes,
- *     both compensated/measured, the mean over tau to second order: the slave's rate at
- *     t_m, the master's at t_m + tau; the turn of the navigation frame, |w_in| tau ~ 1e-6
- *     rad, left out), D = C_s^n R_tau C_s^m^T the master attitude predicted at t_m + tau;
+ *   R_tau = exp([wbar dir tau x]), wbar = (w_ib^s + C_s^m^T w_im^m) / 2 - C_n^s w_in^n
+ *     (slave axes, both compensated/measured, the mean over tau to second order: the
+ *     slave's rate at t_m, the master's at t_m + tau; less the navigation frame's turn
+ *     w_in^n = w_ie^n + w_en^n of the nominal: the attitude's rate w_ns^s, so that the
+ *     offset's column vanishes where the attitude stands still), D = C_s^n R_tau C_s^m^T
+ *     the master attitude predicted at t_m + tau;
  *   master attitude: the small angle of D C_meas^T (n frame), y = log(D C_meas^T), z = 0
  *     (z carries the master's heading, pitch, roll; std: east, north, up rad);
  *   master velocity: v_m = v + dir tau a - D (w_im^m x r) + w_ie^n x (D r), a = C_s^n f^s

@@ -19,6 +19,7 @@ HERE = pathlib.Path(__file__).resolve().parent
 # Public headers (paths under csrc/, the one include root), in dependency order.
 HEADERS = [
     "base/gf_status.h",
+    "base/gf_allan.h",
     "gyrofree/gf_array.h",
     "gyrofree/gf9.h",
     "nav/gf_earth.h",

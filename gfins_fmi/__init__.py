@@ -25,6 +25,7 @@ from gfins_fmi.gyrofree.navigator import GyroFreeNavigator, hermite_increments
 from gfins_fmi.gyrofree.rate_solver import RateSolution, RateSolver
 from gfins_fmi.gyrofree.report import GeometryReport, geometry_report
 from gfins_fmi.nav.imu_errors import ImuErrors, ImuNoise
+from gfins_fmi.nav.plausibility import PlausibilityWarning
 from gfins_fmi.nav.strapdown import (NavSolution, NavState, SampleError, SinsConfig, Strapdown,
                                      euler_to_quat, quat_to_euler)
 
@@ -37,5 +38,5 @@ __all__ = [
     "layout", "geometry_report", "GeometryReport", "RateSolver", "RateSolution",
     "GyroFreeNavigator", "hermite_increments", "ArraySensorErrors", "ImuErrors", "ImuNoise",
     "SinsConfig", "NavState", "NavSolution", "Strapdown", "SampleError",
-    "euler_to_quat", "quat_to_euler", "__version__",
+    "euler_to_quat", "quat_to_euler", "PlausibilityWarning", "__version__",
 ]

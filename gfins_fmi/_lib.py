@@ -170,7 +170,8 @@ def as_vector3(name: str, value, unit: str) -> np.ndarray:
     return as_array(name, value, (3,), unit)
 
 
-_CTYPES = {"double": np.float64, "uint8_t": np.uint8, "int8_t": np.int8}
+_CTYPES = {"double": np.float64, "uint8_t": np.uint8, "int8_t": np.int8, "int64_t": np.int64,
+           "uint64_t": np.uint64}
 
 
 def ptr(arr: np.ndarray, n: int | None = None, ctype: str = "double"):

@@ -543,5 +543,47 @@ gf_status gf_ins_filter_check(const gf_ins_filter *f)
     for (int i = 0; i < n; ++i)
         if (!(f->kf.P[i * n + i] > 0.0) || !isfinite(f->kf.P[i * n + i]))
             return GF_ERR_BAD_PARAMETER;
+    /* The floats (a crafted FMU state with a valid CRC and three words overwritten was
+     * restored and stepped to a NaN standard deviation): P a covariance (finite,
+     * symmetric, positive definite within round-off: gf_kalman_check), the UKF weights
+     * those of the configuration (bit for bit: gf_ukf_weights_init is deterministic),
+     * every other double finite, the kept stds >= 0, the scale corrections > 0, the
+     * times of the last NHC / ZUPT finite or -Inf (none yet), the stored nominal states
+     * of the delayed updates with unit quaternions and latitudes inside the poles. */
+    if (gf_kalman_check(&f->kf) != GF_OK)
+        return GF_ERR_BAD_PARAMETER;
+    gf_ukf_weights w;
+    if (gf_ukf_weights_init(&w, (size_t)n, f->cfg.ukf_alpha, f->cfg.ukf_beta, f->cfg.ukf_kappa) != GF_OK ||
+        memcmp(&w, &f->ukf_w, sizeof w) != 0)
+        return GF_ERR_BAD_PARAMETER;
+    if (!gf_all_finite(f->sensors0, GF_INS_N_SENSORS) || !gf_all_finite(f->prev_gyro_raw, 3) ||
+        !gf_all_finite(f->prev_accel_raw, 3) || !gf_all_finite(f->w_ib_b_rad_s, 3) ||
+        !gf_all_finite(f->f_b_m_s2, 3) || !gf_all_finite(f->acc_dtheta_rad, 3) ||
+        !gf_all_finite(f->acc_dv_m_s, 3) || !gf_all_finite(f->still_f, 3) ||
+        !gf_all_finite(f->still_w, 3) || !isfinite(f->still_fn) || !isfinite(f->still_fn2) ||
+        !isfinite(f->still_wn) || !isfinite(f->last_regular_t_s))
+        return GF_ERR_NONFINITE_INPUT;
+    if (!(f->acc_T_s >= 0.0 && isfinite(f->acc_T_s)) ||
+        !(f->still_time_s >= 0.0 && isfinite(f->still_time_s)))
+        return GF_ERR_BAD_PARAMETER;
+    for (int i = 0; i < 9; ++i)
+        if (!(f->std9[i] >= 0.0 && isfinite(f->std9[i])))
+            return GF_ERR_BAD_PARAMETER;
+    for (int i = 0; i < 6; ++i)
+        if (!(f->inv_scale[i] > 0.0 && isfinite(f->inv_scale[i])))
+            return GF_ERR_BAD_PARAMETER;
+    const double last[2] = {f->last_nhc_t_s, f->last_zupt_t_s};
+    for (int i = 0; i < 2; ++i)
+        if (!(isfinite(last[i]) || last[i] == -INFINITY))
+            return GF_ERR_BAD_PARAMETER;
+    for (int k = 0; k < f->hist_count; ++k) {
+        const gf_ins_history *h = f->hist + (f->hist_head - 1 - k + 2 * GF_INS_HISTORY) % GF_INS_HISTORY;
+        const double qn = h->q_bn[0] * h->q_bn[0] + h->q_bn[1] * h->q_bn[1] +
+                          h->q_bn[2] * h->q_bn[2] + h->q_bn[3] * h->q_bn[3];
+        if (!isfinite(h->t_s) || !gf_all_finite(h->v_n_m_s, 3) || !gf_all_finite(h->w_ib_b_rad_s, 3) ||
+            !(fabs(qn - 1.0) < 2e-6) || !(fabs(h->lat_rad) < GF_HALF_PI) || !isfinite(h->lon_rad) ||
+            !isfinite(h->h_m))
+            return GF_ERR_BAD_PARAMETER;
+    }
     return GF_OK;
 }

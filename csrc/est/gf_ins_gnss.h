@@ -510,10 +510,13 @@ gf_status gf_ins_init(gf_ins_filter *f, const gf_ins_config *cfg, double t0_s,
 
 /* Checks a whole filter handed in by a caller (an FMU state restored from bytes): the
  * configuration, the state layout and every index (idx_*, kf.n, history ring), flags,
- * the nominal states (gf_sins_state_check) and finite estimates with a positive
- * covariance diagonal. gf_ins_step checks the sizes and indices (integer compares)
- * itself every step. Errors: GF_ERR_BAD_SIZE, GF_ERR_BAD_PARAMETER,
- * GF_ERR_NONFINITE_INPUT. */
+ * the nominal states (gf_sins_state_check: unit attitude quaternion, latitude inside the
+ * poles, height in the Earth model's range), finite estimates, the covariance
+ * (gf_kalman_check: finite, symmetric, positive definite within round-off, a positive
+ * diagonal), the UKF weights of the configuration, and every other float of the struct
+ * (finite; stds >= 0, scale corrections > 0; the stored nominal states of the delayed
+ * updates). gf_ins_step checks the sizes and indices (integer compares) itself every
+ * step. Errors: GF_ERR_BAD_SIZE, GF_ERR_BAD_PARAMETER, GF_ERR_NONFINITE_INPUT. */
 gf_status gf_ins_filter_check(const gf_ins_filter *f);
 
 /* Records the current state as the first epoch of *epochs (call once before a run

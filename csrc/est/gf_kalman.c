@@ -56,10 +56,31 @@ gf_status gf_kalman_check(const gf_kalman *kf)
     for (size_t i = 0; i < kf->n; ++i)
         if (!isfinite(kf->x[i]))
             return GF_ERR_NONFINITE_INPUT;
-    for (size_t i = 0; i < kf->n * kf->n; ++i)
+    const size_t n = kf->n;
+    for (size_t i = 0; i < n * n; ++i)
         if (!isfinite(kf->P[i]))
             return GF_ERR_NONFINITE_INPUT;
-    return GF_OK;
+    double C[NMAX * NMAX], s[NMAX];
+    for (size_t i = 0; i < n; ++i) {
+        const double v = kf->P[i * n + i];
+        if (!(v >= 0.0))
+            return GF_ERR_BAD_PARAMETER;
+        s[i] = v > 0.0 ? 1.0 / sqrt(v) : 0.0;
+        /* a state known exactly (variance 0, e.g. a bias held constant) is uncorrelated */
+        for (size_t j = 0; v == 0.0 && j < n; ++j)
+            if (j != i && (kf->P[i * n + j] != 0.0 || kf->P[j * n + i] != 0.0))
+                return GF_ERR_BAD_PARAMETER;
+    }
+    if (!symmetrised(n, kf->P, C))
+        return GF_ERR_BAD_PARAMETER;
+    /* the correlation matrix (unit diagonal: the test does not depend on the units of the
+     * states), nudged by 1e-10 so that round-off-level indefiniteness passes */
+    for (size_t i = 0; i < n; ++i)
+        for (size_t j = 0; j < n; ++j)
+            C[i * n + j] *= s[i] * s[j];
+    for (size_t i = 0; i < n; ++i)
+        C[i * n + i] = 1.0 + 1e-10;
+    return gf_cholesky(n, C) == GF_OK ? GF_OK : GF_ERR_BAD_PARAMETER;
 }
 
 gf_status gf_kalman_init(gf_kalman *kf, size_t n, const double *x0, const double *P0)

@@ -160,7 +160,14 @@ _Static_assert(GF_KF_MAX_N % 4 == 0, "GF_KF_MAX_N must be a multiple of 4 (the e
 
 /* Checks a filter struct handed in by a caller (e.g. restored from saved bytes): n in
  * 1..GF_KF_MAX_N (GF_ERR_BAD_SIZE), x and the used n x n block of P finite
- * (GF_ERR_NONFINITE_INPUT). */
+ * (GF_ERR_NONFINITE_INPUT), and P a covariance as the engine keeps it
+ * (GF_ERR_BAD_PARAMETER): symmetric within the engine's tolerance (|P_ij - P_ji| <=
+ * 1e-9 sqrt(P_ii P_jj), the test of gf_kalman_init and the updates), a diagonal >= 0 (a
+ * zero variance with a zero row and column: a state known exactly) and positive
+ * (semi-)definite within round-off (the Cholesky factor of its correlation matrix with
+ * 1e-10 added to the diagonal exists: eigenvalues of the correlation matrix above -1e-10).
+ * A matrix that fails would make the next predict or update produce NaN or a negative
+ * variance (found by a crafted FMU state). */
 gf_status gf_kalman_check(const gf_kalman *kf);
 
 #ifdef __cplusplus

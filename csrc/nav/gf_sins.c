@@ -634,16 +634,21 @@ gf_status gf_sins_state_check(const gf_sins_state *s)
 {
     if (!s)
         return GF_ERR_NULL_POINTER;
+    /* flat_pos_m in either Earth model: the gyro-free navigator FMU publishes it as its
+     * `pos` output whatever the model (fuzz_fmu_state_gfnav_cube6: a NaN there in a
+     * WGS-84 state was accepted and reached the output after the next step) */
     if (!state_is_valid(s) || !v3_finite(s->a_n_m_s2) || !v3_finite(s->prev_gyro) ||
-        !v3_finite(s->prev_accel) || !isfinite(s->baro_accel_m_s2))
+        !v3_finite(s->prev_accel) || !isfinite(s->baro_accel_m_s2) || !v3_finite(s->flat_pos_m))
         return GF_ERR_BAD_PARAMETER;
     if (s->cfg.earth == GF_SINS_EARTH_FLAT)
-        return v3_finite(s->flat_pos_m) ? GF_OK : GF_ERR_BAD_PARAMETER;
+        return GF_OK;
     /* the kept sine and cosine are those of the latitude (they follow it by angle-sum
      * series, refreshed with libm every 64 samples: within a few ulp), the kept meridian
-     * radius that of a point within one step of it (1e-9 relative, gf_sins.c) */
+     * radius that of a point within one step of it (1e-9 relative, gf_sins.c); the height
+     * within the Earth model's range (gf_earth_update refuses it otherwise, as every
+     * step does: a restored state with h = 1e300 m must not get that far) */
     gf_earth e;
-    if (gf_earth_update(&e, s->lat_rad, 0.0, NULL, 1.0) != GF_OK ||
+    if (gf_earth_update(&e, s->lat_rad, s->h_m, NULL, 1.0) != GF_OK ||
         !(fabs(s->sin_lat - e.sin_lat) <= 1e-12) || !(fabs(s->cos_lat - e.cos_lat) <= 1e-12) ||
         !(fabs(s->R_M_m - e.R_M_m) <= 1e-6 * e.R_M_m))
         return GF_ERR_BAD_PARAMETER;

@@ -267,8 +267,9 @@ gf_status gf_sins_run(gf_sins_state *state, size_t n, const double *gyro, const 
  * configuration (enumerations, limits), direction, a unit attitude quaternion (within
  * 1e-6), finite velocity, acceleration, previous sample, baro state and time, the
  * latitude within the limit with the kept sine and cosine of it (1e-12) and meridian
- * radius (1e-6 relative), a finite longitude and height; with EARTH_FLAT a finite
- * position. Error: GF_ERR_BAD_PARAMETER. gf_sins_step and gf_sins_run check before every
+ * radius (1e-6 relative), a finite longitude and a height within the Earth model's
+ * range (-a/2, a/3); a finite fixed-frame position in either model (a navigator may
+ * publish it). Error: GF_ERR_BAD_PARAMETER. gf_sins_step and gf_sins_run check before every
  * call, with compares only, what selects a branch or divides (configuration, direction,
  * attitude norm, latitude range, cos L > 0, R_M > 0); other non-finite numbers make the
  * step's results non-finite: GF_ERR_DIVERGED. */

@@ -360,6 +360,30 @@ FmuStatus fmu_set(FmuInstance *instance, const FmuVariable *table, size_t n_tabl
  * checked when the model has been initialized (step mode, terminated): before that they
  * are parameters, which exitInitializationMode checks and from which it rebuilds every
  * internal, and only the variable table reads them. */
+/* A state saved before initialization holds what the master set (parameters, inputs) and
+ * start values: its outputs must be their start values. A crafted state could carry any
+ * bytes there (an infinite output), and the getters would return them (found by
+ * fuzz_fmu_state: the model's own checks only apply once it is initialized). */
+static const char *outputs_not_at_start(const ModelData *d)
+{
+    ModelData *start = malloc(sizeof *start);
+    if (!start)
+        return "it cannot be checked (out of memory)";
+    memset(start, 0, sizeof *start);
+    model_set_start_values(start);
+    const char *why = NULL;
+    for (size_t i = 0; i < sizeof kFmi2Variables / sizeof kFmi2Variables[0] && !why; ++i) {
+        const FmuVariable *v = &kFmi2Variables[i];
+        if (v->causality != FMU_CAUSALITY_OUTPUT)
+            continue;
+        const size_t bytes = v->count * (v->type == FMU_TYPE_FLOAT64 ? sizeof(double) : sizeof(int32_t));
+        if (memcmp((const char *)d + v->offset, (const char *)start + v->offset, bytes) != 0)
+            why = "an output differs from its start value before initialization";
+    }
+    free(start);
+    return why;
+}
+
 static const char *snapshot_invalid(const FmuSnapshot *s)
 {
     if (s->mode == 0 || (s->mode & ~FMU_MODE_ANY) || (s->mode & (s->mode - 1)))
@@ -371,7 +395,7 @@ static const char *snapshot_invalid(const FmuSnapshot *s)
         return "it holds a non-finite time";
     if (s->mode & (FMU_MODE_STEP | FMU_MODE_TERMINATED))
         return model_validate_state(&s->data);
-    return NULL;
+    return outputs_not_at_start(&s->data);
 }
 
 /* 1 if p is a state object made by this FMU (tag and token). */

@@ -9,6 +9,7 @@ import numpy as np
 
 from gfins_fmi.calibration.syscal_filter import CalibrationInputError, core_gravity_m_s2
 from gfins_fmi.nav.earth import WGS84
+from gfins_fmi.nav.plausibility import latitude_from_earth_rate, latitude_problem, report
 
 __all__ = ["Segment", "segment_record", "record_increments", "check_record"]
 
@@ -130,11 +131,15 @@ def segment_record(t_s, dtheta_rad, rate_threshold_deg_s: float = 0.5, smooth_s:
 
 
 
-def check_record(t_end, dt, dth, dv, segs, lat_rad, h_m, min_align_s, max_angle_per_sample_rad):
-    """Units, sampling and rest: CalibrationInputError with what was found."""
+def check_record(t_end, dt, dth, dv, segs, lat_rad, h_m, min_align_s, max_angle_per_sample_rad,
+                 gyro_std_rad_s: float | None = None, checks: str = "raise"):
+    """Units, sampling and rest: CalibrationInputError with what was found. With
+    ``gyro_std_rad_s`` (the gyros' bias 1-sigma, rad/s), the site latitude against the one
+    the Earth rate gives in each static interval (their median; ``checks`` says whether a
+    contradiction raises, warns or passes)."""
     if not (dt > 0).all():
         k = int(np.flatnonzero(~(dt > 0))[0])
-        raise CalibrationInputError(f"sample times must increase: interval {k} is {dt[k]!r} s")
+        raise CalibrationInputError(f"sample times must increase: interval {k} is {float(dt[k])!r} s")
     stat = [s for s in segs if s.kind == "static"]
     if not stat:
         raise CalibrationInputError("the record has no static interval (rate below the threshold for "
@@ -161,6 +166,8 @@ def check_record(t_end, dt, dth, dv, segs, lat_rad, h_m, min_align_s, max_angle_
         hint = " (are the gyro increments in degrees? np.radians)" if abs(w / (W * 180 / np.pi) - 1) < 0.5 else ""
         raise CalibrationInputError(f"at rest the gyros read {w:.3g} rad/s = {w / W:.1f} x the Earth "
                                     f"rate{hint}: the filter needs rad and a gyro that sees the Earth rate")
+    if gyro_std_rad_s is not None:
+        lat_problem(t_end, dt, dth, dv, stat, lat_rad, gyro_std_rad_s, checks)
     worst = float(np.max(np.linalg.norm(dth, axis=1)))
     if worst > max_angle_per_sample_rad:
         k = int(np.argmax(np.linalg.norm(dth, axis=1)))
@@ -169,3 +176,29 @@ def check_record(t_end, dt, dth, dv, segs, lat_rad, h_m, min_align_s, max_angle_
             f"{t_end[k]:.6g} s): faster than the sample rate resolves (limit "
             f"{np.degrees(max_angle_per_sample_rad):.3g} deg per sample); record at a higher rate "
             "or turn slower")
+
+
+def lat_problem(t_end, dt, dth, dv, stat, lat_rad, gyro_std_rad_s, checks) -> None:
+    """The site latitude against the Earth rate the gyros measure at rest: per static
+    interval the latitude of its mean rate and specific force
+    (:func:`gfins_fmi.nav.plausibility.latitude_from_earth_rate`), the median over the
+    intervals (the positions turn the gyro biases different ways), its 1-sigma that of one
+    interval (bias and white noise over the interval); a given latitude more than 5 sigma
+    and 2 deg from it is not where the record was made (before: accepted silently, and the
+    calibration fitted the wrong Earth rate into the gyro errors, issue 21)."""
+    lats, sig, means = [], [], []
+    for s in stat:
+        sl = slice(s.i0, s.i1)
+        T = float(np.sum(dt[sl]))
+        w = np.sum(dth[sl], axis=0) / T            # mean rate, rad/s
+        f = np.sum(dv[sl], axis=0) / T             # mean specific force, m/s^2
+        means.append((w, f))
+        lats.append(latitude_from_earth_rate(w, f))
+        noise = np.std(dth[sl] / dt[sl, None], axis=0).max() / np.sqrt(max(s.i1 - s.i0, 1))
+        sig.append(float(np.hypot(gyro_std_rad_s, noise)))
+    if not lats:
+        return
+    k = int(np.argsort(lats)[len(lats) // 2])
+    report([latitude_problem(lat_rad, *means[k], sig[k], f"the record's static interval {k + 1} of "
+                             f"{len(stat)} (t = {stat[k].t0_s:.6g} to {stat[k].t1_s:.6g} s)")],
+           checks, error=CalibrationInputError, stacklevel=4)

@@ -93,7 +93,7 @@ def calibrate(record, lat_rad: float, h_m: float, *, lon_rad: float = 0.0,
               config: SyscalConfig | None = None, passes: int = 2, params0=None,
               rate_threshold_deg_s: float = 0.5, min_static_s: float = 5.0,
               min_align_s: float = 30.0, max_angle_per_sample_deg: float = 3.0,
-              heading_rad: float | None = None) -> CalibrationReport:
+              heading_rad: float | None = None, checks: str = "raise") -> CalibrationReport:
     """System-level calibration of a raw multi-position record (seed 001 S4-S5).
 
     Parameters
@@ -116,6 +116,10 @@ def calibrate(record, lat_rad: float, h_m: float, *, lon_rad: float = 0.0,
     max_angle_per_sample_deg : turning faster than this per sample is refused.
     heading_rad : not used for the alignment (gyrocompassing gives it); kept for records
         whose gyros cannot see the Earth rate: then the first position's heading.
+    checks : {"raise", "warn", "off"}
+        A site latitude the Earth rate measured in the static intervals contradicts
+        (more than 5 sigma of the prior's gyro bias and 2 deg away: the record was made
+        elsewhere) raises :class:`CalibrationInputError`, warns or passes.
 
     Returns
     -------
@@ -131,14 +135,15 @@ def calibrate(record, lat_rad: float, h_m: float, *, lon_rad: float = 0.0,
     config = config or SyscalConfig()
     lat = float(lat_rad)
     if not (np.isfinite(lat) and abs(lat) < np.radians(89.0)):
-        raise CalibrationInputError(f"lat_rad = {lat_rad!r}: the site's latitude must be within +-89 deg "
+        raise CalibrationInputError(f"lat_rad = {float(lat_rad)!r}: the site's latitude must be within +-89 deg "
                                     "(in radians: np.radians)")
     h = as_scalar("h_m", h_m, "m", at_least=-1000.0, at_most=1e5)
     if not (isinstance(passes, int) and 1 <= passes <= 10):
         raise ValueError(f"passes must be an integer in 1..10; got {passes!r}")
     t_end, dt, dth, dv = record_increments(record)
     segs = segment_record(t_end, dth, rate_threshold_deg_s, min_static_s=min_static_s)
-    check_record(t_end, dt, dth, dv, segs, lat, h, min_align_s, np.radians(max_angle_per_sample_deg))
+    check_record(t_end, dt, dth, dv, segs, lat, h, min_align_s, np.radians(max_angle_per_sample_deg),
+                 gyro_std_rad_s=np.radians(config.prior.gyro_bias_deg_h) / 3600.0, checks=checks)
     n_p = config.n_states - 9
     p = np.zeros(N_PARAMS)
     if params0 is not None:
@@ -237,10 +242,12 @@ def covariance_study(schedule, lat_rad: float, h_m: float, config: SyscalConfig 
 def plot_report(rep: CalibrationReport, folder, truth=None,
                 names=("gyro_scale_x", "gyro_gamma_zx", "gyro_bias_z", "accel_scale_y",
                        "accel_alpha_yx", "accel_bias_z", "accel_k2_x", "lever_arm_y", "lever_arm_z"),
-                tag: str = "") -> list:
+                tag: str = "", save=None) -> list:
     """Two figures in ``folder``: the first pass's estimates of nine parameters with
     +-1 sigma bands (and ``truth``, SI, if known), and the zero-velocity residuals of the
-    last pass with the static intervals shaded. Returns their paths."""
+    last pass with the static intervals shaded. Returns their paths. ``save``: where a
+    figure's bytes go, given its path (e.g. an output set's temporary,
+    :meth:`gfins_fmi.io.output_set.OutputSet.file`); default: the path itself."""
 
     import matplotlib   # lazy: matplotlib (~0.3 s) only for figures
     matplotlib.use("Agg")
@@ -266,8 +273,9 @@ def plot_report(rep: CalibrationReport, folder, truth=None,
         ax.set_xlabel("time (min)")
     axes[0, 0].legend(fontsize=8)
     fig.suptitle("system calibration, first pass from the prior: estimates with +-1 sigma")
+    save = save or (lambda path: path)
     f1 = folder / f"syscal_convergence{tag}.png"
-    fig.savefig(f1, dpi=90)
+    fig.savefig(save(f1), dpi=90)
     plt.close(fig)
     fig, ax = plt.subplots(figsize=(12, 4), constrained_layout=True)
     for s in rep.segments:
@@ -280,6 +288,6 @@ def plot_report(rep: CalibrationReport, folder, truth=None,
            title="zero-velocity residual at each update (last pass)")
     ax.legend(fontsize=8)
     f2 = folder / f"syscal_residuals{tag}.png"
-    fig.savefig(f2, dpi=90)
+    fig.savefig(save(f2), dpi=90)
     plt.close(fig)
     return [f1, f2]

@@ -6,13 +6,60 @@ share: reading and writing files (``files``) and the initial state from options
 (``initial``)."""
 from __future__ import annotations
 
+import contextlib
 import importlib
+import signal
 import sys
+import threading
+import warnings
 
 from gfins_fmi._lib import GfinsError
 from gfins_fmi.cli.parser import build_parser
 
-__all__ = ["main"]
+__all__ = ["main", "Terminated"]
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised where the command is, like Ctrl-C's KeyboardInterrupt: the same
+    clean-up runs (no temporaries, the previous outputs kept)."""
+
+
+def _terminate(signum, frame):
+    raise Terminated()
+
+
+@contextlib.contextmanager
+def _sigterm_raises():
+    """SIGTERM raises :class:`Terminated` while a command runs (main thread only; the
+    previous handler is put back)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.getsignal(signal.SIGTERM)   # recorded before a pending one can run
+    try:
+        signal.signal(signal.SIGTERM, _terminate)
+        yield
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+
+
+@contextlib.contextmanager
+def _warnings_as_lines(command: str):
+    """The library's warnings (plausibility, unusable measurements: UserWarning and its
+    kin) shown as one line each, ``gfins CMD: warning: ...``, every time."""
+    def show(message, category, filename, lineno, file=None, line=None):
+        print(f"gfins {command}: warning: {message}", file=sys.stderr)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("always", UserWarning)
+        warnings.showwarning = show
+        yield
+
+
+def _outputs_note(exc) -> str:
+    note = getattr(exc, "gfins_outputs", "")
+    return f"; {note}" if note else ""
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -22,15 +69,17 @@ def main(argv: list[str] | None = None) -> int:
     if problem:   # a combination of options: refused at parse time too
         parsers[args.command].error(problem)
     try:
-        # the chosen command's module only: importing all of them (and the whole package
-        # with them) would make `gfins --help` ~1.7x slower (tests/repository/test_source_audit.py)
-        command = importlib.import_module(f"gfins_fmi.cli.{args.module}")
-        return getattr(command, args.function)(args)
+        with _sigterm_raises(), _warnings_as_lines(args.command):
+            # the chosen command's module only: importing all of them (and the whole package
+            # with them) would make `gfins --help` ~1.7x slower (tests/repository/test_source_audit.py)
+            command = importlib.import_module(f"gfins_fmi.cli.{args.module}")
+            return getattr(command, args.function)(args)
     except (ValueError, TypeError, OSError, ImportError, GfinsError) as exc:
-        print(f"gfins {args.command}: error: {exc}", file=sys.stderr)
+        print(f"gfins {args.command}: error: {exc}{_outputs_note(exc)}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        # the record commands write beside the output's name and rename when complete
-        kept = f"; {args.output} left as it was" if getattr(args, "output", None) else ""
-        print(f"gfins {args.command}: interrupted{kept}", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as exc:
+        # every command writes its files as one set (gfins_fmi.io.output_set): an
+        # interrupt leaves the previous set, or the new one when it came after the commit
+        what = "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted"
+        print(f"gfins {args.command}: {what}{_outputs_note(exc)}", file=sys.stderr)
+        return 143 if isinstance(exc, Terminated) else 130

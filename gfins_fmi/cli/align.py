@@ -32,12 +32,13 @@ import sys
 import numpy as np
 
 from gfins_fmi import io
-from gfins_fmi.cli.files import write_table
+from gfins_fmi.cli.files import compensated, outputs, run_writing
 from gfins_fmi.cli.initial import from_initial_option, record_start_s
 from gfins_fmi.cli.noise import imu_noise
 from gfins_fmi.estimation.alignment import coarse_align, coarse_align_inertial
 from gfins_fmi.estimation.config import UG, FilterConfig, InitialState
 from gfins_fmi.estimation.fine_alignment import align_in_motion, fine_align
+from gfins_fmi.estimation.noise_file import read_imu_errors
 from gfins_fmi.estimation.transfer import MasterErrors, TransferTruth, transfer_align
 from gfins_fmi.io.columns import ALIGNMENT_PASS_COLUMNS, TRANSFER_COLUMNS
 from gfins_fmi.io.navigation import read_navigation, write_navigation
@@ -55,10 +56,24 @@ def _biases(args, noise):
 
 def run(args) -> int:
     if args.mode == "transfer":
-        return _transfer(args)
+        if args.simulate is not None:
+            _simulate(args)
+        return run_writing(_transfer, args, inputs=(args.imu, args.speed, args.truth, args.truth_json),
+                           files=(args.output, args.plot))
+    with outputs(args.imu, args.speed, args.depth) as outs:
+        if args.output:
+            outs.claim(args.output)
+        status = _run(args, outs)
+        outs.commit()
+        return status
+
+
+def _run(args, outs) -> int:
     deg = math.pi / 180.0
     noise = imu_noise(args.grade or "navigation")
     imu = io.ImuRecord.from_csv(args.imu)
+    if args.imu_errors:
+        imu = compensated(imu, read_imu_errors(args.imu_errors))
     gb, ab = _biases(args, noise)
     if args.mode == "static":
         lat, lon, h = args.position
@@ -104,7 +119,7 @@ def run(args) -> int:
         cols = [al.passes["t_s"], al.passes["direction"].astype(float), e[:, 0], e[:, 1], e[:, 2],
                 *(al.passes["std9"][:, 6 + i] / deg for i in range(3)),
                 al.passes["n_updates"].astype(float), al.passes["n_rejected"].astype(float)]
-        write_table(args.output, ALIGNMENT_PASS_COLUMNS, cols)
+        outs.write_table(args.output, ALIGNMENT_PASS_COLUMNS, cols)
         print(f"{len(al.passes)} passes -> {args.output}")
     if not al.converged:
         print("gfins align: warning: the alignment has not converged (see the note above); exit status 1",
@@ -125,16 +140,20 @@ def _simulate(args) -> None:
     inst = SlaveInstallation(mount_rad=(20 * _ARCMIN, -15 * _ARCMIN, 25 * _ARCMIN), lever_arm_m=(0.1, 0.0, 0.0),
                              time_offset_s=0.015)
     sc = simulate_transfer(args.simulate, installation=inst, seed=args.sim_seed)
-    sc.slave_imu.to_csv(args.imu)
-    write_navigation(args.speed, sc.master, sc.master_rate_rad_s)
     truth = args.imu.with_name(args.imu.name + ".truth.csv")
-    sc.truth.to_csv(truth)
+    truth_json = args.imu.with_name(args.imu.name + ".truth.json")
     info = {"mount_deg": [math.degrees(x) for x in inst.mount_rad], "lever_arm_m": list(inst.lever_arm_m),
             "time_offset_s": inst.time_offset_s,
             "gyro_bias_deg_h": [math.degrees(x) * 3600 for x in sc.slave_gyro_bias_rad_s],
             "accel_bias_mg": [x / _MG for x in sc.slave_accel_bias_m_s2]}
-    truth_json = args.imu.with_name(args.imu.name + ".truth.json")
-    truth_json.write_text(json.dumps(info, indent=1) + "\n")
+    with outputs() as outs:     # the scenario's four files as one set (the alignment's inputs)
+        for path in (args.imu, args.speed, truth, truth_json):
+            outs.claim(path)
+        sc.slave_imu.to_csv(outs.file(args.imu))
+        write_navigation(outs.file(args.speed), sc.master, sc.master_rate_rad_s)
+        sc.truth.to_csv(outs.file(truth))
+        outs.write_text(truth_json, json.dumps(info, indent=1) + "\n")
+        outs.commit()
     print(f"simulated {args.simulate:g} s: slave -> {args.imu}, master -> {args.speed}, truth -> {truth}, "
           f"{truth_json}")
 
@@ -153,12 +172,12 @@ def _read_truth_json(path) -> dict:
     return {conv[k][0]: np.asarray(v, float) * conv[k][1] for k, v in d.items()}
 
 
-def _transfer(args) -> int:
-    if args.simulate is not None:
-        _simulate(args)
+def _transfer(args, outs) -> int:
     deg = math.pi / 180.0
     noise = imu_noise(args.grade or "consumer")
     imu = io.ImuRecord.from_csv(args.imu)
+    if args.imu_errors:
+        imu = compensated(imu, read_imu_errors(args.imu_errors))
     if args.speed.suffix == ".nav":
         master, rates = io.read_kfgins_nav(args.speed), None
     else:
@@ -207,10 +226,10 @@ def _transfer(args) -> int:
                 *res.lever_std_m.T, res.time_offset_s, res.time_offset_std_s, *(res.gyro_bias_rad_s * k["g"]).T,
                 *(res.gyro_bias_std_rad_s * k["g"]).T, *(res.accel_bias_m_s2 * k["a"]).T,
                 *(res.accel_bias_std_m_s2 * k["a"]).T, *(res.euler_rad * k["m"]).T, *(res.attitude_std_rad * k["m"]).T]
-        write_table(args.output, TRANSFER_COLUMNS, cols)
+        outs.write_table(args.output, TRANSFER_COLUMNS, cols)
         print(f"{len(res.t_s)} rows -> {args.output}")
     if args.plot:
-        res.plot(args.plot, truth)
+        res.plot(outs.file(args.plot), truth)
         print(f"figure -> {args.plot}")
     sig = res.mount_std_rad[-1]
     if not (sig[0] <= args.tolerance * _ARCMIN and sig[2] <= args.tolerance * _ARCMIN):

@@ -11,7 +11,7 @@ import numpy as np
 
 from gfins_fmi.calibration.syscal_filter import PARAM_NAMES, PARAM_UNITS, Prior, SyscalConfig
 from gfins_fmi.calibration.system import calibrate, plot_report, random_params, simulate_record
-from gfins_fmi.cli.files import read_imu
+from gfins_fmi.cli.files import outputs, read_imu
 from gfins_fmi.nav.imu_errors import ImuNoise
 from gfins_fmi.sim import rotation as rot
 
@@ -19,6 +19,14 @@ __all__ = ["run"]
 
 
 def _simulate(args, config) -> None:
+    with outputs() as outs:
+        truth = outs.claim(args.imu.with_name(args.imu.name + ".truth.json"))
+        outs.claim(args.imu)
+        _simulate_into(args, config, outs, truth)
+        outs.commit()
+
+
+def _simulate_into(args, config, outs, truth) -> None:
     sched = rot.seed001_path(2) if args.simulate == "seed001" else rot.turntable_path_19()
     rng = np.random.default_rng(args.sim_seed)
     p = random_params(rng, config.prior, 28 if args.delay else 27)
@@ -26,10 +34,8 @@ def _simulate(args, config) -> None:
                                  noise=ImuNoise(gyro_arw_deg_sqrt_h=args.arw,
                                                 accel_vrw_ug_sqrt_hz=args.vrw),
                                  seed=args.sim_seed + 1)
-    rec.to_csv(args.imu)
-    truth = args.imu.with_name(args.imu.name + ".truth.json")
-    truth.write_text(json.dumps({"names": list(PARAM_NAMES[:p.size]), "si": p.tolist()}, indent=1),
-                     encoding="utf-8")
+    rec.to_csv(outs.file(args.imu))
+    outs.write_text(truth, json.dumps({"names": list(PARAM_NAMES[:p.size]), "si": p.tolist()}, indent=1))
     print(f"simulated {args.simulate}: {len(rec)} samples written to {args.imu} (truth: {truth})")
 
 
@@ -40,6 +46,18 @@ def run(args) -> int:
                               estimate_delay=args.delay, prior=prior)
     if args.simulate:
         _simulate(args, config)
+    with outputs(args.imu) as outs:
+        for path in (args.report, args.json):
+            if path:
+                outs.claim(path)
+        if args.plot:
+            outs.claim_folder(args.plot)
+        status = _calibrate(args, config, outs)
+        outs.commit()
+        return status
+
+
+def _calibrate(args, config, outs) -> int:
     imu = read_imu(args.imu, args.format)
     rep = calibrate(imu, np.radians(args.lat), args.height, lon_rad=np.radians(args.lon),
                         config=config, passes=args.passes)
@@ -59,15 +77,15 @@ def run(args) -> int:
     out = "\n".join(text)
     print(out)
     if args.report:
-        args.report.write_text(out + "\n", encoding="utf-8")
+        outs.write_text(args.report, out + "\n")
     if args.json:
         doc = {"names": list(rep.names), "estimate_si": rep.estimate.tolist(), "std_si": rep.std.tolist(),
                "units": [u[0] for u in PARAM_UNITS[:len(rep.names)]],
                "estimate_units": rep.in_units(rep.estimate).tolist(),
                "std_units": rep.in_units(rep.std).tolist(), "unobservable": rep.unobservable,
                "fmu_parameters": rep.errors.fmu_parameters(), "accel_delay_s": rep.accel_delay_s}
-        args.json.write_text(json.dumps(doc, indent=1), encoding="utf-8")
+        outs.write_text(args.json, json.dumps(doc, indent=1))
     if args.plot:
-        for f in plot_report(rep, args.plot):
+        for f in plot_report(rep, args.plot, save=outs.file):
             print(f"figure: {f}")
     return 0

@@ -7,6 +7,7 @@ import pathlib
 
 import numpy as np
 
+from gfins_fmi.cli.files import outputs
 from gfins_fmi.fmi.reference import compare_runners
 from gfins_fmi.sim.vehicle import VehicleProfile
 
@@ -35,10 +36,12 @@ def run(args) -> int:
               f"same sensor data |dlat| {r['diff']['lat_rad']:.3g} rad, |dv| "
               f"{r['diff']['v_m_s']:.3g} m/s"
               + (f", |dq| {r['diff']['q']:.3g}, |dstd| {r['diff']['std']:.3g}" if integrated else ""))
-    np.savetxt(out / "cosim_errors.csv", np.c_[e["t_s"], e["horizontal_m"], e["velocity_m_s"],
-                                               np.linalg.norm(e["attitude_rad"], axis=1)],
-               delimiter=",",
-               header="t_s,horizontal_error_m,velocity_error_m_s,attitude_error_rad", comments="")
+    with outputs() as outs:     # written beside its name, renamed when complete
+        np.savetxt(outs.file(out / "cosim_errors.csv"),
+                   np.c_[e["t_s"], e["horizontal_m"], e["velocity_m_s"],
+                         np.linalg.norm(e["attitude_rad"], axis=1)], delimiter=",",
+                   header="t_s,horizontal_error_m,velocity_error_m_s,attitude_error_rad", comments="")
+        outs.commit()
     print(f"  errors -> {out / 'cosim_errors.csv'}")
     ok = all(max(r["diff"].values()) == 0.0 for r in res.values())
     print("cosim " + (f"passed: every co-simulation equals {reference} bit for bit"

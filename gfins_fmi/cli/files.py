@@ -1,21 +1,26 @@
-"""What the commands read and write, in one place: the record commands' streaming path
-(a :class:`~gfins_fmi.io.TableReader` in chunks -> the solver -> a
-:class:`~gfins_fmi.io.TableWriter`, with the time column checked as it streams and a
-progress bar), whole tables written the same way (:func:`write_table`: the integrated
-solution, its innovation log, the alignment passes), and the recorded files of the
-estimation commands read by format (:func:`read_imu`, :func:`read_gnss`, ...)."""
+"""What the commands read and write, in one place: every command's outputs are one
+:class:`~gfins_fmi.io.output_set.OutputSet` (:func:`outputs`: no output is an input, the
+files appear together when the run has succeeded, partial tables are named as such);
+the record commands' streaming path (a :class:`~gfins_fmi.io.TableReader` in chunks ->
+the solver -> a table of the set, with the time column checked as it streams and a
+progress bar); and the recorded files of the estimation commands read by format
+(:func:`read_imu`, :func:`read_gnss`, ...), with messages that name the file and what is
+wrong with it."""
 from __future__ import annotations
 
+import re
 import sys
 
 import numpy as np
 
 from gfins_fmi import io
-from gfins_fmi.io.table_writer import TableWriter
+from gfins_fmi._lib import NonFiniteInputError
+from gfins_fmi.io.output_set import OutputSet
 from gfins_fmi.io.tables import TableReader
 
-__all__ = ["TimeColumn", "Refused", "record_reader", "stream", "nav_columns", "write_table", "read_imu",
-           "read_gnss", "read_optional", "read_truth"]
+__all__ = ["TimeColumn", "Refused", "outputs", "record_reader", "stream", "nav_columns",
+           "read_imu", "read_gnss", "read_optional", "read_truth", "cause", "run_writing",
+           "compensated", "compensated_block"]
 
 
 #: relative tolerance of a fixed sampling interval in a time column: timestamps rounded
@@ -111,6 +116,39 @@ _HEADER_HINT = "if it is a line of column names, give --header"
 _PROGRESS_ROWS, _PROGRESS_BYTES = 1_000_000, 64 << 20
 
 
+#: the end of a solver's message that points to the exception's ``.partial`` attribute (the
+#: API's); the commands name the partial file instead
+_PARTIAL_NOTE = re.compile(r"; (no sample was \w+ before it \(\.partial is empty\)|"
+                           r"samples? [\d.]+ (was|were) \w+ \(see \.partial\)|"
+                           r"the solution before it is in \.partial)$")
+
+
+def cause(error: Exception) -> str:
+    """A solver's message without the API's pointer to ``.partial``."""
+    return _PARTIAL_NOTE.sub("", str(error))
+
+
+def outputs(*inputs) -> OutputSet:
+    """The set of files a command writes; ``inputs``: its input files (None skipped),
+    which no output may be."""
+    return OutputSet(inputs)
+
+
+def run_writing(run, args, inputs=(), files=(), folder=None) -> int:
+    """``run(args, outs)`` with the command's outputs as one set: ``files`` (None skipped)
+    and the figure ``folder`` claimed before the run, the set committed when it returns
+    (nothing of it kept if it raises)."""
+    with outputs(*inputs) as outs:
+        for path in files:
+            if path:
+                outs.claim(path)
+        if folder:
+            outs.claim_folder(folder)
+        status = run(args, outs)
+        outs.commit()
+        return status
+
+
 class Refused(Exception):
     """The solver refused a sample: ``error`` (with ``.partial``) and the output
     columns of the ``rows`` before it in the chunk."""
@@ -126,19 +164,22 @@ def record_reader(args, what: str):
                        header_hint=_HEADER_HINT)
 
 
-def stream(args, reader, names, dtypes, solve, verb: str, group: int = 1) -> tuple[int, int]:
+def stream(args, outs: OutputSet, reader, names, dtypes, solve, verb: str,
+           group: int = 1) -> tuple[int, int]:
     """Read, solve and write a record chunk by chunk: ``solve(start, block)`` gives the
     output columns of the rows of ``block`` (the first is row ``start``) or raises
-    :class:`Refused`. The output is written beside ``args.output`` and renamed into
-    place at the end; after a refused sample it holds the rows before it, and when
-    there is none, it is not written (an existing file stays as it was).
+    :class:`Refused`. The output, a table of ``outs``, appears under ``args.output`` when
+    the whole record is done (``outs`` is committed here). After a refused sample the
+    rows before it go to the partial file (``sol.partial.csv``, its first line says
+    where and why it stopped) and ``args.output`` stays as it was; when there is no row
+    before it, nothing is written.
 
     Returns (status, rows written): status 0, or 1 after a refused sample. ``group``:
     input rows per output row (the last output row takes the rows left).
     """
     status, error = 0, None
-    with reader, TableWriter(args.output, names, dtypes,
-                             rows=None if reader.n_rows is None else -(-reader.n_rows // group)) as writer, \
+    with reader, outs.table(args.output, names, dtypes,
+                            rows=None if reader.n_rows is None else -(-reader.n_rows // group)) as writer, \
             _progress(args, reader, verb) as bar:
         for start, block in reader:
             try:
@@ -153,16 +194,26 @@ def stream(args, reader, names, dtypes, solve, verb: str, group: int = 1) -> tup
             bar.set_postfix_str(f"{writer.rows} samples")
         else:
             bar.update(reader.size - bar.n)     # trailing comment lines, if any
-        if status and writer.rows == 0:
-            kept = "left as it was" if args.output.exists() else "not written"
-            print(f"error: {error}; no sample was {verb}: {args.output} {kept}", file=sys.stderr)
-            writer.discard()
-            return status, 0
         if status:
-            print(f"error: {error}; writing the {writer.rows} samples {verb} before it",
-                  file=sys.stderr)
+            why = cause(error)
+            at = getattr(error, "index", None)
+            where = f"input row {at}" if isinstance(at, int) and at >= 0 else "a refused sample"
+            rows = writer.rows
+            outs.keep_partial(f"stopped at {where} of {args.input}: {why}; the {rows} rows here "
+                              f"are the samples {verb} before it")
+            if rows == 0:
+                print(f"error: {why}; no sample was {verb}: {outs.outcome()}", file=sys.stderr)
+            else:
+                print(f"error: {why}; the {rows} samples {verb} before it are in "
+                      f"{_names(outs.partial)} ({outs.outcome().split('; ', 1)[1]})", file=sys.stderr)
+            return status, rows
         writer.commit()
+    outs.commit()
     return status, writer.rows
+
+
+def _names(paths) -> str:
+    return ", ".join(str(p) for p in paths)
 
 
 class _NoBar:
@@ -204,14 +255,6 @@ def nav_columns(sol) -> list:
             + [sol.q_bn[:, j] for j in range(4)])
 
 
-def write_table(path, names, columns, dtypes=None, *, float_format=None) -> None:
-    """A whole table written at once through :class:`~gfins_fmi.io.TableWriter`: beside
-    its name, renamed when complete (nothing half-written is left)."""
-    with TableWriter(path, names, dtypes, float_format=float_format) as w:
-        w.write(columns)
-        w.commit()
-
-
 def read_imu(path, fmt: str = "csv", gps_week=None):
     """An IMU record: ``csv`` (our ImuRecord CSV), ``kfgins`` (KF-GINS IMU text/.bin:
     increments, front-right-down) or ``rtk_walk`` (the rtk_walk CSV, with its mounting)."""
@@ -243,3 +286,36 @@ def read_truth(path, gps_week=None):
         return None
     return (io.read_kfgins_nav(path, gps_week=gps_week) if path.suffix == ".nav"
             else io.TruthRecord.from_csv(path))
+
+
+def compensated(imu, errors):
+    """An ImuRecord with the IMU errors removed (``--imu-errors``): rates by
+    ImuErrors.compensate, increments through the mean rate of each interval
+    (compensate_increments; the first interval taken as long as the second)."""
+    if errors is None:
+        return imu
+    if imu.kind == "rates":
+        w, f = errors.compensate(imu.gyro, imu.accel)
+    else:
+        first = imu.t_s[1] - imu.t_s[0] if len(imu) > 1 else 1.0
+        dt = np.diff(imu.t_s, prepend=imu.t_s[0] - first)
+        w, f = errors.compensate_increments(imu.gyro, imu.accel, dt)
+    return io.ImuRecord(t_s=imu.t_s, gyro=w, accel=f, kind=imu.kind, source=f"{imu.source}; compensated")
+
+
+def compensated_block(errors, t, gyro, accel, kind: str, t_prev=None):
+    """One chunk of a streamed record compensated (``--imu-errors``): (gyro, accel). Rows
+    from the first one the error model refuses (not finite) on are passed as they are,
+    for the navigator to refuse at the same row with its own message. ``t_prev``: the
+    time before the chunk (increments: the first interval)."""
+    if kind == "rates":
+        fn, args = errors.compensate, ()
+    else:
+        before = t_prev if t_prev is not None else (t[0] - (t[1] - t[0]) if len(t) > 1 else t[0] - 1.0)
+        fn, args = errors.compensate_increments, (np.diff(t, prepend=before),)
+    try:
+        return fn(gyro, accel, *args)
+    except NonFiniteInputError as exc:
+        k = exc.index
+        w, f = exc.partial
+        return np.vstack([w, gyro[k:]]), np.vstack([f, accel[k:]])

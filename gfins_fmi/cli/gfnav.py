@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from gfins_fmi._lib import NonFiniteInputError, SampleError
-from gfins_fmi.cli.files import Refused, TimeColumn, nav_columns, record_reader, stream
+from gfins_fmi.cli.files import Refused, TimeColumn, nav_columns, outputs, record_reader, stream
 from gfins_fmi.cli.initial import from_state_options
 from gfins_fmi.gyrofree.geometry import layout
 from gfins_fmi.gyrofree.navigator import GyroFreeNavigator
@@ -17,6 +17,12 @@ __all__ = ["run"]
 
 
 def run(args) -> int:
+    with outputs(args.input) as outs:
+        outs.claim(args.output)
+        return _run(args, outs)
+
+
+def _run(args, outs) -> int:
     g = layout(args.layout, args.lever_arm)
     n = g.n_sensors
     reader = record_reader(args, "accelerometer-array record")
@@ -55,8 +61,8 @@ def run(args) -> int:
             raise Refused(exc, columns(t, exc.partial, exc.partial_rates), len(exc.partial)) from None
         return columns(t, sol, rates)
 
-    status, rows = stream(args, reader, NAV_COLUMNS + RATE_COLUMNS,
+    status, rows = stream(args, outs, reader, NAV_COLUMNS + RATE_COLUMNS,
                           [np.float64] * (len(NAV_COLUMNS) + 6) + [np.uint8], solve, "navigated")
-    if rows:
+    if status == 0:
         print(f"{rows} samples navigated -> {args.output}")
     return status

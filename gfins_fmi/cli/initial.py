@@ -37,4 +37,4 @@ def record_start_s(imu) -> float:
     one interval (the median of the first 100) before it (increments: the first covers
     the interval that ends there)."""
     t = imu.t_s
-    return t[0] if imu.kind == "rates" else t[0] - float(np.median(np.diff(t[:100])))
+    return float(t[0]) if imu.kind == "rates" else float(t[0] - np.median(np.diff(t[:100])))

@@ -14,7 +14,7 @@ from gfins_fmi.cli.options import GRADES, count, prior_setting, real, vector
 from gfins_fmi.gyrofree.array import MIN_LEVER_ARM_M
 from gfins_fmi.nav.earth import WGS84
 
-__all__ = ["build_parser", "executor_arguments", "record_arguments", "state_arguments",
+__all__ = ["build_parser", "executor_arguments", "record_arguments", "state_arguments", "imu_errors_argument",
            "ANALYZE_CONFIGS"]
 
 #: ``gfins analyze --config``: the scenarios of gfins_fmi.analysis.error_report.CONFIGS (named
@@ -22,7 +22,17 @@ __all__ = ["build_parser", "executor_arguments", "record_arguments", "state_argu
 ANALYZE_CONFIGS = ("sins", "cube6", "qin9", "12", "qin9-sqrt", "12-sqrt", "qin9-fused", "12-fused")
 
 #: ``gfins calibrate --help``
-CALIBRATE_DESCRIPTION = """``gfins calibrate``: system-level calibration of a recorded multi-position run.
+CALIBRATE_DESCRIPTION = """``gfins calibrate``: system-level calibration of a recorded multi-position run,
+or (``gfins calibrate poses RECORD``) calibration at unknown static poses of a hand-turned IMU.
+
+    gfins calibrate poses RECORD [--lat DEG --height M | --gravity M_S2] [--format csv|kfgins|rtk_walk]
+                    [--counts GYRO_LSB_PER_DPS,ACCEL_LSB_PER_G] [--initial-still S] [--still-window S]
+                    [--still-accel F] [--still-gyro F] [--min-still S] [--k2] [--gyro-bias still|fit]
+                    [--output CAL.toml] [--table PREFIX] [--report REPORT.md] [--plot DIR]
+
+RECORD starts at rest (--initial-still s), then the IMU is turned by hand to >= 20 orientations
+and held still at each for a few seconds (docs/characterise_imu.md). Prints the poses found and
+every parameter with its 1-sigma; --output writes [imu_errors] for `gfins integrate --imu-errors`.
 
     gfins calibrate IMU --lat DEG --height M [--lon DEG] [--format csv|kfgins]
                     [--arw DEG_SQRT_H] [--vrw UG_SQRT_HZ] [--delay] [--passes N]
@@ -52,6 +62,27 @@ def _check_demo(args) -> str | None:
 def _check_cosim(args) -> str | None:
     if args.seconds < args.step:
         return f"--seconds {args.seconds:g} s is shorter than one --step ({args.step:g} s)"
+    # the FMUs refuse a step past their stop time (to 1e-9 relative, the glue's tolerance on
+    # communication points): before, a step that does not divide the run failed at its
+    # last step, deep inside the run
+    n = args.seconds / args.step
+    k = round(n)
+    if abs(k * args.step - args.seconds) > 1e-9 * max(1.0, args.seconds):
+        lo, hi = int(n), int(n) + 1
+        return (f"--seconds {args.seconds:.10g} s is not a whole number of --step {args.step:.10g} s "
+                f"({n:.6g} steps): give a step that divides it, or --seconds {lo * args.step:.10g} or "
+                f"{hi * args.step:.10g} ({lo} or {hi} steps)")
+    return None
+
+
+def _check_integrate(args) -> str | None:
+    if args.outages is not None:
+        dur, per, first = args.outages
+        if not (dur > 0 and per >= dur and first >= 0):
+            return (f"--outages {dur:g},{per:g},{first:g}: DURATION must be > 0 s, PERIOD >= "
+                    "DURATION and FIRST >= 0 s")
+    if args.noise and args.noise_file:
+        return "give the IMU noise once: --noise or --noise-file"
     return None
 
 
@@ -103,14 +134,22 @@ def record_arguments(p, what: str) -> None:
                         "inputs of 10^6 samples, or 64 MiB of text, or more)")
 
 
+def imu_errors_argument(p) -> None:
+    """``--imu-errors CAL.toml``, shared by the commands that read IMU records."""
+    p.add_argument("--imu-errors", type=pathlib.Path, default=None, metavar="CAL.toml",
+                   help="compensate the IMU record with these errors first ([imu_errors] of a file "
+                        "`gfins calibrate poses` writes)")
+
+
 def state_arguments(p) -> None:
     """Initial state and vertical channel, shared by the navigation commands (the state:
     :func:`gfins_fmi.cli.initial.from_state_options`)."""
     p.add_argument("--lat0", type=real("deg", above=-90.0, below=90.0), required=True,
                    help="initial latitude, deg")
     p.add_argument("--lon0", type=real("deg"), required=True, help="initial longitude, deg")
-    p.add_argument("--h0", type=real("m", above=-0.5 * WGS84.a), default=0.0,
-                   help="initial height, m (also the held height)")
+    p.add_argument("--h0", type=real("m", above=-0.5 * WGS84.a, below=WGS84.a / 3.0), default=0.0,
+                   help="initial height above the ellipsoid, m, in (-a/2, a/3) (also the held "
+                        "height)")
     p.add_argument("--heading0", type=real("deg"), default=0.0,
                    help="initial heading, deg clockwise from north")
     p.add_argument("--pitch0", type=real("deg"), default=0.0, help="initial pitch, deg")
@@ -153,6 +192,10 @@ def _integrate(sub) -> argparse.ArgumentParser:
                    default=None, metavar="ARW,VRW,GB,AB,TAU",
                    help="IMU noise: ARW deg/sqrt(h), accelerometer noise ug/sqrt(Hz), gyro bias "
                         "instability deg/h, accelerometer bias instability ug, correlation time s")
+    p.add_argument("--noise-file", type=pathlib.Path, default=None, metavar="FILE.toml",
+                   help="IMU noise from a noise block (TOML; `gfins noise RECORD --output FILE.toml` "
+                        "writes one; units in its keys); overrides --grade, excludes --noise")
+    imu_errors_argument(p)
     p.add_argument("--filter", choices=("ekf", "ukf"), default="ekf")
     p.add_argument("--smooth", action="store_true", help="also run the RTS smoother (its solution is "
                    "written to OUT.smoothed.csv)")
@@ -178,7 +221,32 @@ def _integrate(sub) -> argparse.ArgumentParser:
     p.add_argument("--nhc", action="store_true", help="non-holonomic constraints (ground vehicles)")
     p.add_argument("--plot", type=pathlib.Path, default=None, help="folder for figures")
     p.add_argument("--progress", action="store_true", help="progress bar")
-    _command(p, "integrate")
+    _command(p, "integrate", check=_check_integrate)
+    return p
+
+
+def _noise(sub) -> argparse.ArgumentParser:
+    p = sub.add_parser("noise", help="noise identification of a static IMU record: Allan deviation "
+                       "per axis with confidence intervals, fitted terms, the filter's noise block",
+                       description="Overlapping Allan deviation of a static record (streamed), the IEEE "
+                       "952 terms fitted per axis (quantisation, ARW/VRW, bias instability or a "
+                       "Gauss-Markov bump, rate random walk, rate ramp) with their 1-sigma, written "
+                       "as the noise block `gfins integrate --noise-file` reads (docs/characterise_imu.md).")
+    p.add_argument("record", type=pathlib.Path, help="static IMU record: ImuRecord CSV, npz or Parquet "
+                   "(rates or increments, read in chunks), or --format kfgins/rtk_walk")
+    p.add_argument("--format", choices=("record", "kfgins", "rtk_walk"), default="record",
+                   help="record: our ImuRecord columns (default); kfgins, rtk_walk: those readers")
+    p.add_argument("--output", type=pathlib.Path, default=None, metavar="NOISE.toml",
+                   help="write the noise block here (for gfins integrate --noise-file)")
+    p.add_argument("--table", type=pathlib.Path, default=None, metavar="ADEV.csv",
+                   help="write tau, the deviation of every axis and its 68%% interval")
+    p.add_argument("--plot", type=pathlib.Path, default=None, help="folder for the log-log figure")
+    p.add_argument("--per-decade", type=count(1), default=10, help="taus per decade (default 10)")
+    p.add_argument("--tau-max", type=real("s", above=0.0), default=None,
+                   help="largest tau, s (default a quarter of the record; memory is 2.5 tau-max "
+                        "of samples per axis)")
+    p.add_argument("--progress", action="store_true", help="progress bar while reading")
+    _command(p, "noise_id")
     return p
 
 
@@ -186,13 +254,18 @@ def _calibrate(sub) -> argparse.ArgumentParser:
     p = sub.add_parser("calibrate", help="system-level calibration (seed 001's 36-state filter) of a "
                        "raw multi-position record", description=CALIBRATE_DESCRIPTION,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("imu", type=pathlib.Path, help="raw IMU record (IMU frame), starting at rest")
-    p.add_argument("--format", choices=("csv", "kfgins"), default="csv",
-                   help="csv: gfins_fmi.io ImuRecord CSV (increments or rates); kfgins: KF-GINS IMU file")
-    p.add_argument("--lat", type=real("deg", above=-89.0, below=89.0), required=True,
-                   help="site latitude, deg")
+    p.add_argument("imu", type=pathlib.Path, help="raw IMU record (IMU frame), starting at rest; or the "
+                   "word poses followed by RECORD for the calibration at unknown poses")
+    p.add_argument("record", type=pathlib.Path, nargs="?", default=None,
+                   help="(gfins calibrate poses RECORD) the hand-turned record")
+    p.add_argument("--format", choices=("csv", "kfgins", "rtk_walk"), default="csv",
+                   help="csv: gfins_fmi.io ImuRecord CSV (increments or rates); kfgins: KF-GINS IMU file; "
+                        "rtk_walk (poses only)")
+    p.add_argument("--lat", type=real("deg", above=-89.0, below=89.0), default=None,
+                   help="site latitude, deg (required for the system-level calibration)")
     p.add_argument("--lon", type=real("deg"), default=0.0, help="site longitude, deg (default 0)")
-    p.add_argument("--height", type=real("m"), required=True, help="site ellipsoidal height, m")
+    p.add_argument("--height", type=real("m"), default=None,
+                   help="site ellipsoidal height, m (required for the system-level calibration)")
     p.add_argument("--arw", type=real("deg/sqrt(h)", at_least=0.0), default=0.002,
                    help="gyro angle random walk, deg/sqrt(h) (default 0.002: seed 001's laser gyros)")
     p.add_argument("--vrw", type=real("ug/sqrt(Hz)", at_least=0.0), default=10.0,
@@ -213,8 +286,49 @@ def _calibrate(sub) -> argparse.ArgumentParser:
                    help="first write a simulated record of this path to IMU (random errors at the "
                         "prior's level, the noise of --arw/--vrw)")
     p.add_argument("--sim-seed", type=int, default=0, help="seed of --simulate (default 0)")
-    _command(p, "calibrate")
+    q = p.add_argument_group("calibration at unknown poses (gfins calibrate poses RECORD)")
+    q.add_argument("--gravity", type=real("m/s^2", above=9.7, below=9.9), default=None,
+                   help="local gravity, m/s^2 (default: normal gravity at --lat, --height)")
+    q.add_argument("--counts", type=vector(2, "GYRO_LSB_PER_DPS,ACCEL_LSB_PER_G"), default=None,
+                   metavar="GYRO_LSB_PER_DPS,ACCEL_LSB_PER_G",
+                   help="the record holds raw counts (t in s): their nominal sensitivities, LSB per deg/s "
+                        "and LSB per g")
+    q.add_argument("--initial-still", type=real("s", above=0.0), default=20.0,
+                   help="the record's still start, s (default 20): the sensor's noise and gyro bias")
+    q.add_argument("--still-window", type=real("s", above=0.0), default=1.0,
+                   help="window of the still detector, s (default 1)")
+    q.add_argument("--still-accel", type=real("", above=0.0), default=6.0,
+                   help="still when the accelerometer variance is below this many times the initial one (default 6)")
+    q.add_argument("--still-gyro", type=real("", above=0.0), default=6.0,
+                   help="... and the gyro window mean below this many times its noise + 0.5 deg/s (default 6)")
+    q.add_argument("--min-still", type=real("s", above=0.0), default=2.0,
+                   help="shortest pose, s (default 2)")
+    q.add_argument("--k2", action="store_true", help="also fit the accelerometers' K2 (needs >= 15 poses)")
+    q.add_argument("--gyro-bias", choices=("still", "fit"), default="still",
+                   help="gyro bias from the initial still period (default) or from the turns")
+    q.add_argument("--output", type=pathlib.Path, default=None, metavar="CAL.toml",
+                   help="write [imu_errors] (for gfins integrate --imu-errors)")
+    q.add_argument("--table", type=pathlib.Path, default=None, metavar="PREFIX",
+                   help="write PREFIX.poses.csv and PREFIX.turns.csv (residuals before and after)")
+    _command(p, "calibrate", check=_check_calibrate)
     return p
+
+
+def _check_calibrate(args) -> str | None:
+    """``gfins calibrate poses RECORD`` runs cli/calibrate_poses.py; ``gfins calibrate IMU``
+    the system-level calibration, which needs the site."""
+    if args.record is not None:
+        if str(args.imu) != "poses":
+            return f"one record: gfins calibrate IMU ..., or gfins calibrate poses RECORD (got {args.imu} {args.record})"
+        if args.gravity is None and (args.lat is None or args.height is None):
+            return "the calibration at poses needs the gravity: --lat and --height (normal gravity), or --gravity"
+        args.module = "calibrate_poses"
+        return None
+    if args.lat is None or args.height is None:
+        return "the following arguments are required: --lat, --height"
+    if args.format == "rtk_walk":
+        return "--format rtk_walk is for gfins calibrate poses"
+    return None
 
 
 def _align(sub) -> argparse.ArgumentParser:
@@ -225,6 +339,7 @@ def _align(sub) -> argparse.ArgumentParser:
     p.add_argument("mode", choices=("static", "motion", "transfer"))
     p.add_argument("imu", type=pathlib.Path, help="IMU file (ImuRecord CSV / npz / parquet); transfer: "
                    "the slave's")
+    imu_errors_argument(p)
     p.add_argument("speed", type=pathlib.Path, nargs="?", default=None, metavar="SPEED|MASTER_NAV",
                    help="motion: speed record (OdometerRecord: t_s, speed_m_s, std_m_s); transfer: the "
                         "master's navigation record (KF-GINS .nav, our navigation CSV with NAV_SOLUTION "
@@ -350,6 +465,7 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict]:
     record_arguments(p, "t (s), gyro x y z, accel x y z [, h_ext (m)]")
     p.add_argument("--input-kind", choices=["increments", "rates"], default="increments",
                    help="increments: rad and m/s over (t_(k-1), t_k]; rates: rad/s and m/s^2 at t_k")
+    imu_errors_argument(p)
     state_arguments(p)
     p.add_argument("--t0", type=real("s"), default=None,
                    help="time of the initial state, s (default: one interval before the first "
@@ -369,8 +485,8 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict]:
     p.add_argument("--lever-arm", type=lever_arm, required=True, help="lever arm l, m")
     p.add_argument("--strategy", choices=["integrate", "sqrt", "eigen", "fused"],
                    default="integrate", help="angular-rate strategy (default integrate)")
-    p.add_argument("--accel-noise", type=real("m/s^2", above=0.0), default=1e-4,
-                   help="accelerometer white-noise std, m/s^2 (fused strategy)")
+    p.add_argument("--accel-noise", type=real("m/s^2", above=0.0, at_most=1000.0), default=1e-4,
+                   help="accelerometer white-noise std, m/s^2, at most 1000 (fused strategy)")
     p.add_argument("--omega-init", type=vector(3, "x,y,z in rad/s"), default=[0.0, 0.0, 0.0],
                    help="rate at the first sample, rad/s, x,y,z (write --omega-init=-1,0,0 "
                         "when it starts with -)")
@@ -426,6 +542,7 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict]:
     _command(p, "cosim", check=_check_cosim)
 
     parsers["integrate"] = _integrate(sub)
+    parsers["noise"] = _noise(sub)
     parsers["calibrate"] = _calibrate(sub)
     parsers["align"] = _align(sub)
 

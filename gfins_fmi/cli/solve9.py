@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from gfins_fmi._lib import NonFiniteInputError, SampleError
-from gfins_fmi.cli.files import Refused, TimeColumn, record_reader, stream
+from gfins_fmi.cli.files import Refused, TimeColumn, outputs, record_reader, stream
 from gfins_fmi.gyrofree.array import Accel9Solver
 from gfins_fmi.io.columns import ACCEL9_COLUMNS
 
@@ -13,6 +13,12 @@ __all__ = ["run"]
 
 
 def run(args) -> int:
+    with outputs(args.input) as outs:
+        outs.claim(args.output)
+        return _run(args, outs)
+
+
+def _run(args, outs) -> int:
     reader = record_reader(args, "9-accelerometer record")
     if reader.n_columns not in (9, 10):
         raise ValueError(f"{args.input}: expected 9 columns (A1..A9, m/s^2) or 10 (t, A1..A9); "
@@ -44,8 +50,8 @@ def run(args) -> int:
             raise Refused(exc, columns(t, exc.partial), len(exc.partial)) from None
         return columns(t, sol)
 
-    status, rows = stream(args, reader, ACCEL9_COLUMNS, [np.float64] * 13 + [np.uint8], solve,
+    status, rows = stream(args, outs, reader, ACCEL9_COLUMNS, [np.float64] * 13 + [np.uint8], solve,
                           "solved")
-    if rows:
+    if status == 0:
         print(f"{rows} samples solved -> {args.output}; flags: {flags}")
     return status

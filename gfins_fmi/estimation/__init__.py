@@ -5,15 +5,17 @@ smoother) and the tools to evaluate it. See docs/estimation.md.
 Modules: ``config`` (FilterConfig, InitialState, the names of measurement kinds and
 sensor estimates), ``error_model`` (the filter's error model in numpy: its definition),
 ``measurements`` (the C structs as numpy dtypes, gathering the aiding records),
+``measurement_checks`` (records a run cannot use, found before it),
 ``navigator`` (IntegratedNavigator), ``solution`` (IntegratedSolution and the smoother),
 ``alignment`` (coarse alignment), ``fine_alignment`` (with the filter: at rest, in motion),
 ``evaluation`` (errors against a reference, consistency, outages, figures).
 """
 from gfins_fmi.estimation.config import (MEAS_TYPES, SENSOR_NAMES, UPDATE_STATUS, FilterConfig,
                                          FilterError, InitialState, state_names)
+from gfins_fmi.estimation.measurement_checks import UnusableMeasurementError, UnusableMeasurementWarning
 from gfins_fmi.estimation.navigator import IntegratedNavigator, integrate
 from gfins_fmi.estimation.solution import IntegratedSolution, SmoothedSolution
 
 __all__ = ["FilterConfig", "InitialState", "IntegratedNavigator", "IntegratedSolution",
            "SmoothedSolution", "FilterError", "integrate", "state_names", "MEAS_TYPES",
-           "SENSOR_NAMES", "UPDATE_STATUS"]
+           "SENSOR_NAMES", "UPDATE_STATUS", "UnusableMeasurementError", "UnusableMeasurementWarning"]

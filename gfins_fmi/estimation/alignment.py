@@ -26,6 +26,7 @@ from typing import Optional
 import numpy as np
 
 from gfins_fmi.nav.earth import WGS84
+from gfins_fmi.nav.plausibility import latitude_problem, report
 from gfins_fmi.nav.strapdown import NavState, SinsConfig, Strapdown, euler_to_quat, quat_to_euler
 
 __all__ = ["CoarseAlignment", "coarse_align", "coarse_align_inertial", "attitude_from_gravity_and_earth_rate",
@@ -77,11 +78,22 @@ def _window_means(imu, t0, t1):
     t = np.asarray(imu.t_s)
     sel = (t > t0) & (t <= t1)
     if np.count_nonzero(sel) < 10:
-        raise AlignmentError(f"the window ({t0}, {t1}] s holds {np.count_nonzero(sel)} IMU samples; "
+        raise AlignmentError(f"the window ({float(t0):.10g}, {float(t1):.10g}] s holds {np.count_nonzero(sel)} IMU samples; "
                              "an alignment needs at least 10 (and ~1 s or more)")
     g, a = np.asarray(imu.gyro)[sel], np.asarray(imu.accel)[sel]
     if imu.kind == "increments":
-        dt = np.diff(np.r_[t[np.flatnonzero(sel)[0] - 1] if np.flatnonzero(sel)[0] > 0 else t0, t[sel]])
+        i0 = int(np.flatnonzero(sel)[0])
+        if i0 > 0:
+            prev = t[i0 - 1]
+        else:
+            # the record's first increment: its interval starts at the window's start only
+            # if that is about one interval before it; otherwise (a window opened just
+            # before the first sample, `gfins align static` without --window) the typical
+            # interval. Before: dt = 1e-9 s there, |f| = 1e6 m/s^2, and the window was
+            # refused as "motion during the static alignment window" (issue 21)
+            typical = float(np.median(np.diff(t[sel])))
+            prev = t0 if abs(t[i0] - t0 - typical) <= 0.5 * typical else t[i0] - typical
+        dt = np.diff(np.r_[prev, t[sel]])
         w, f = g / dt[:, None], a / dt[:, None]
     else:
         w, f = g, a
@@ -90,7 +102,8 @@ def _window_means(imu, t0, t1):
 
 def coarse_align(imu, t0_s: float, t1_s: float, lat_rad: float, *, gyro_bias_std_rad_s: float = 0.0,
                  accel_bias_std_m_s2: float = 1e-3, max_accel_std_m_s2: float = 0.2,
-                 max_rate_rad_s: float = 0.05, max_heading_std_rad: float = np.radians(10.0)) -> CoarseAlignment:
+                 max_rate_rad_s: float = 0.05, max_heading_std_rad: float = np.radians(10.0),
+                 checks: str = "raise") -> CoarseAlignment:
     """Analytic coarse alignment over the window (t0_s, t1_s] of an IMU record at rest.
 
     Levelling: the mean specific force f is the up axis in body coordinates, so pitch =
@@ -101,6 +114,11 @@ def coarse_align(imu, t0_s: float, t1_s: float, lat_rad: float, *, gyro_bias_std
 
     Motion in the window (std of |f| above ``max_accel_std_m_s2`` or mean |w| above
     ``max_rate_rad_s``) raises :class:`AlignmentError`.
+
+    ``checks``: with ``gyro_bias_std_rad_s`` > 0 (gyros good enough to gyrocompass), a
+    ``lat_rad`` that the Earth rate measured in the window contradicts (more than 5 sigma
+    and 2 deg away: :func:`gfins_fmi.nav.plausibility.latitude_problem`) raises
+    :class:`AlignmentError` (``"raise"``), warns (``"warn"``) or passes (``"off"``).
     """
     if not abs(lat_rad) < np.pi / 2:
         raise AlignmentError("lat_rad must be inside (-90, 90) deg")
@@ -108,7 +126,7 @@ def coarse_align(imu, t0_s: float, t1_s: float, lat_rad: float, *, gyro_bias_std
     fn = np.linalg.norm(f, axis=1)
     notes = []
     if fn.std() > max_accel_std_m_s2 or np.linalg.norm(w, axis=1).mean() > max_rate_rad_s:
-        raise AlignmentError(f"motion during the static alignment window ({t0_s}, {t1_s}] s: std of |f| "
+        raise AlignmentError(f"motion during the static alignment window ({float(t0_s):.10g}, {float(t1_s):.10g}] s: std of |f| "
                              f"{fn.std():.3g} m/s^2 (limit {max_accel_std_m_s2}), mean |w| "
                              f"{np.linalg.norm(w, axis=1).mean():.3g} rad/s (limit {max_rate_rad_s}); "
                              "choose a window at rest")
@@ -128,6 +146,10 @@ def coarse_align(imu, t0_s: float, t1_s: float, lat_rad: float, *, gyro_bias_std
     else:
         noise = np.linalg.norm(w - wm, axis=1).std() / np.sqrt(len(w))
         sd = np.hypot(gyro_bias_std_rad_s, noise) / horiz
+        if gyro_bias_std_rad_s > 0:   # the latitude given against the one the gyros measure
+            report([latitude_problem(lat_rad, wm, fm, float(np.hypot(gyro_bias_std_rad_s, noise)),
+                                     f"the window ({float(t0_s):.10g}, {float(t1_s):.10g}] s at rest")],
+                   checks, error=AlignmentError, stacklevel=3)
         if sd <= max_heading_std_rad:
             heading = float(np.arctan2(-wl[0], wl[1]) % (2 * np.pi))
             hstd, method = float(sd), "gyrocompass"

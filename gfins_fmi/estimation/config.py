@@ -255,6 +255,27 @@ FilterConfig = make_dataclass("FilterConfig", _filter_config_fields(), bases=(_F
 FilterConfig.__module__ = __name__
 
 
+#: the largest initial 1-sigma of each block (InitialState.std_blocks): unit, why
+_STD_LIMITS = {
+    "velocity_std_m_s": (1e4, "m/s", "faster than any vehicle"),
+    "position_std_m": (1e7, "m", "more than the Earth's radius"),
+    "attitude_std_rad": (math.pi, "rad", "more than a half turn; the error-state filter assumes "
+                                         "small attitude errors"),
+    "gyro_bias_std_rad_s": (50.0, "rad/s", "the gyro limit of the mechanization"),
+    "accel_bias_std_m_s2": (1000.0, "m/s^2", "the accelerometer limit of the mechanization"),
+    "gyro_scale_std": (1.0, "", "a scale error of 100 %"),
+    "accel_scale_std": (1.0, "", "a scale error of 100 %"),
+    "baro_bias_std_m": (1e5, "m", "more than the atmosphere"),
+    "odometer_scale_std": (1.0, "", "a scale error of 100 %"),
+    "odometer_mount_std_rad": (math.pi / 2, "rad", "a quarter turn, the boresight's range"),
+    "master_mount_std_rad": (math.pi / 2, "rad", "a quarter turn; the mounting's error is taken as "
+                                                 "small angles"),
+    "master_lever_std_m": (1000.0, "m", "a lever arm longer than any host"),
+    "master_time_offset_std_s": (10.0, "s", "streams this far apart are not one host's; align "
+                                            "their time scales first"),
+}
+
+
 @dataclass
 class InitialState:
     """The filter's start: the navigation state and the 1-sigma uncertainty of each error
@@ -324,6 +345,14 @@ class InitialState:
                     raise ValueError(f"InitialState.{name} must be one number or {size}; got "
                                      f"{_show(value)}")
                 out[name] = np.broadcast_to(arr, (size,)).tolist()
+            top, unit, why = _STD_LIMITS[name]
+            worst = np.max(np.abs(arr)) if arr.size else 0.0
+            if np.isfinite(worst) and worst > top:
+                # before: the variance overflowed in C, "gf_ins_init: an input sample is not
+                # finite" (issue 21)
+                raise ValueError(f"InitialState.{name} = {_show(value)}{' ' + unit if unit else ''} "
+                                 f"is above {top:g}{' ' + unit if unit else ''} ({why}): give the "
+                                 "1-sigma of the error at the start")
         return out
 
     def covariance(self, config: FilterConfig) -> np.ndarray:

@@ -18,7 +18,7 @@ import numpy as np
 from gfins_fmi.estimation.error_model import ins_error_model
 from gfins_fmi.estimation.navigator import IntegratedNavigator
 from gfins_fmi.nav.earth import WGS84, attitude_error_rad
-from gfins_fmi.nav.earth import euler_to_quat as euler_to_quat_rows
+from gfins_fmi.nav.earth import euler_to_quat as earth_euler_to_quat
 from gfins_fmi.nav.strapdown import euler_to_quat, quat_to_euler
 
 __all__ = ["NavErrors", "navigation_errors", "state_errors", "nees", "chi2_band",
@@ -47,8 +47,12 @@ def _quat_of(obj):
     e = _get(obj, "euler_rad")
     if e is None:
         return None
-    e = np.asarray(e, float)   # one row per epoch (a TruthRecord): the vectorised form
-    return euler_to_quat(e) if e.ndim == 1 else euler_to_quat_rows(*e.T)
+    if e.ndim == 1:
+        return euler_to_quat(e)
+    # a record's angles, (n, 3): the same convention as the C core's gf_euler_to_quat
+    # (before: handed whole to the one-attitude function, so every --truth TruthRecord
+    # refused in the scoring, "euler_rad must have shape (3,)")
+    return np.asarray(earth_euler_to_quat(e[:, 0], e[:, 1], e[:, 2]))
 
 
 def _interp_quat(t_ref, q_ref, t):

@@ -11,7 +11,7 @@ from typing import Optional
 
 import numpy as np
 
-from gfins_fmi._lib import lib
+from gfins_fmi._lib import as_scalar, lib
 from gfins_fmi.estimation.alignment import AlignmentError, CoarseAlignment
 from gfins_fmi.estimation.config import MEAS_TYPES, InitialState
 from gfins_fmi.estimation.measurements import PASS_DTYPE
@@ -55,10 +55,17 @@ def fine_align(imu, lat_rad: float, lon_rad: float, h_m: float, *, config, coars
     t1 = t[-1] if t1_s is None else float(t1_s)
     sel = (t > t0) & (t <= t1)
     if np.count_nonzero(sel) < 2:
-        raise AlignmentError(f"no IMU samples in the fine-alignment window ({t0}, {t1}] s")
+        raise AlignmentError(f"no IMU samples in the fine-alignment window ({t0:.10g}, {t1:.10g}] s")
     if not np.isfinite(coarse.euler_rad[0]) and heading_std_rad is None:
         raise AlignmentError("the coarse alignment has no heading: give heading_std_rad (and a "
                              "heading through coarse.euler_rad) or gyrocompass first")
+    # before: rate_hz = 0 was a bare ZeroDivisionError and 1e9 Hz a 447 GiB MemoryError
+    rate_hz = as_scalar("rate_hz", rate_hz, "Hz", above=0.0)
+    imu_hz = 1.0 / float(np.median(np.diff(t[sel])))
+    if rate_hz > imu_hz * (1.0 + 1e-9):
+        raise ValueError(f"rate_hz = {rate_hz:g} Hz is above the IMU's sampling rate "
+                         f"({imu_hz:.6g} Hz): a zero-velocity update comes at most once per IMU "
+                         f"sample; give rate_hz <= {imu_hz:.6g} (10 Hz is the usual choice)")
     tg = np.arange(t0 + 1.0 / rate_hz, t1 + 1e-9, 1.0 / rate_hz)
     m = len(tg)
     zero = GnssRecord(t_s=tg, lat_rad=np.full(m, lat_rad), lon_rad=np.full(m, lon_rad),
@@ -197,8 +204,8 @@ def align_in_motion(imu, speed, *, config, initial, depth=None, gnss=None, odome
     if len(t) < 2:
         raise AlignmentError(f"the IMU record holds {len(t)} samples; an alignment needs a stored period")
     if not nav0.t_s < t[0] + (1e-9 if getattr(imu, "kind", "increments") == "rates" else 0.0):
-        raise AlignmentError(f"the initial state (t = {nav0.t_s!r} s) must be at the start of the record's "
-                             f"first interval, before its first sample ({t[0]!r} s)")
+        raise AlignmentError(f"the initial state (t = {float(nav0.t_s)!r} s) must be at the start of the record's "
+                             f"first interval, before its first sample ({float(t[0])!r} s)")
     span = float(t[-1] - nav0.t_s)
     if span < min_duration_s:
         raise AlignmentError(f"the alignment record spans {span:.3g} s, shorter than min_duration_s = "

@@ -9,7 +9,11 @@ import numpy as np
 from gfins_fmi._lib import ffi, lib
 from gfins_fmi.estimation.config import MEAS_TYPES, N_SENSORS
 
-__all__ = ["MEAS_DTYPE", "PASS_DTYPE", "INNOVATION_DTYPE", "gather_measurements"]
+__all__ = ["MEAS_DTYPE", "PASS_DTYPE", "INNOVATION_DTYPE", "gather_measurements", "MAX_STD"]
+
+#: the largest measurement standard deviation taken (m, m/s): its square, and the
+#: innovation covariance built from it, stay far from overflowing a double
+MAX_STD = 1e100
 
 
 def _struct_dtype(cname: str, spec) -> np.dtype:
@@ -84,7 +88,7 @@ def gather_measurements(gnss, baro, odometer, gnss_velocity: bool, speed=None,
             np.all(np.isfinite(meas["std"]), axis=1) & np.all(np.isfinite(meas["aux"]), axis=1))
     if np.any(bad):
         k = int(np.flatnonzero(bad)[0])
-        raise ValueError(f"measurement {MEAS_TYPES[int(meas['type'][k])]} at t = {meas['t_s'][k]} s "
+        raise ValueError(f"measurement {MEAS_TYPES[int(meas['type'][k])]} at t = {float(meas['t_s'][k])!r} s "
                          "holds NaN or Inf (value or standard deviation): remove it or mark the "
                          "epoch invalid")
     for type_, m in ((lib.GF_INS_MEAS_GNSS_POS, 3), (lib.GF_INS_MEAS_GNSS_VEL, 3),
@@ -94,8 +98,19 @@ def gather_measurements(gnss, baro, odometer, gnss_velocity: bool, speed=None,
         sel = meas["type"] == type_
         if np.any(sel) and not np.all(meas["std"][sel, :m] > 0):
             k = int(np.flatnonzero(sel & ~np.all(meas["std"][:, :m] > 0, axis=1))[0])
-            raise ValueError(f"{MEAS_TYPES[int(type_)]} at t = {meas['t_s'][k]} s has a standard "
-                             f"deviation <= 0 ({meas['std'][k, :m].tolist()}): every std must be > 0")
+            raise ValueError(f"{MEAS_TYPES[int(type_)]} at t = {float(meas['t_s'][k])!r} s has a "
+                             f"standard deviation <= 0 ({meas['std'][k, :m].tolist()}): every std "
+                             "must be > 0")
+        big = sel & ~np.all(meas["std"][:, :m] <= MAX_STD, axis=1)
+        if np.any(big):
+            # before: the variance overflowed in C and the run stopped with "IMU sample k
+            # holds NaN or Inf" (issue 21)
+            k = int(np.flatnonzero(big)[0])
+            raise ValueError(f"{MEAS_TYPES[int(type_)]} at t = {float(meas['t_s'][k])!r} s has a "
+                             f"standard deviation of {meas['std'][k, :m].tolist()} (in the record's "
+                             f"units: m, m/s): above {MAX_STD:g} its variance overflows, and a "
+                             "measurement that uncertain carries no information: leave the epoch "
+                             "out or mark it invalid")
     order = np.argsort(meas["t_s"], kind="stable")
     out = np.zeros(len(meas), MEAS_DTYPE)      # concatenate drops the C padding: copy by field
     for name in MEAS_DTYPE.names:

@@ -18,8 +18,10 @@ import numpy as np
 from gfins_fmi._lib import check_status, ffi, lib, ptr, status_text
 from gfins_fmi.estimation.config import (N_SENSORS, N_TRANSFER, SENSOR_NAMES, FilterConfig,
                                          FilterError, InitialState, vector3)
+from gfins_fmi.estimation.measurement_checks import check_measurements
 from gfins_fmi.estimation.measurements import INNOVATION_DTYPE, PASS_DTYPE, gather_measurements
 from gfins_fmi.estimation.solution import IntegratedSolution
+from gfins_fmi.nav.plausibility import report, specific_force_problem
 
 __all__ = ["IntegratedNavigator", "integrate"]
 
@@ -88,7 +90,7 @@ class IntegratedNavigator:
             raise ValueError("initial.nav.q_bn must have 4 elements and initial.nav.v_n_m_s 3")
         for name in ("lat_rad", "lon_rad", "h_m", "t_s"):
             if not np.isfinite(getattr(nav, name)):
-                raise ValueError(f"initial.nav.{name} = {getattr(nav, name)!r} must be finite")
+                raise ValueError(f"initial.nav.{name} = {float(getattr(nav, name))!r} must be finite")
         P0 = np.ascontiguousarray(initial.covariance(config))
         sens = np.zeros(N_SENSORS) if initial.sensors is None else np.ascontiguousarray(initial.sensors, float)
         if sens.shape != (N_SENSORS,) or not np.all(np.isfinite(sens)):
@@ -139,7 +141,8 @@ class IntegratedNavigator:
 
     def run(self, imu, gnss=None, baro=None, odometer=None, *, speed=None, gnss_velocity: bool = True,
             master=None, state_std: bool = False, smoother: bool = False, chunk: int = 200_000,
-            progress: bool = False, spill_bytes: int = 1 << 30, spill_dir=None) -> IntegratedSolution:
+            progress: bool = False, spill_bytes: int = 1 << 30, spill_dir=None,
+            checks: str = "raise") -> IntegratedSolution:
         """Process a record.
 
         Parameters
@@ -164,6 +167,15 @@ class IntegratedNavigator:
         chunk : IMU samples per C call (rounded up to a multiple of ``config.subsamples``,
             so that the cut does not change the result).
         progress : a progress bar (tqdm).
+        checks : {"raise", "warn", "off"}
+            Before the run, a measurement record with epochs but none inside this IMU
+            record (from the filter's time to the last sample: two time scales, most
+            likely) raises :class:`UnusableMeasurementError` (``"raise"``), is a
+            :class:`UnusableMeasurementWarning` (``"warn"``: a piece of a longer record
+            that falls in an outage), or is not looked for (``"off"``). Unless ``"off"``,
+            an IMU record whose median specific force is far from gravity (units, rates
+            against increments, times in ms) is a
+            :class:`~gfins_fmi.nav.plausibility.PlausibilityWarning`.
 
         Returns
         -------
@@ -175,6 +187,8 @@ class IntegratedNavigator:
         ------
         FilterError
             With ``index`` (IMU sample) and ``partial`` (the solution before it).
+        UnusableMeasurementError
+            See ``checks``.
         """
         cfg = self.config
         t, g, a = self._record(imu)
@@ -187,6 +201,11 @@ class IntegratedNavigator:
         if self.reversed:
             raise ValueError("the filter is reversed in time: use run_backward(), or reverse() it again")
         meas = gather_measurements(gnss, baro, odometer, gnss_velocity, speed, master)
+        if n and checks != "off":
+            check_measurements(self.t_s, float(t[-1]), checks, stacklevel=3, gnss=gnss, baro=baro,
+                               odometer=odometer, speed=speed)
+            report([specific_force_problem(self._specific_force(t, a), "the IMU record")], "warn",
+                   stacklevel=3)
         # capacity: one epoch per propagation and up to two per measurement
         duration = float(t[-1] - self.t_s) if n else 0.0
         if cfg.propagation_interval_s > 0:
@@ -269,11 +288,15 @@ class IntegratedNavigator:
                                  state_std=out["state_std"][:k] if state_std else None)
         if status != lib.GF_OK:
             hints = {
-                lib.GF_ERR_BAD_TIME: (f"IMU sample {bad} at t = {t[bad]!r} s: the interval from the "
+                lib.GF_ERR_BAD_TIME: (f"IMU sample {bad} at t = {float(t[bad])!r} s: the interval from the "
                                       f"previous sample ({self.t_s!r} s) is not in (0, "
                                       f"{cfg.max_imu_gap_s}] s (time going backwards or an IMU gap; "
                                       "raise max_imu_gap_s to bridge gaps by dead reckoning)"),
-                lib.GF_ERR_NONFINITE_INPUT: f"IMU sample {bad} holds NaN or Inf",
+                lib.GF_ERR_NONFINITE_INPUT: (
+                    f"IMU sample {bad} holds NaN or Inf" if not (
+                        np.isfinite(t[bad]) and np.all(np.isfinite(g[bad])) and np.all(np.isfinite(a[bad])))
+                    else f"IMU sample {bad} (t = {float(t[bad])!r} s) is finite, but an update in its "
+                         "interval was not (a measurement's value, or its variance, overflows)"),
                 lib.GF_ERR_OUT_OF_RANGE: (f"IMU sample {bad} exceeds |w| <= {cfg.max_rate_rad_s} rad/s or "
                                           f"|f| <= {cfg.max_specific_force_m_s2} m/s^2 (input = "
                                           f"{cfg.input!r}: check the units)"),
@@ -313,6 +336,16 @@ class IntegratedNavigator:
                              "or change FilterConfig.input")
         return t, g, a
 
+    def _specific_force(self, t, a, most: int = 100_000):
+        """|f| (m/s^2) of at most ``most`` samples spread over the record (rates: the
+        accelerometer; increments: dv over its interval)."""
+        step = max(1, len(t) // most)
+        if self.config.input == "rates":
+            return np.linalg.norm(a[::step], axis=1)
+        dt = np.diff(np.r_[self.t_s, t])[::step]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.linalg.norm(a[::step], axis=1) / dt
+
     def _log(self, n_entries: int):
         arr = np.zeros(n_entries + 16, INNOVATION_DTYPE)
         log = ffi.new("gf_ins_log *")
@@ -349,7 +382,7 @@ class IntegratedNavigator:
         if st != lib.GF_OK:
             k = int(n_done[0])
             raise FilterError(f"backward walk stopped after {k} samples (from the last): {status_text(st)} "
-                              f"(the filter's time must be the record's last sample, {t[-1] if n else None!r} s, "
+                              f"(the filter's time must be the record's last sample, {float(t[-1]) if n else None!r} s, "
                               f"and t_start_s = {t_start_s!r} before its first)", int(st), n - 1 - k)
         return IntegratedSolution(out["t_s"], out["q_bn"], out["v_n_m_s"], out["pos"][:, 0].copy(),
                                   out["pos"][:, 1].copy(), out["pos"][:, 2].copy(), out["std"], out["sensors"],
@@ -387,7 +420,7 @@ class IntegratedNavigator:
         if st != lib.GF_OK:
             raise FilterError(f"forward-backward processing stopped in pass {int(done[0])} of {np_total}: "
                               f"{status_text(st)} (the filter must start at the record's start, before "
-                              f"its first sample at {t[0]!r} s)", int(st), -1)
+                              f"its first sample at {float(t[0])!r} s)", int(st), -1)
         return table, log_arr[:int(log.count)].copy()
 
 

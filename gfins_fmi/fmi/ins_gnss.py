@@ -171,14 +171,14 @@ class InsGnssDriver:
         self.increments = config.input == "increments"
         if self.increments:
             if not t[0] > t0:
-                raise ValueError(f"imu.t_s[0] = {t[0]!r} s must be after initial.nav.t_s = "
+                raise ValueError(f"imu.t_s[0] = {float(t[0])!r} s must be after initial.nav.t_s = "
                                  f"{t0!r} s: an increment covers the interval since the "
                                  "previous sample")
             times = np.r_[t0, t]
         else:
             if t[0] != t0:
                 raise ValueError(f"with rates the FMU takes the first sample at its start time: "
-                                 f"initial.nav.t_s = {t0!r} s must equal imu.t_s[0] = {t[0]!r} s")
+                                 f"initial.nav.t_s = {t0!r} s must equal imu.t_s[0] = {float(t[0])!r} s")
             times = t.copy()
         self.shift = 1 if self.increments else 0         # FMU step k = record row k - shift
         h = np.diff(times)
@@ -196,7 +196,7 @@ class InsGnssDriver:
             if np.any(np.diff(ks) == 0):
                 j = int(ks[np.flatnonzero(np.diff(ks) == 0)[0]])
                 raise ValueError(f"two {what} measurements fall into the interval of IMU sample "
-                                 f"{j} (t = {t[j]!r} s): the FMU takes one per kind and step")
+                                 f"{j} (t = {float(t[j])!r} s): the FMU takes one per kind and step")
             at[ks + self.shift] = keep
             return at
 

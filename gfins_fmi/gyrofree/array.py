@@ -23,6 +23,7 @@ import numpy as np
 from gfins_fmi._lib import (NonFiniteInputError, SampleError, as_positive_scalar, as_rows,
                             as_start_index, as_vector3, check_status, done_before, ffi,
                             first_nonfinite, lib, ptr, status_text)
+from gfins_fmi.nav.plausibility import interval_problem, report
 
 __all__ = ["ArrayGeometry", "accel9_geometry", "forward_model", "Accel9Solution",
            "Accel9Solver", "solve_accel9", "FLAG_NEG_OMEGA_SQ", "FLAG_SIGN_UNKNOWN",
@@ -251,6 +252,7 @@ class Accel9Solver:
                              f"|omega| <= {MAX_RATE_RAD_S:g} rad/s")
         self._state = ffi.new("gf9_state *")
         check_status(lib.gf9_init(self._state, self.l_m, ptr(w0, 3)), "gf9_init")
+        self._looked = False     # the record's interval checked against its rates (solve)
 
     @property
     def n_samples(self) -> int:
@@ -310,6 +312,12 @@ class Accel9Solver:
                 f"{MAX_SPECIFIC_FORCE_M_S2:g} m/s^2 (A_m_s2[{s0 + k}] = {A[k].tolist()}); "
                 + done_before(k, s0), int(status), s0 + k, out._head(k))
         check_status(status, "gf9_solve")
+        if not self._looked and n >= 8:
+            # once per record: a time unit off (ms read as s) integrates omega_dot over the
+            # wrong interval and gives wrong signs without any flag (issue 21)
+            self._looked = True
+            report([interval_problem(dt_s, out.omega_sq_rad2_s2, out.omega_dot_rad_s2,
+                                     "the 9-accelerometer record")], "warn", stacklevel=3)
         return out
 
 

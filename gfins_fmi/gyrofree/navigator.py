@@ -12,8 +12,7 @@ from gfins_fmi._lib import (NonFiniteInputError, SampleError, as_array, as_posit
                             first_nonfinite, lib, ptr, status_text)
 from gfins_fmi.gyrofree.array import ArrayGeometry
 from gfins_fmi.gyrofree.geometry import array_solver
-from gfins_fmi.gyrofree.rate_solver import (RateSolution, check_rate_loop, rate_config,
-                                            strategy_error)
+from gfins_fmi.gyrofree.rate_solver import RateSolution, check_rate_loop, init_error, rate_config
 from gfins_fmi.nav.strapdown import NavSolution, NavState, SinsConfig
 
 __all__ = ["INTEGRATIONS", "hermite_increments", "GyroFreeNavigator"]
@@ -95,7 +94,7 @@ class GyroFreeNavigator:
                                    ptr(x0.q_bn, 4), ptr(x0.v_n_m_s, 3), x0.lat_rad, x0.lon_rad,
                                    x0.h_m, x0.t_s, ffi.NULL)
         if status == lib.GF_ERR_BAD_PARAMETER:   # everything else was checked above
-            raise ValueError(strategy_error(strategy, geometry))
+            raise ValueError(init_error(strategy, geometry, cfg))
         check_status(status, "gf_gfnav_init")
         check_rate_loop(geometry, strategy, allow_unstable)
         if self._flat:

@@ -17,7 +17,7 @@ from gfins_fmi.gyrofree.report import geometry_report
 from gfins_fmi.gyrofree.stability import rate_loop_stability
 
 __all__ = ["RateSolution", "RateSolver", "UnstableRateLoopWarning", "rate_config",
-           "strategy_error", "check_rate_loop"]
+           "strategy_error", "init_error", "check_rate_loop", "MAX_ACCEL_NOISE_M_S2"]
 
 @dataclass
 class RateSolution:
@@ -48,13 +48,34 @@ def rate_config(strategy, accel_noise_m_s2, bias_walk, init_std, init_bias_std):
     c = ffi.new("gf_rate_config *")
     lib.gf_rate_config_default(c)
     c.strategy = STRATEGIES[strategy]
-    c.accel_noise_m_s2 = as_scalar("accel_noise_m_s2", accel_noise_m_s2, "m/s^2", above=0.0)
+    # upper bounds: the physical limits of the navigators (|f| <= 1000 m/s^2, |w| <= 50
+    # rad/s) bound any meaningful noise and prior; beyond ~1e153 m/s^2 the variances
+    # overflow a double, which the C core refused as a bad strategy (issue 21)
+    c.accel_noise_m_s2 = as_scalar("accel_noise_m_s2", accel_noise_m_s2, "m/s^2", above=0.0,
+                                   at_most=MAX_ACCEL_NOISE_M_S2)
     c.bias_walk_rad_s2_sqrt_s = as_scalar("bias_walk_rad_s2_sqrt_s", bias_walk, "rad/s^2/sqrt(s)",
-                                          at_least=0.0)
-    c.init_std_rad_s = as_scalar("init_std_rad_s", init_std, "rad/s", above=0.0)
+                                          at_least=0.0, at_most=1e3)
+    c.init_std_rad_s = as_scalar("init_std_rad_s", init_std, "rad/s", above=0.0, at_most=50.0)
     c.init_bias_std_rad_s2 = as_scalar("init_bias_std_rad_s2", init_bias_std, "rad/s^2",
-                                       at_least=0.0)
+                                       at_least=0.0, at_most=1e3)
     return c
+
+
+#: the largest accelerometer white-noise std a rate solver takes (m/s^2): the navigators'
+#: specific-force limit
+MAX_ACCEL_NOISE_M_S2 = 1000.0
+
+
+def init_error(strategy: str, geometry: ArrayGeometry, cfg) -> str:
+    """Why gf_gfins_init refused: the strategy on this array (:func:`strategy_error`) when
+    the array cannot serve it, else the settings (their covariances)."""
+    if strategy not in geometry_report(geometry).working_strategies:
+        return strategy_error(strategy, geometry)
+    return (f"the rate solver ({strategy!r}) refused its settings: accel_noise_m_s2 = "
+            f"{cfg.accel_noise_m_s2:g} m/s^2, init_std_rad_s = {cfg.init_std_rad_s:g} rad/s, "
+            f"init_bias_std_rad_s2 = {cfg.init_bias_std_rad_s2:g} rad/s^2, "
+            f"bias_walk_rad_s2_sqrt_s = {cfg.bias_walk_rad_s2_sqrt_s:g}: the covariances they "
+            "give on this array are not finite; give physical values")
 
 
 
@@ -130,7 +151,7 @@ class RateSolver:
         self._state = ffi.new("gf_gfins_state *")
         status = lib.gf_gfins_init(self._state, geometry._c, cfg, ptr(w0, 3), ffi.NULL)
         if status == lib.GF_ERR_BAD_PARAMETER:
-            raise ValueError(strategy_error(strategy, geometry))
+            raise ValueError(init_error(strategy, geometry, cfg))
         check_status(status, "gf_gfins_init")
         check_rate_loop(geometry, strategy, allow_unstable)
 

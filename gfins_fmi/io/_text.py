@@ -14,7 +14,7 @@ from typing import Callable, Iterable, Iterator, Sequence
 
 import numpy as np
 
-from gfins_fmi.io.errors import FileFormatError, RecordError
+from gfins_fmi.io.errors import FileFormatError, RecordError, not_a_file
 
 __all__ = ["read_table", "record_errors_at_lines", "diagnose", "data_lines", "is_number"]
 
@@ -117,7 +117,7 @@ def read_table(path, n_columns: Sequence[int], what: str, *, delimiter: str | No
     """
     path = pathlib.Path(path)
     if lines is None and not path.is_file():
-        raise FileNotFoundError(f"{path}: no such file (a {what} file was expected)")
+        raise not_a_file(path, f"{what} file")
 
     def file_lines() -> Sequence[str]:
         if lines is not None:

@@ -1,10 +1,11 @@
 """The two exceptions of record I/O: a record that breaks its contract, and a file that
-does not hold what its format promises. Both are ValueErrors."""
+does not hold what its format promises (both are ValueErrors); and the one message of an
+input that is not a file (:func:`not_a_file`)."""
 from __future__ import annotations
 
 import pathlib
 
-__all__ = ["RecordError", "FileFormatError"]
+__all__ = ["RecordError", "FileFormatError", "not_a_file"]
 
 
 class RecordError(ValueError):
@@ -41,3 +42,18 @@ class FileFormatError(ValueError):
         super().__init__(f"{where}: {message}")
         self.path = pathlib.Path(path)
         self.line = line
+
+
+def _article(what: str) -> str:
+    return "an" if what[:1].lower() in "aeio" else "a"
+
+
+def not_a_file(path, what: str) -> OSError:
+    """The error for an input ``path`` that is not a readable file: a folder
+    (IsADirectoryError) or nothing (FileNotFoundError), the file expected named (``what``:
+    "ImuRecord CSV", "RTKLIB .pos file")."""
+    path = pathlib.Path(path)
+    if path.is_dir():
+        return IsADirectoryError(f"{path}: is a folder, not a file ({_article(what)} {what} was "
+                                 "expected): give the file's path")
+    return FileNotFoundError(f"{path}: no such file ({_article(what)} {what} was expected)")

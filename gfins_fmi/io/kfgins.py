@@ -18,7 +18,7 @@ import numpy as np
 
 from gfins_fmi.io._text import read_table, record_errors_at_lines
 from gfins_fmi.io.conventions import SECONDS_PER_WEEK, frd_to_rfu, ned_to_enu, rpy_frd_ned_to_euler_rfu_enu
-from gfins_fmi.io.errors import FileFormatError
+from gfins_fmi.io.errors import FileFormatError, not_a_file
 from gfins_fmi.io.records import GnssRecord, ImuRecord, TruthRecord
 
 __all__ = ["read_kfgins_imu", "read_kfgins_gnss", "read_kfgins_nav"]
@@ -29,7 +29,7 @@ def _table(path, n_columns, what):
     own loader does."""
     path = pathlib.Path(path)
     if not path.is_file():
-        raise FileNotFoundError(f"{path}: no such file (a {what} file was expected)")
+        raise not_a_file(path, f"{what} file")
     with open(path, encoding="utf-8", errors="replace") as f:
         first = next((line for line in f if line.strip()), "")
     if "," not in first:
@@ -71,7 +71,7 @@ def read_kfgins_imu(path, n_columns: int = 7, gps_week: int | None = None) -> Im
     line_of = None
     if path.suffix.lower() == ".bin":
         if not path.is_file():
-            raise FileNotFoundError(f"{path}: no such file (a KF-GINS binary IMU file was expected)")
+            raise not_a_file(path, "KF-GINS binary IMU file")
         size = path.stat().st_size
         if size == 0 or size % 56:
             raise FileFormatError(path, None, f"{size} bytes is not a whole number of 56-byte "

@@ -28,7 +28,7 @@ import numpy as np
 from gfins_fmi.io._text import data_lines, record_errors_at_lines
 from gfins_fmi.io.table_writer import TableWriter
 from gfins_fmi.io.tables import TableReader
-from gfins_fmi.io.errors import FileFormatError, RecordError
+from gfins_fmi.io.errors import FileFormatError, RecordError, not_a_file
 
 __all__ = ["ImuRecord", "GnssRecord", "BaroRecord", "OdometerRecord", "TruthRecord",
            "SamplingStats", "Gap", "QUALITY_NAMES", "IMU_KINDS"]
@@ -264,7 +264,7 @@ class _Record:
         type's layouts; the ``# gfins_fmi`` line, if present, must name this type)."""
         path = pathlib.Path(path)
         if not path.is_file():
-            raise FileNotFoundError(f"{path}: no such file (a {cls.__name__} CSV was expected)")
+            raise not_a_file(path, f"{cls.__name__} CSV")
         source, header_line, names = "", None, None
         try:
             with open(path, encoding="utf-8") as f:

@@ -16,7 +16,7 @@ import numpy as np
 
 from gfins_fmi.io._text import read_table, record_errors_at_lines
 from gfins_fmi.io.conventions import SECONDS_PER_WEEK, gps_seconds_from_calendar
-from gfins_fmi.io.errors import FileFormatError
+from gfins_fmi.io.errors import FileFormatError, not_a_file
 from gfins_fmi.io.records import GnssRecord
 
 __all__ = ["read_rtklib_pos"]
@@ -81,7 +81,7 @@ def read_rtklib_pos(path, velocity: bool | None = None) -> GnssRecord:
     """
     path = pathlib.Path(path)
     if not path.is_file():
-        raise FileNotFoundError(f"{path}: no such file (an RTKLIB .pos file was expected)")
+        raise not_a_file(path, "RTKLIB .pos file")
     raw = path.read_text(encoding="utf-8", errors="replace").splitlines()
     system, names = _header(path, raw)
     if system is not None and system != "GPST":

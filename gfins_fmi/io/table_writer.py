@@ -5,6 +5,10 @@ leaves half a file and never replaces an existing one. Formats as
 :mod:`gfins_fmi.io.tables` reads them: CSV text (polars formats the numbers: the shortest
 decimal that reads back as the same float64), npz (stored zip of ``.npy`` columns, in
 place when the row count is known), Parquet (pyarrow, one row group per chunk).
+
+The temporaries and the partial tables of a failed run are named in
+:mod:`gfins_fmi.io.temporaries`; a run's whole set of files is
+:class:`gfins_fmi.io.output_set.OutputSet`.
 """
 from __future__ import annotations
 
@@ -12,10 +16,8 @@ import ctypes
 import io
 import os
 import pathlib
-import secrets
 import shutil
 import struct
-import weakref
 import zipfile
 import zlib
 from typing import Sequence
@@ -23,37 +25,12 @@ from typing import Sequence
 import numpy as np
 
 from gfins_fmi.io.tables import checked_format, pyarrow_module
+from gfins_fmi.io.temporaries import temporary_beside
 
 __all__ = ["TableWriter"]
 
 #: bytes copied at a time when assembling an npz file
 _COPY_BYTES = 16 << 20
-
-def _remove_temporary(tmp: pathlib.Path) -> None:
-    """A temporary output and its side folder (npz), where they exist."""
-    tmp.unlink(missing_ok=True)
-    side = pathlib.Path(str(tmp) + ".d")
-    if side.exists():
-        shutil.rmtree(side, ignore_errors=True)
-
-
-def _temp_beside(path: pathlib.Path, owner) -> tuple[pathlib.Path, weakref.finalize]:
-    """A new empty file beside ``path`` (same folder, so the final rename stays on one
-    file system), created with the process's umask like any output, and the finalizer
-    that removes it. The finalizer is registered before the file exists: a Ctrl-C at any
-    point after (even before the caller has entered its ``with`` block) leaves no
-    temporary file once ``owner`` is collected or the interpreter exits; a commit
-    detaches it."""
-    for _ in range(100):
-        tmp = path.with_name(f"{path.name}.{secrets.token_hex(4)}.partial")
-        remove = weakref.finalize(owner, _remove_temporary, tmp)
-        try:
-            with open(tmp, "xb"):
-                return tmp, remove
-        except FileExistsError:
-            remove.detach()
-    raise FileExistsError(f"{path}: no free temporary name beside it")  # pragma: no cover
-
 
 #: bytes of output written between two steps of :class:`_WriteBehind`
 _WRITE_BEHIND_BYTES = 64 << 20
@@ -378,6 +355,14 @@ class TableWriter:
         whose bytes must stay those of an earlier writer (the innovation log of ``gfins
         integrate``).
 
+    output_set : OutputSet, optional
+        The run's set of files this table belongs to
+        (:meth:`gfins_fmi.io.output_set.OutputSet.table` passes it): :meth:`commit` then
+        only finishes the file, and the set renames it with the others when the whole
+        run has succeeded; the temporary lives as long as the set, and leaving the
+        ``with`` block without a commit leaves the rows to the set (its partial file, or
+        nothing when it is discarded).
+
     Text columns (dtype ``str``: words without commas, quotes or line breaks, such as
     the names of measurement kinds) are written to CSV only.
 
@@ -392,7 +377,7 @@ class TableWriter:
 
     def __init__(self, path, names: Sequence[str], dtypes: Sequence | None = None, *,
                  comments: Sequence[str] = (), format: str | None = None,
-                 rows: int | None = None, float_format: str | None = None):
+                 rows: int | None = None, float_format: str | None = None, output_set=None):
         self.path = pathlib.Path(path)
         self.names = tuple(names)
         if not self.names or not all(isinstance(n, str) and n and n.replace("_", "a").isalnum()
@@ -410,7 +395,10 @@ class TableWriter:
             raise ValueError(f"{self.path}: text columns and float_format are CSV only")
         if self.path.is_dir():
             raise IsADirectoryError(f"{self.path} is a folder: give a file name for the output")
-        self._tmp, self._remove = _temp_beside(self.path, self)
+        self.output_set = output_set
+        self._tmp, self._remove = temporary_beside(
+            self.path, self if output_set is None else output_set,
+            None if output_set is None else output_set.temporaries)
         try:
             self._sink = _SINKS[self.format](self._tmp, self.names, self.dtypes, list(comments),
                                              rows, float_format)
@@ -438,13 +426,37 @@ class TableWriter:
         self._sink.write(arrays)
         self.rows += m
 
-    def commit(self) -> pathlib.Path:
-        """Finish the file and rename it to :attr:`path` (replacing any file there)."""
+    @property
+    def temporary(self) -> pathlib.Path:
+        """The file being written (beside :attr:`path`)."""
+        return self._tmp
+
+    def finish(self) -> pathlib.Path:
+        """Close the file without renaming it; returns the temporary, which is removed
+        like an unfinished one unless a set (``output_set``) renames it."""
         if not self._open:
             raise ValueError(f"{self.path}: the writer is closed")
         self._open = False
         try:
             self._sink.close()
+        except BaseException:
+            self._cleanup()
+            raise
+        return self._tmp
+
+    def release(self) -> None:
+        """The finished temporary is the caller's now (an output set renames or removes
+        it): the writer no longer removes it."""
+        self._remove.detach()
+
+    def commit(self) -> pathlib.Path:
+        """Finish the file and rename it to :attr:`path` (replacing any file there); in
+        an ``output_set``, finish it and leave the renaming to the set's commit."""
+        self.finish()
+        if self.output_set is not None:
+            self.output_set.finished(self)
+            return self.path
+        try:
             os.replace(self._tmp, self.path)
             self._remove.detach()
         except BaseException:
@@ -466,4 +478,7 @@ class TableWriter:
         return self
 
     def __exit__(self, *exc) -> None:
-        self.discard()
+        # a table of a set: what was written is the set's to keep (its partial file) or
+        # drop, when the run ends; alone: dropped unless committed
+        if self.output_set is None:
+            self.discard()

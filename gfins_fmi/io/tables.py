@@ -40,7 +40,7 @@ from typing import Iterator
 import numpy as np
 
 from gfins_fmi.io._text import is_number, diagnose
-from gfins_fmi.io.errors import FileFormatError
+from gfins_fmi.io.errors import FileFormatError, not_a_file
 
 __all__ = ["TableReader", "table_format", "checked_format", "pyarrow_module", "FORMATS",
            "DEFAULT_CHUNK_ROWS"]
@@ -406,7 +406,7 @@ class TableReader:
         self.path = pathlib.Path(path)
         self.chunk_rows = _chunk_rows(chunk_rows)
         if not self.path.is_file():
-            raise FileNotFoundError(f"{self.path}: no such file (a {what} file was expected)")
+            raise not_a_file(self.path, f"{what} file")
         self.format = checked_format(self.path, format)
         if self.format == "csv":
             hint = header_hint or "if it is a line of column names, read it with header=True"

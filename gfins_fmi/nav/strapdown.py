@@ -193,7 +193,7 @@ class NavState:
     def checked(self, flat: bool = False) -> "NavState":
         """This state with every field checked: C-contiguous float64 arrays of the right
         shape, finite values, latitude inside the mechanization's limit (+-89.9 deg; a
-        fixed frame: +-90 deg), height above -a/2, a quaternion
+        fixed frame: +-90 deg), height in (-a/2, a/3) (a fixed frame: above -a/2), a quaternion
         that can be normalised; ``pos_m`` (3,) for a fixed frame (``flat``; None: the
         origin). Every navigator checks its initial state here before C reads it.
 
@@ -218,6 +218,10 @@ class NavState:
         h = as_scalar("initial.h_m", self.h_m, "m")
         if not h > -0.5 * WGS84.a:
             raise ValueError(f"initial.h_m = {h!r} m is below -a/2 (-3189 km): absurd height")
+        if not flat and not h < WGS84.a / 3.0:
+            raise ValueError(f"initial.h_m = {h!r} m is above a/3 (+2126 km), the Earth model's "
+                             "range (its gravity expansion in height): give the height above "
+                             "the ellipsoid in m")
         t = as_scalar("initial.t_s", self.t_s, "s")
         pos = None
         if flat:
@@ -466,13 +470,25 @@ class Strapdown:
                                           f"rad/s or |f| <= {self.config.max_specific_force_m_s2} m/s^2 "
                                           f"(gyro {g[bad].tolist()}, accel {a[bad].tolist()}; "
                                           f"input = {self.config.input!r})"),
-                lib.GF_ERR_BAD_TIME: f"sample {s0 + bad}: sample times must be strictly increasing",
+                lib.GF_ERR_BAD_TIME: self._time_hint(tt, s0, bad),
                 lib.GF_ERR_DIVERGED: (f"sample {s0 + bad}: the navigation state left its domain "
                                       "(pole reached or absurd height)"),
             }
             msg = hints.get(status, f"sample {s0 + bad}: {status_text(status)}")
             raise SampleError(f"{msg}{group}; {done}", int(status), s0 + bad, partial)
         return sol
+
+    def _time_hint(self, tt, s0: int, bad: int) -> str:
+        """Why sample ``bad``'s time was refused: it does not follow the time before it
+        (the previous sample's, or for the first the navigator's own: NavState.t_s)."""
+        if tt is None or self._backward or not np.isfinite(tt[bad]):
+            return f"sample {s0 + bad}: sample times must be strictly increasing"
+        prev = float(self._state.time_s)      # after the last good sample
+        first = s0 + bad == 0 and bad == 0
+        what = ("the navigator's initial time (NavState.t_s: the state's time must come "
+                "before the record's first sample)" if first else "the previous sample's")
+        return (f"sample {s0 + bad} at t = {float(tt[bad])!r} s does not come after {prev!r} s, "
+                f"{what}; sample times must increase strictly")
 
     def _culprit(self, g, a, tt, dt, he, g0: int, g1: int, status: int) -> int:
         """The sample of group [g0, g1) (recorded order) that made its update fail:

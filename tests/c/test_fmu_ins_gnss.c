@@ -15,6 +15,7 @@
  *      corrupted n_states, idx_*, kf.n and configuration enumerations;
  *   4. refused: bad parameters (logged naming them), a measurement valid after the sample
  *      it came with, a non-finite GNSS input (outputs kept). */
+#include <math.h>
 #include <string.h>
 
 #include "fmi2Functions.h"
@@ -467,6 +468,83 @@ static fmi2Status ins_step(fmi2Component c, double t_s)
     return fmi2DoStep(c, t_s, H_S, fmi2True);
 }
 
+/* Covariances that are finite and symmetric, word for word, yet not covariances: two
+ * (three with a diagonal) words overwritten consistently and the CRC recomputed, as a
+ * crafted file would be. Each is refused; an untouched state goes back in. */
+static void test_crafted_covariances(fmi2Component c)
+{
+    fmi2FMUstate good = NULL;
+    size_t size = 0;
+    CHECK(fmi2GetFMUstate(c, &good) == fmi2OK && fmi2SerializedFMUstateSize(c, good, &size) == fmi2OK,
+          "state");
+    uint8_t *ok = malloc(size), *bytes = malloc(size);
+    CHECK(ok && bytes && fmi2SerializeFMUstate(c, good, (fmi2Byte *)ok, size) == fmi2OK, "serialize");
+    const size_t at = offsetof(ModelData, filter.kf.P);
+    const ModelData *d = (const ModelData *)snapshot_model_data(ok, size);
+    const int n = d->filter.n_states;
+    CHECK(n >= 15, "n_states %d", n);
+    double P[GF_KF_MAX_N * GF_KF_MAX_N];
+    for (int kase = 0; kase < 3; ++kase) {
+        memcpy(bytes, ok, size);
+        memcpy(P, d->filter.kf.P, sizeof P);
+        const char *what = "";
+        if (kase == 0) {        /* correlation 2 between two states: indefinite */
+            P[1] = P[n] = 2.0 * sqrt(P[0] * P[n + 1]);
+            what = "P[0][1] = P[1][0] = 2 sqrt(P00 P11)";
+        } else if (kase == 1) { /* three words: a variance made 1e-12 of itself, its correlations kept */
+            P[1] = P[n] = 0.9 * sqrt(P[0] * P[n + 1]);
+            P[0] *= 1e-12;
+            what = "P[0][0] *= 1e-12 with P[0][1] = P[1][0] at correlation 0.9";
+        } else {                /* a pair off by more than the engine's symmetry tolerance */
+            P[2 * n + 5] = P[5 * n + 2] + 1e-6 * sqrt(P[2 * n + 2] * P[5 * n + 5]);
+            what = "P[2][5] != P[5][2] by 1e-6 of sqrt(P22 P55)";
+        }
+        memcpy(snapshot_model_data(bytes, size) + at, P, sizeof P);
+        ref_state_fix_crc(bytes, size);
+        expect_bytes_refused(c, bytes, size, what, "covariance");
+    }
+    CHECK(fmi2SetFMUstate(c, good) == fmi2OK, "the good state goes back in");
+    fmi2FreeFMUstate(c, &good);
+    free(ok);
+    free(bytes);
+}
+
+/* A state saved in initialization mode (before any output is computed) with an output
+ * overwritten and the CRC recomputed: before, the model's checks ran only for an
+ * initialized model, so it was accepted and the getters returned update_time = Inf
+ * (fuzz_fmu_state, issue 21). Now its outputs must be their start values. */
+static void test_crafted_state_before_initialization(void)
+{
+    fmi2Component c = open_ready(GF_INS_EKF, 0);     /* in initialization mode */
+    fmi2FMUstate st = NULL;
+    size_t size = 0;
+    CHECK(fmi2GetFMUstate(c, &st) == fmi2OK && fmi2SerializedFMUstateSize(c, st, &size) == fmi2OK,
+          "state in initialization mode");
+    uint8_t *ok = malloc(size), *bytes = malloc(size);
+    CHECK(ok && bytes && fmi2SerializeFMUstate(c, st, (fmi2Byte *)ok, size) == fmi2OK, "serialize");
+    g_log[0] = '\0';
+    fmi2FMUstate back = NULL;
+    CHECK(fmi2DeSerializeFMUstate(c, (const fmi2Byte *)ok, size, &back) == fmi2OK,
+          "the untouched state is taken: %s", g_log);
+    fmi2FreeFMUstate(c, &back);
+    const double inf = INFINITY, nan = NAN;
+    const struct { size_t at; double v; const char *what; } cases[] = {
+        {offsetof(ModelData, update_time_s) + 3 * sizeof(double), inf, "update_time[4] = Inf"},
+        {offsetof(ModelData, lat_rad), nan, "lat = NaN"},
+        {offsetof(ModelData, std9) + 4 * sizeof(double), 1.0, "std[5] = 1 (finite, not its start value)"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+        memcpy(bytes, ok, size);
+        memcpy(snapshot_model_data(bytes, size) + cases[i].at, &cases[i].v, sizeof(double));
+        ref_state_fix_crc(bytes, size);
+        expect_bytes_refused(c, bytes, size, cases[i].what, "start value");
+    }
+    fmi2FreeFMUstate(c, &st);
+    free(ok);
+    free(bytes);
+    fmi2FreeInstance(c);
+}
+
 static void test_damaged_states(int filter)
 {
     fmi2Component c = open_ready(filter, 0);
@@ -492,6 +570,22 @@ static void test_damaged_states(int filter)
         PATCH('i', filter.nav.cfg.vertical, 1, "filter"),
         PATCH('d', filter.nav.q_bn[0], 3.0, "filter"),
         PATCH('d', filter.kf.P[0], -1.0, "filter"),
+        /* issue 21: the floats of a crafted state with a valid CRC (before: accepted, and
+         * a NaN covariance entry stepped to a NaN standard deviation) */
+        PATCH('d', filter.kf.P[1], NAN, "filter"),            /* off the diagonal */
+        PATCH('d', filter.kf.P[1], 1e3, "filter"),            /* asymmetric (and indefinite) */
+        PATCH('d', filter.nav.h_m, 1e300, "filter"),          /* outside the Earth model */
+        PATCH('d', filter.ukf_w.gamma, 2.0, "filter"),        /* not the configuration's */
+        PATCH('d', filter.std9[4], NAN, "filter"),
+        PATCH('d', filter.inv_scale[0], 0.0, "filter"),
+        PATCH('d', filter.still_fn, INFINITY, "filter"),
+        PATCH('d', filter.acc_T_s, -1.0, "filter"),
+        PATCH('d', filter.last_nhc_t_s, NAN, "filter"),
+        PATCH('d', std9[4], NAN, "output"),                   /* what a get returns at once */
+        PATCH('d', lat_rad, INFINITY, "output"),
+        PATCH('d', nis[0], INFINITY, "monitoring"),
+        PATCH('d', q0[0], NAN, "parameter"),
+        PATCH('d', align_f_sum[0], NAN, "alignment"),
         PATCH('i', skipped, -2, "skip"),
         PATCH('i', started, 4, "started"),
     };
@@ -502,6 +596,7 @@ static void test_damaged_states(int filter)
     check_damaged_states(c, mid * H_S, H_S, ins_step, N - mid, r, 10, patches,
                          sizeof patches / sizeof patches[0], regions,
                          sizeof regions / sizeof regions[0], 300);
+    test_crafted_covariances(c);
     fmi2FreeInstance(c);
 }
 
@@ -509,6 +604,7 @@ int main(void)
 {
     turn_drive(g_truth, N, H_S);
     test_damaged_states(GF_INS_EKF);
+    test_crafted_state_before_initialization();
     test_equals_core(GF_INS_EKF, 0);
     test_equals_core(GF_INS_UKF, 0);
     test_equals_core(GF_INS_EKF, 2);

@@ -235,6 +235,11 @@ static void test_damaged_states(void)
         PATCH('i', skipped, -3, "skip"),
         PATCH('i', started, 7, "started"),
         PATCH('d', previous_step_s, NAN, "previous_step"),
+        /* issue 21: the outputs a restored state carries, a height outside the Earth model */
+        PATCH('d', lat_rad, NAN, "output"),
+        PATCH('d', euler_rad[2], INFINITY, "output"),
+        PATCH('d', nav.h_m, 1e300, "navigation state"),
+        PATCH('d', q0[0], NAN, "parameter"),
     };
     const StateRegion regions[] = {
         REGION(nav.cfg), REGION(nav), REGION(imu), REGION_HEAD(lowpass, 16 + 6 * 8),
@@ -252,6 +257,15 @@ static void test_damaged_states(void)
         PATCH('i', nav.rate.n_w_meas, 12, "rate solver"),
         PATCH('z', nav.rate.kf.n, 36, "rate solver"),
         PATCH('d', nav.rate.kf.P[7], NAN, "rate solver"),
+        /* issue 21: the fused rate filter's covariance must be one (symmetric, positive
+         * definite), and the fixed-frame position is published as `pos` whatever the
+         * Earth model (fuzz_fmu_state_gfnav_cube6: a NaN there reached the output) */
+        PATCH('d', nav.rate.kf.P[1], 1.0, "rate solver"),
+        PATCH('d', nav.nav.flat_pos_m[1], NAN, "navigation state"),
+        PATCH('d', nav.nav.h_m, 1e300, "navigation state"),
+        PATCH('d', pos_m[1], NAN, "output"),
+        PATCH('d', omega_rad_s[0], INFINITY, "output"),
+        PATCH('d', lever_arm_m, NAN, "parameter"),
         PATCH('i', nav.nav.cfg.input, 0, "navigation state"),
         PATCH('i', nav.nav.cfg.earth, 2, "navigation state"),
         PATCH('i', skipped, 5, "skip"),

@@ -54,7 +54,10 @@ def test_solve9_csv_roundtrip_and_bad_sample(tmp_path):
     np.savetxt(src, A, delimiter=",", fmt="%.17g")
     proc = run("solve9", str(src), str(dst), "--dt", str(dt), "--lever-arm", str(l), check=False)
     assert proc.returncode == 1 and "A_m_s2[120, 4]" in proc.stderr
-    assert np.loadtxt(dst, delimiter=",", skiprows=1).shape[0] == 120  # nothing lost
+    # nothing lost, nothing mistaken: the 120 rows before it in sol.partial.csv (its first
+    # line says where and why), the complete solution of the first run left as it was
+    assert np.loadtxt(tmp_path / "sol.partial.csv", delimiter=",", skiprows=2).shape[0] == 120
+    assert np.loadtxt(dst, delimiter=",", skiprows=1).shape[0] == n
 
 
 def test_solve9_bad_arguments(tmp_path):
@@ -67,7 +70,7 @@ def test_solve9_bad_arguments(tmp_path):
 
 def test_navigate_csv_and_bad_sample(tmp_path):
     """gfins navigate on a CSV of increments reproduces Strapdown.run; a NaN row stops it
-    with status 1 and the rows before it written."""
+    with status 1 and the rows before it in sol.partial.csv."""
     from gfins_fmi.sim import trajectory as tj
     tr = tj.sample(tj.Circle(), 30.0, 0.01)
     src, dst = tmp_path / "rec.csv", tmp_path / "sol.csv"
@@ -90,7 +93,8 @@ def test_navigate_csv_and_bad_sample(tmp_path):
     np.savetxt(src, rec, delimiter=",", fmt="%.17g")
     proc = run(*[a for a in args if a != "--header"], check=False)
     assert proc.returncode == 1 and "accel[1000, 1]" in proc.stderr
-    assert np.loadtxt(dst, delimiter=",", skiprows=1).shape[0] == 1000
+    assert np.loadtxt(tmp_path / "sol.partial.csv", delimiter=",", skiprows=2).shape[0] == 1000
+    assert np.loadtxt(dst, delimiter=",", skiprows=1).shape[0] == len(rec)   # the first run's
 
 
 def test_gfnav_csv(tmp_path):

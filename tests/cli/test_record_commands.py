@@ -162,7 +162,8 @@ def test_gfnav_and_solve9_stream_in_chunks_as_one_call(array_record, accel9_reco
 
 def test_errors_past_the_first_chunk_name_the_records_row(nav_record, tmp_path, capsys):
     """A NaN at row 700 in chunks of 256: the message names row 700 (not 700 - 512) and
-    the output holds the 700 rows before it; times checked across chunk boundaries."""
+    the partial output holds the 700 rows before it; times checked across chunk
+    boundaries."""
     tr, rec, init = nav_record
     bad = rec.copy()
     bad[700, 5] = np.nan
@@ -170,8 +171,9 @@ def test_errors_past_the_first_chunk_name_the_records_row(nav_record, tmp_path, 
     assert main(["navigate", str(src), str(dst), *init, "--chunk", "256"]) == 1
     err = capsys.readouterr().err
     assert "accel[700, 1] = nan is not finite" in err, err
-    assert "writing the 700 samples navigated before it" in err
-    assert np.array_equal(_read(dst), _nav_table(_nav_reference(tr, init, 700)))
+    assert "the 700 samples navigated before it are in " + str(tmp_path / "sol.partial.csv") in err
+    assert np.array_equal(_read(tmp_path / "sol.partial.csv"), _nav_table(_nav_reference(tr, init, 700)))
+    assert not dst.exists()
     bad = rec.copy()
     bad[512, 0] = bad[511, 0]                         # the first row of the third chunk
     _write(src, bad)
@@ -269,11 +271,12 @@ def test_gfnav_partial_output_keeps_the_rate_columns(array_record, tmp_path, cap
     src, dst = _write(tmp_path / "arr.csv", bad), tmp_path / "sol.csv"
     assert main(_gfnav_args(src, dst, init)) == 1
     assert "A_m_s2[300, 3] = nan is not finite" in capsys.readouterr().err
+    dst = tmp_path / "sol.partial.csv"
     out = _read(dst)
     sol, rates = _gfnav_reference(tr, init, rec[:300, 1:])
     assert out.shape == (300, 21)
     assert np.array_equal(out, np.c_[_nav_table(sol), rates.omega_rad_s, rates.f_m_s2, rates.flags])
-    header = dst.read_text().splitlines()[0].split(",")
+    header = dst.read_text().splitlines()[1].split(",")      # after the "# partial: ..." line
     assert header[-7:] == ["omega_x_rad_s", "omega_y_rad_s", "omega_z_rad_s", "f_x_m_s2",
                            "f_y_m_s2", "f_z_m_s2", "flags"]
 

@@ -247,5 +247,5 @@ def test_csv_errors(tmp_path):
         ImuRecord.from_csv(write(tmp_path / "empty.csv", ""))
     with pytest.raises(FileFormatError, match="no data lines"):
         ImuRecord.from_csv(write(tmp_path / "head.csv", "\n".join(lines[:3])))
-    with pytest.raises(FileNotFoundError, match="a ImuRecord CSV was expected"):
+    with pytest.raises(FileNotFoundError, match="an ImuRecord CSV was expected"):
         ImuRecord.from_csv(tmp_path / "missing.csv")

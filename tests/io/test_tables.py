@@ -131,7 +131,7 @@ def test_npz_written_in_place_or_through_side_files(planned, values, tmp_path):
             w.write([values[lo:lo + 300, j] for j in range(4)] + [flags[lo:lo + 300]])
         # side files from the start without a count, from the 701st row with 700; none
         # yet with 1000 or 1300 (the short one is moved to side files at commit)
-        side = list(tmp_path.glob("*.partial.d"))
+        side = list(tmp_path.glob("t.*.tmp.npz.d"))
         assert (side != []) == (planned is None or planned < 1000), side
         w.commit()
     with zipfile.ZipFile(path) as z:

@@ -297,9 +297,9 @@ def test_misspelled_keywords_are_refused():
     nav = gf.GyroFreeNavigator(g, x0, "fused", init_std_rad_s=0.5, bias_walk_rad_s2_sqrt_s=0.0,
                                init_bias_std_rad_s2=0.0)
     assert nav is not None
-    with pytest.raises(ValueError, match="init_bias_std_rad_s2 must be finite and >= 0"):
+    with pytest.raises(ValueError, match=r"init_bias_std_rad_s2 must be finite and in \[0, 1000\]"):
         gf.GyroFreeNavigator(g, x0, "fused", init_bias_std_rad_s2=-1.0)
-    with pytest.raises(ValueError, match="bias_walk_rad_s2_sqrt_s must be finite and >= 0"):
+    with pytest.raises(ValueError, match=r"bias_walk_rad_s2_sqrt_s must be finite and in \[0, 1000\]"):
         gf.RateSolver(g, "fused", bias_walk_rad_s2_sqrt_s=np.nan)
 
 

@@ -191,7 +191,7 @@ def test_absurd_rate_and_bad_times(sine_1h):
     assert exc.value.index == 10 and len(exc.value.partial) == 10
     t = tr.t_s[1:101].copy()
     t[50] = t[49]                     # not strictly increasing
-    with pytest.raises(gf.SampleError, match="sample 50: sample times must be strictly increasing"):
+    with pytest.raises(gf.SampleError, match=r"sample 50 at t = 0.5 s does not come after 0.5 s, the previous sample.s; sample times must increase strictly"):
         gf.Strapdown(gf.NavState.from_trajectory(tr, 0)).run(tr.dtheta_rad[:100], tr.dv_m_s[:100], t_s=t)
 
 

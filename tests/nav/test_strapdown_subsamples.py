@@ -280,7 +280,8 @@ def test_bad_time_inside_a_group_is_named():
     tr = tj.sample(tj.Circle(), 1.0, 0.01)
     t = tr.t_s[1:].copy()
     t[6] = t[5]
-    with pytest.raises(gf.SampleError, match=r"sample 6: sample times must be strictly increasing "
+    with pytest.raises(gf.SampleError, match=r"sample 6 at t = 0.06 s does not come after 0.06 s, the "
+                                              r"previous sample's; sample times must increase strictly "
                                               r"\(in the update of samples 6\.\.7\)") as e:
         gf.Strapdown(gf.NavState.from_trajectory(tr, 0), gf.SinsConfig(subsamples=2)).run(
             tr.dtheta_rad, tr.dv_m_s, t_s=t)

@@ -20,12 +20,14 @@ sys.path.insert(0, str(ROOT / "fuzz"))
 import run as fuzz_run  # noqa: E402  (fuzz/run.py)
 
 RUNS = 300   # mutations per target after the seed corpus: seconds in all
-# the default run builds and runs the C-core targets and two FMU targets (the integrated
-# navigator and a gyro-free one: every C module and the FMI glue); GFINS_FUZZ_ALL=1 adds
-# the other five FMU targets (their build costs the test run ~25 s more on two cores)
+# the default run builds and runs the C-core targets, two FMU targets (the integrated
+# navigator and a gyro-free one: every C module and the FMI glue) and the integrated
+# navigator's crafted-state target (its oracle: refused, or finite outputs; its corpus
+# replays the state it found, issue 21); GFINS_FUZZ_ALL=1 adds the other FMU targets
+# (their build costs the test run ~25 s more on two cores)
 ALL = bool(os.environ.get("GFINS_FUZZ_ALL"))
 DEFAULT_C = ["fuzz_sins", "fuzz_accel", "fuzz_filters", "fuzz_rotation", "fuzz_ins_fb", "fuzz_fmu_ins_gnss",
-             "fuzz_fmu_gfnav_cube6"]
+             "fuzz_fmu_gfnav_cube6", "fuzz_fmu_state_ins_gnss"]
 
 
 @pytest.fixture(scope="module")

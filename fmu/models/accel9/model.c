@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "fmu_model.h"
+#include "base/gf_math.h"
 #include "model.h"
 
 FmuStatus model_exit_initialization(FmuInstance *instance, ModelData *d, double start_time_s)
@@ -72,5 +73,10 @@ const char *model_validate_state(const ModelData *d)
         return "the solver state (lever arm, reference rate, angular acceleration) is invalid";
     if (!(d->previous_step_s >= 0.0) || !isfinite(d->previous_step_s))
         return "previous_step_s is not finite and >= 0";
+    if (!gf_all_finite(d->f_m_s2, 3) || !gf_all_finite(d->omega_rad_s, 3) ||
+        !gf_all_finite(d->omega_dot_rad_s2, 3) || !gf_all_finite(d->omega_sq_rad2_s2, 3))
+        return "an output (specific force, rate, angular acceleration, squared rates) is not finite";
+    if (!isfinite(d->lever_arm_m) || !gf_all_finite(d->omega_init_rad_s, 3))
+        return "a parameter (lever arm, initial rate) is not finite";
     return NULL;
 }

@@ -188,5 +188,15 @@ const char *model_validate_state(const ModelData *d)
         return "the rate solver's sensor count is not the layout's";
     if (gf_sins_state_check(&d->nav.nav) != GF_OK || d->nav.nav.cfg.input != GF_SINS_INPUT_RATES)
         return "the navigation state (configuration, attitude, position) is invalid";
+    /* the outputs a restored state carries (returned by a get before any step) */
+    if (!gf_all_finite(d->q_bn, 4) || !gf_all_finite(d->euler_rad, 3) || !gf_all_finite(d->v_n_m_s, 3) ||
+        !isfinite(d->lat_rad) || !isfinite(d->lon_rad) || !isfinite(d->h_m) || !gf_all_finite(d->pos_m, 3) ||
+        !gf_all_finite(d->omega_rad_s, 3) || !gf_all_finite(d->f_m_s2, 3) || !isfinite(d->nav_time_s))
+        return "an output (attitude, velocity, position, rate, specific force, time) is not finite";
+    if (!isfinite(d->lever_arm_m) || !isfinite(d->accel_noise_m_s2) || !gf_all_finite(d->omega_init_rad_s, 3) ||
+        !isfinite(d->flat_gravity_m_s2) || !isfinite(d->hold_height_m) || !isfinite(d->baro_tau_s) ||
+        !gf_all_finite(d->q0, 4) || !gf_all_finite(d->v0_m_s, 3) || !isfinite(d->lat0_rad) ||
+        !isfinite(d->lon0_rad) || !isfinite(d->h0_m) || !gf_all_finite(d->pos0_m, 3))
+        return "a parameter (array, strategy, initial state, vertical channel) is not finite";
     return NULL;
 }

@@ -756,12 +756,51 @@ const char *ins_gnss_state_problem(const ModelData *d)
     return NULL;
 }
 
+/* The model's own floats: NULL when the parameters, the outputs and the alignment sums a
+ * restored state carries are finite (the monitoring outputs nis and update_time may be
+ * NaN: "no update of this kind yet"; never infinite), else what is wrong. The inputs are
+ * the master's to set before the next doStep (which checks them). */
+static const char *model_floats_problem(const ModelData *d)
+{
+    const double *params[] = {d->q0, d->v0_m_s, &d->lat0_rad, &d->lon0_rad, &d->h0_m, d->sensors0,
+                              d->std0_vel_m_s, d->std0_pos_m, d->std0_att_rad, d->std0_gyro_bias_rad_s,
+                              d->std0_accel_bias_m_s2, d->std0_gyro_scale, d->std0_accel_scale,
+                              &d->std0_baro_bias_m, &d->std0_odo_scale, d->std0_odo_mount_rad,
+                              &d->align_time_s, &d->align_min_speed_m_s, &d->align_travel_std_rad};
+    const size_t n_params[] = {4, 3, 1, 1, 1, GF_INS_N_SENSORS, 3, 3, 3, 3, 3, 3, 3, 1, 1, 2, 1, 1, 1};
+    for (size_t i = 0; i < sizeof n_params / sizeof n_params[0]; ++i)
+        if (!gf_all_finite(params[i], n_params[i]))
+            return "a parameter (initial state, its 1-sigma or the alignment settings) is not finite";
+    const double *outs[] = {d->q_bn, d->euler_rad, d->v_n_m_s, &d->lat_rad, &d->lon_rad, &d->h_m,
+                            &d->nav_time_s, d->std9, d->sensors};
+    const size_t n_outs[] = {4, 3, 3, 1, 1, 1, 1, 9, GF_INS_N_SENSORS};
+    for (size_t i = 0; i < sizeof n_outs / sizeof n_outs[0]; ++i)
+        if (!gf_all_finite(outs[i], n_outs[i]))
+            return "an output (attitude, velocity, position, time, 1-sigma, sensor estimates) is not finite";
+    for (int k = 0; k < INS_FMU_KINDS; ++k)
+        if (isinf(d->nis[k]) || isinf(d->update_time_s[k]))
+            return "a monitoring output (nis, update_time) is infinite";
+    const double *sums[] = {&d->align_t0_s, &d->align_t_prev_s, d->align_f_sum, d->align_w_sum,
+                            &d->align_fn_sum, &d->align_fn2_sum, &d->align_wn_sum};
+    const size_t n_sums[] = {1, 1, 3, 3, 1, 1, 1};
+    for (size_t i = 0; i < sizeof n_sums / sizeof n_sums[0]; ++i)
+        if (!gf_all_finite(sums[i], n_sums[i]))
+            return "the alignment phase's sums are not finite";
+    return NULL;
+}
+
 const char *model_validate_state(const ModelData *d)
 {
     const char *why = ins_gnss_state_problem(d);
+    if (!why)
+        why = model_floats_problem(d);
     if (why)
         return why;
-    if (d->started && gf_ins_filter_check(&d->filter) != GF_OK)
-        return "the filter state (layout, indices, nominal state, covariance) is invalid";
+    /* the whole filter as soon as it exists (exit initialization), not only once it has
+     * a sample: a doStep may take it from there */
+    const gf_ins_filter *f = &d->filter;
+    const int exists = !(f->n_states == 0 && f->kf.n == 0 && f->ukf_w.n == 0);
+    if (exists && gf_ins_filter_check(f) != GF_OK)
+        return "the filter state (layout, indices, nominal state, covariance, floats) is invalid";
     return NULL;
 }

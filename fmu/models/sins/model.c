@@ -225,6 +225,15 @@ const char *model_validate_state(const ModelData *d)
         return why;
     if (gf_sins_state_check(&d->nav) != GF_OK)
         return "the navigation state (configuration, attitude, position) is invalid";
+    /* the outputs a restored state carries (returned by a get before any step) */
+    if (!gf_all_finite(d->q_bn, 4) || !gf_all_finite(d->euler_rad, 3) || !gf_all_finite(d->v_n_m_s, 3) ||
+        !isfinite(d->lat_rad) || !isfinite(d->lon_rad) || !isfinite(d->h_m) || !isfinite(d->nav_time_s) ||
+        !gf_all_finite(d->q_vehicle, 4) || !gf_all_finite(d->euler_vehicle_rad, 3))
+        return "an output (attitude, velocity, position, time) is not finite";
+    if (!gf_all_finite(d->q0, 4) || !gf_all_finite(d->v0_m_s, 3) || !isfinite(d->lat0_rad) ||
+        !isfinite(d->lon0_rad) || !isfinite(d->h0_m) || !isfinite(d->hold_height_m) ||
+        !isfinite(d->baro_tau_s) || !isfinite(d->max_rate_rad_s) || !isfinite(d->max_specific_force_m_s2))
+        return "a parameter (initial state, vertical channel, limits) is not finite";
     if (d->nav.cfg.subsamples != 1) /* the FMU steps one sample per update */
         return "the navigation state's subsamples is not 1";
     if (d->imu_comp != 0 && d->imu_comp != 1)

@@ -340,6 +340,54 @@ FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double 
     return FMU_OK;
 }
 
+/* A 1-sigma output: finite and >= 0 for an estimated block, NaN for one the filter has
+ * not (idx < 0) */
+static int std_output_ok(const double *s, int n, int32_t idx)
+{
+    for (int i = 0; i < n; ++i)
+        if (idx >= 0 ? !(s[i] >= 0.0 && isfinite(s[i])) : !isnan(s[i]))
+            return 0;
+    return 1;
+}
+
+/* The model's own floats (as fmu/models/ins_gnss/model.c's, issue 21): NULL when the
+ * parameters, the outputs and the internals a restored state carries are finite (the
+ * monitoring nis may be NaN: "no update of this kind yet", never infinite; the 1-sigma
+ * of a block not estimated is NaN), else what is wrong. The inputs are the master's to
+ * set before the next doStep (which checks them). */
+static const char *model_floats_problem(const ModelData *d)
+{
+    const double *params[] = {d->q0, d->v0_m_s, &d->lat0_rad, &d->lon0_rad, &d->h0_m, d->sensors0,
+                              d->std0_vel_m_s, d->std0_pos_m, d->std0_att_rad, d->std0_gyro_bias_rad_s,
+                              d->std0_accel_bias_m_s2, d->std0_gyro_scale, d->std0_accel_scale,
+                              d->std0_mount_rad, d->std0_lever_m, &d->std0_time_offset_s,
+                              &d->master_interval_s, d->master_vel_std_m_s, d->master_att_std_rad,
+                              d->master_pos_std_m};
+    const size_t n_params[] = {4, 3, 1, 1, 1, GF_INS_N_SENSORS, 3, 3, 3, 3, 3, 3, 3, 3, 3, 1, 1, 3, 3, 3};
+    for (size_t i = 0; i < sizeof n_params / sizeof n_params[0]; ++i)
+        if (!gf_all_finite(params[i], n_params[i]))
+            return "a parameter (initial state, its 1-sigma, the master's noise) is not finite";
+    const double *outs[] = {d->q_bn, d->euler_rad, d->v_n_m_s, &d->lat_rad, &d->lon_rad, &d->h_m,
+                            &d->nav_time_s, d->std9, d->sensors, d->mount_rad, d->lever_m,
+                            &d->time_offset_s, d->flexure_rad};
+    const size_t n_outs[] = {4, 3, 3, 1, 1, 1, 1, 9, GF_INS_N_SENSORS, 3, 3, 1, 3};
+    for (size_t i = 0; i < sizeof n_outs / sizeof n_outs[0]; ++i)
+        if (!gf_all_finite(outs[i], n_outs[i]))
+            return "an output (attitude, velocity, position, time, 1-sigma, sensor and transfer "
+                   "estimates) is not finite";
+    const gf_ins_filter *f = &d->filter;
+    if (!std_output_ok(d->mount_std_rad, 3, f->idx_tmount) || !std_output_ok(d->lever_std_m, 3, f->idx_tlever) ||
+        !std_output_ok(&d->time_offset_std_s, 1, f->idx_toffset))
+        return "a transfer 1-sigma output (mount_std, lever_std, time_offset_std) is not finite and >= 0 "
+               "for an estimated block, or not NaN for one that is not";
+    for (int k = 0; k < TA_FMU_KINDS; ++k)
+        if (isinf(d->nis[k]))
+            return "a monitoring output (nis) is infinite";
+    if (!(isfinite(d->last_master_t_s) || d->last_master_t_s == -INFINITY))
+        return "last_master_t_s is neither finite nor -Inf (no epoch used yet)";
+    return NULL;
+}
+
 const char *model_validate_state(const ModelData *d)
 {
     const gf_ins_filter *f = &d->filter;
@@ -348,11 +396,12 @@ const char *model_validate_state(const ModelData *d)
     if ((d->started & ~1) || (d->match_attitude & ~1) || (d->match_position & ~1) ||
         (d->start_from_master & ~1))
         return "a flag of the model is not 0 or 1";
-    if (isnan(d->last_master_t_s))
-        return "last_master_t_s is NaN";
     if (f->n_states == 0 && f->kf.n == 0 && f->ukf_w.n == 0)
         return NULL;   /* not started yet (before exitInitializationMode) */
+    const char *why = model_floats_problem(d);
+    if (why)
+        return why;
     if (gf_ins_filter_check(f) != GF_OK)
-        return "the filter state (layout, indices, nominal state, covariance) is invalid";
+        return "the filter state (layout, indices, nominal state, covariance, floats) is invalid";
     return NULL;
 }

@@ -66,7 +66,7 @@ static void fuzz_imu_error(fz *d)
         e.g_bias_rad_s[i] = fz_num(d, 0.01);
         e.a_bias_m_s2[i] = fz_num(d, 0.1);
         e.a_k2_s2_m[i] = fz_num(d, 1e-5);
-        e.a_lever_m[i] = fz_num(d, 0.05);
+        e.a_lever_pos_m[4 * i] = fz_num(d, 0.05);
     }
     for (int i = 0; i < 9; ++i) {
         e.g_misalign_rad[i] = i % 4 ? fz_num(d, 0.01) : 0.0;

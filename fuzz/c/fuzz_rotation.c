@@ -108,7 +108,8 @@ static void fuzz_syscal(fz *d)
     static gf_syscal_epoch ep[MAX_RUN];
     gf_syscal_config c;
     gf_syscal_config_default(&c);
-    c.n_states = fz_u8(d) % 8 == 0 ? (int32_t)fz_u8(d) : (fz_u8(d) & 1 ? 36 : 37);
+    static const int32_t models[4] = {36, 37, 39, 40};   /* seed and full, +delay */
+    c.n_states = fz_u8(d) % 8 == 0 ? (int32_t)fz_u8(d) : models[fz_u8(d) & 3];
     c.lat_rad = fz_u8(d) & 3 ? 0.7 : fz_num(d, 1.6);
     c.lon_rad = fz_num(d, 3.0);
     c.h_m = fz_u8(d) & 3 ? 50.0 : fz_num(d, 1e4);

@@ -11,7 +11,7 @@ from gfins_fmi.calibration.syscal_filter import CalibrationInputError, core_grav
 from gfins_fmi.nav.earth import WGS84
 from gfins_fmi.nav.plausibility import latitude_from_earth_rate, latitude_problem, report
 
-__all__ = ["Segment", "segment_record", "record_increments", "check_record"]
+__all__ = ["Segment", "segment_record", "record_increments", "check_record", "lat_problem"]
 
 @dataclass(frozen=True)
 class Segment:
@@ -132,11 +132,14 @@ def segment_record(t_s, dtheta_rad, rate_threshold_deg_s: float = 0.5, smooth_s:
 
 
 def check_record(t_end, dt, dth, dv, segs, lat_rad, h_m, min_align_s, max_angle_per_sample_rad,
+                 gravity_m_s2: float | None = None, earth_rate: bool = True,
                  gyro_std_rad_s: float | None = None, checks: str = "raise"):
-    """Units, sampling and rest: CalibrationInputError with what was found. With
-    ``gyro_std_rad_s`` (the gyros' bias 1-sigma, rad/s), the site latitude against the one
-    the Earth rate gives in each static interval (their median; ``checks`` says whether a
-    contradiction raises, warns or passes)."""
+    """Units, sampling and rest: CalibrationInputError with what was found. ``gravity_m_s2``:
+    the site's gravity (default WGS-84 normal gravity); ``earth_rate``: the gyros must see
+    the Earth rate (the coarse alignment gyrocompasses; False when the heading is given).
+    With ``gyro_std_rad_s`` (the gyros' bias 1-sigma, rad/s) and ``earth_rate``, the site
+    latitude against the one the Earth rate gives in each static interval (their median;
+    ``checks`` says whether a contradiction raises, warns or passes)."""
     if not (dt > 0).all():
         k = int(np.flatnonzero(~(dt > 0))[0])
         raise CalibrationInputError(f"sample times must increase: interval {k} is {float(dt[k])!r} s")
@@ -151,7 +154,7 @@ def check_record(t_end, dt, dth, dv, segs, lat_rad, h_m, min_align_s, max_angle_
                                     "(seed 001 rests 10 min)")
     sel = np.concatenate([np.arange(s.i0, s.i1) for s in stat])
     f = np.linalg.norm(dv[sel] / dt[sel, None], axis=1).mean()
-    g = core_gravity_m_s2(lat_rad, h_m)
+    g = core_gravity_m_s2(lat_rad, h_m) if gravity_m_s2 is None else gravity_m_s2
     if abs(f / g - 1.0) > 0.05:
         hint = (" (dv looks like a specific force in m/s^2 rather than increments in m/s over "
                 "each interval: build the record with kind='rates'; or the increments are in "
@@ -162,11 +165,13 @@ def check_record(t_end, dt, dth, dv, segs, lat_rad, h_m, min_align_s, max_angle_
                                     f"the site is {g:.6g} m/s^2{hint}")
     w = np.linalg.norm(dth[sel] / dt[sel, None], axis=1).mean()
     W = WGS84.omega_ie
-    if w > 30 * W:
+    if earth_rate and w > 30 * W:
         hint = " (are the gyro increments in degrees? np.radians)" if abs(w / (W * 180 / np.pi) - 1) < 0.5 else ""
         raise CalibrationInputError(f"at rest the gyros read {w:.3g} rad/s = {w / W:.1f} x the Earth "
-                                    f"rate{hint}: the filter needs rad and a gyro that sees the Earth rate")
-    if gyro_std_rad_s is not None:
+                                    f"rate{hint}: the coarse alignment needs rad and a gyro that sees the "
+                                    "Earth rate (for MEMS gyros give the start heading: heading_rad, "
+                                    "--heading)")
+    if earth_rate and gyro_std_rad_s is not None:
         lat_problem(t_end, dt, dth, dv, stat, lat_rad, gyro_std_rad_s, checks)
     worst = float(np.max(np.linalg.norm(dth, axis=1)))
     if worst > max_angle_per_sample_rad:

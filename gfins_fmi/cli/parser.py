@@ -34,14 +34,26 @@ RECORD starts at rest (--initial-still s), then the IMU is turned by hand to >= 
 and held still at each for a few seconds (docs/characterise_imu.md). Prints the poses found and
 every parameter with its 1-sigma; --output writes [imu_errors] for `gfins integrate --imu-errors`.
 
-    gfins calibrate IMU --lat DEG --height M [--lon DEG] [--format csv|kfgins]
-                    [--arw DEG_SQRT_H] [--vrw UG_SQRT_HZ] [--delay] [--passes N]
-                    [--prior NAME=VALUE ...] [--report REPORT.md] [--json PARAMS.json] [--plot DIR]
-                    [--simulate seed001|turntable19 [--sim-seed N]]
+    gfins calibrate IMU --lat DEG --height M [--lon DEG] [--gravity M_S2]
+                    [--format csv|kfgins|bin64|bin32|text7 [--raw-kind increments|rates]
+                     [--gyro-unit U] [--accel-unit U] [--time-scale S]]
+                    [--grade auto|navigation|tactical|mems] [--model full|seed] [--delay|--no-delay]
+                    [--arw DEG_SQRT_H] [--vrw UG_SQRT_HZ] [--vel-std M_S] [--passes N]
+                    [--prior NAME=VALUE ...] [--prior-mean CLBT] [--widen-priors [--max-rounds N]]
+                    [--heading DEG] [--report REPORT.md] [--json PARAMS.json]
+                    [--compensation CLBT.json|.toml|.bin|.txt] [--plot DIR] [--progress]
+                    [--simulate seed001|turntable19 [--sim-errors seed|lab] [--sim-seed N]]
 
-Prints the static intervals and turns found, every parameter with its 1-sigma and the
-parameters the path cannot observe; ``--json`` writes the estimates, their stds and the
-error model as start values of the SINS and vehicle FMUs; ``--simulate`` first writes a
+The full lever-arm model (the x and y accelerometers' positions relative to the z
+accelerometer, and the accelerometer delay: 40 states) with the defaults of the IMU's
+grade (read from the first static interval unless --grade names it); --model seed runs
+seed 001's 36 states. Prints the static intervals and turns found, every parameter with
+its 1-sigma, its prior and its shift against the prior, the checks (NIS, prior blocks,
+model terms the chosen model lacks) with warnings that name the parameters and the fix,
+and the result in the compensation form (PSINS clbt fields); --json writes both
+conventions and the SINS/vehicle FMU start values, --compensation the compensation form
+alone (JSON, TOML, PSINS's 37-value .bin or text). --prior-mean centres the prior on a
+compensation form (a previous calibration, another tool's). --simulate first writes a
 simulated raw record of that path to IMU (its true errors beside it, IMU.truth.json).
 """
 
@@ -250,45 +262,83 @@ def _noise(sub) -> argparse.ArgumentParser:
     return p
 
 
+#: ``gfins calibrate --format``: the raw 7-column layouts (gfins_fmi.io.raw_imu) by name
+RAW_FORMATS = {"bin64": "float64", "bin32": "float32", "text7": "text"}
+
+
 def _calibrate(sub) -> argparse.ArgumentParser:
-    p = sub.add_parser("calibrate", help="system-level calibration (seed 001's 36-state filter) of a "
-                       "raw multi-position record", description=CALIBRATE_DESCRIPTION,
+    p = sub.add_parser("calibrate", help="system-level calibration (the full lever-arm model or seed "
+                       "001's 36 states) of a raw multi-position record", description=CALIBRATE_DESCRIPTION,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("imu", type=pathlib.Path, help="raw IMU record (IMU frame), starting at rest; or the "
                    "word poses followed by RECORD for the calibration at unknown poses")
     p.add_argument("record", type=pathlib.Path, nargs="?", default=None,
                    help="(gfins calibrate poses RECORD) the hand-turned record")
-    p.add_argument("--format", choices=("csv", "kfgins", "rtk_walk"), default="csv",
+    p.add_argument("--format", choices=("csv", "kfgins", "rtk_walk") + tuple(RAW_FORMATS), default="csv",
                    help="csv: gfins_fmi.io ImuRecord CSV (increments or rates); kfgins: KF-GINS IMU file; "
-                        "rtk_walk (poses only)")
+                        "bin64, bin32, text7: seven columns [wx wy wz ax ay az t] (PSINS's imu array), "
+                        "float64 / float32 binary or text (docs/io.md); rtk_walk (poses only)")
+    p.add_argument("--raw-kind", choices=("increments", "rates"), default="increments",
+                   help="raw formats: increments over the interval ending at t (default) or rates at t")
+    p.add_argument("--gyro-unit", choices=("rad", "deg", "arcsec", "deg/h"), default="rad",
+                   help="raw formats: gyro column unit (per second for rates; deg/h for rates only; default rad)")
+    p.add_argument("--accel-unit", choices=("m", "g", "mg", "ug"), default="m",
+                   help="raw formats: accelerometer column unit, m (m/s or m/s^2), g, mg, ug (default m)")
+    p.add_argument("--time-scale", type=real("s", above=0.0), default=1.0,
+                   help="raw formats: seconds per unit of the time column (default 1; 0.001 for ms)")
     p.add_argument("--lat", type=real("deg", above=-89.0, below=89.0), default=None,
                    help="site latitude, deg (required for the system-level calibration)")
     p.add_argument("--lon", type=real("deg"), default=0.0, help="site longitude, deg (default 0)")
     p.add_argument("--height", type=real("m"), default=None,
                    help="site ellipsoidal height, m (required for the system-level calibration)")
-    p.add_argument("--arw", type=real("deg/sqrt(h)", at_least=0.0), default=0.002,
-                   help="gyro angle random walk, deg/sqrt(h) (default 0.002: seed 001's laser gyros)")
-    p.add_argument("--vrw", type=real("ug/sqrt(Hz)", at_least=0.0), default=10.0,
-                   help="accelerometer white noise, ug/sqrt(Hz) (default 10)")
-    p.add_argument("--vel-std", type=real("m/s", at_least=0.0), default=1e-3,
-                   help="std of the zero-velocity measurement (base sway), m/s (default 0.001)")
-    p.add_argument("--delay", action="store_true",
-                   help="estimate the accelerometer sample delay (37th state)")
+    p.add_argument("--gravity", type=real("m/s^2", above=9.7, below=9.9), default=None,
+                   help="the site's gravity, m/s^2 (e.g. surveyed; both modes); default WGS-84 "
+                        "normal gravity at --lat, --height")
+    p.add_argument("--grade", choices=("auto", "navigation", "tactical", "mems"), default="auto",
+                   help="IMU grade whose priors and noise are the defaults (calibration.grades); "
+                        "auto: read from the first static interval (default)")
+    p.add_argument("--model", choices=("full", "seed"), default="full",
+                   help="full: lever arms in all directions (default); seed: seed 001's 36 states")
+    p.add_argument("--delay", action=argparse.BooleanOptionalAction, default=None,
+                   help="estimate the accelerometer sample delay (default: yes with --model full, "
+                        "no with --model seed)")
+    p.add_argument("--arw", type=real("deg/sqrt(h)", at_least=0.0), default=None,
+                   help="gyro angle random walk, deg/sqrt(h) (default: the grade's)")
+    p.add_argument("--vrw", type=real("ug/sqrt(Hz)", at_least=0.0), default=None,
+                   help="accelerometer white noise, ug/sqrt(Hz) (default: the grade's)")
+    p.add_argument("--vel-std", type=real("m/s", at_least=0.0), default=None,
+                   help="std of the zero-velocity measurement (base sway), m/s (default: the grade's, "
+                        "1e-5; 0: 1e-6)")
     p.add_argument("--passes", type=int, default=2, choices=range(1, 11), metavar="N",
                    help="filter passes, each linearised about the previous estimates, the prior kept (default 2)")
     p.add_argument("--prior", type=prior_setting, action="append", default=[], metavar="NAME=VALUE",
                    help="prior 1-sigma (calibration.syscal_filter.Prior field, its unit), e.g. "
                         "gyro_bias_deg_h=0.05")
+    p.add_argument("--prior-mean", type=pathlib.Path, default=None, metavar="CLBT",
+                   help="centre the prior on this compensation form (.json, .toml, PSINS .bin or text)")
+    p.add_argument("--widen-priors", action="store_true",
+                   help="when estimates fight their prior, widen those priors and run again")
+    p.add_argument("--max-rounds", type=int, default=4, choices=range(1, 11), metavar="N",
+                   help="with --widen-priors: at most N runs (default 4)")
+    p.add_argument("--heading", type=real("deg"), default=None,
+                   help="heading of the IMU's y axis at the start, deg (gyros that cannot see the "
+                        "Earth rate: MEMS); default: gyrocompassing")
     p.add_argument("--report", type=pathlib.Path, help="write the report (markdown) here")
-    p.add_argument("--json", type=pathlib.Path, help="write estimates, stds and FMU parameters here")
+    p.add_argument("--json", type=pathlib.Path,
+                   help="write estimates, stds, checks, both conventions and FMU parameters here")
+    p.add_argument("--compensation", type=pathlib.Path, metavar="CLBT",
+                   help="write the compensation form here (.json, .toml, .bin: PSINS's 37 float64, else text)")
     p.add_argument("--plot", type=pathlib.Path, help="folder for the convergence and residual figures")
+    p.add_argument("--progress", action="store_true", help="progress bar over the filter passes")
     p.add_argument("--simulate", choices=("seed001", "turntable19"),
-                   help="first write a simulated record of this path to IMU (random errors at the "
-                        "prior's level, the noise of --arw/--vrw)")
+                   help="first write a simulated record of this path to IMU (see --sim-errors; the "
+                        "noise of --arw/--vrw, default 0.002 deg/sqrt(h) and 10 ug/sqrt(Hz))")
+    p.add_argument("--sim-errors", choices=("seed", "lab"), default="seed",
+                   help="--simulate's errors: seed (random at seed 001's prior, lever arms along the "
+                        "axes; default) or lab (random at a laboratory tool's defaults: lever arms "
+                        "across the axes, 1 ms delay; calibration.compensation.random_compensation)")
     p.add_argument("--sim-seed", type=int, default=0, help="seed of --simulate (default 0)")
     q = p.add_argument_group("calibration at unknown poses (gfins calibrate poses RECORD)")
-    q.add_argument("--gravity", type=real("m/s^2", above=9.7, below=9.9), default=None,
-                   help="local gravity, m/s^2 (default: normal gravity at --lat, --height)")
     q.add_argument("--counts", type=vector(2, "GYRO_LSB_PER_DPS,ACCEL_LSB_PER_G"), default=None,
                    metavar="GYRO_LSB_PER_DPS,ACCEL_LSB_PER_G",
                    help="the record holds raw counts (t in s): their nominal sensitivities, LSB per deg/s "
@@ -322,12 +372,18 @@ def _check_calibrate(args) -> str | None:
             return f"one record: gfins calibrate IMU ..., or gfins calibrate poses RECORD (got {args.imu} {args.record})"
         if args.gravity is None and (args.lat is None or args.height is None):
             return "the calibration at poses needs the gravity: --lat and --height (normal gravity), or --gravity"
+        if args.format in RAW_FORMATS:
+            return f"--format {args.format} is for the system-level calibration (gfins calibrate IMU); poses reads csv, kfgins, rtk_walk"
         args.module = "calibrate_poses"
         return None
     if args.lat is None or args.height is None:
         return "the following arguments are required: --lat, --height"
     if args.format == "rtk_walk":
         return "--format rtk_walk is for gfins calibrate poses"
+    if args.format in RAW_FORMATS and args.raw_kind == "increments" and args.gyro_unit == "deg/h":
+        return "--gyro-unit deg/h is a rate: use it with --raw-kind rates"
+    if args.max_rounds != 4 and not args.widen_priors:
+        return "--max-rounds needs --widen-priors"
     return None
 
 

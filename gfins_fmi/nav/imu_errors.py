@@ -4,8 +4,14 @@ Model and seed equations: ``csrc/nav/gf_imu_error.h``.
 
 Units at this boundary (SI inside): gyro bias in deg/h, accelerometer bias in ug
 (1 ug = 9.80665e-6 m/s^2), scale factors in ppm, misalignments in arcsec, K2 in ug/g^2,
-inner lever arms in cm, temperatures in degC; temperature coefficients in the same unit
-per degC^(k+1).
+inner lever arms in cm, the accelerometer delay in ms, temperatures in degC; temperature
+coefficients in the same unit per degC^(k+1).
+
+Inner lever arms: accelerometer i sits at r_i from the reference point; ``lever_arm_cm``
+is either the three offsets along the own axes (seed 001's model, (3,)) or the three
+positions (3, 3), row i = r_i in IMU axes. Arms across the sensing axes feel the angular
+acceleration (w_dot x r_i); :meth:`ImuErrors.apply` and :meth:`ImuErrors.compensate` take
+it as ``omega_dot_rad_s2``, the increment methods estimate it from the rates.
 """
 from __future__ import annotations
 
@@ -30,10 +36,11 @@ _FIELDS = {1: "gyro_scale_ppm (|s| < 0.5 = 500000 ppm)",
            3: "accel_scale_ppm (|s| < 500000 ppm)",
            4: "accel_misalignment_arcsec (|N| < 20626 arcsec, zero diagonal)",
            5: "accel_k2_ug_g2 (|K2| * 1000 m/s^2 < 0.1)",
-           6: "lever_arm_cm (|r| < 100 cm)",
+           6: "lever_arm_cm (every |r_ij| < 100 cm)",
            7: "temperature order (at most 4 coefficients)",
            8: "gyro_bias_deg_h (|b| < 50 rad/s = 1.03e10 deg/h)",
-           9: "accel_bias_ug (|b| < 1000 m/s^2 = 1.02e8 ug)"}
+           9: "accel_bias_ug (|b| < 1000 m/s^2 = 1.02e8 ug)",
+           10: "accel_delay_ms (|d| < 1000 ms)"}
 
 
 def _vec(name, value, shape):
@@ -56,13 +63,18 @@ class ImuErrors:
         Cross-coupling N_g (zero diagonal): w_out = (I + diag s)(I + N) w + b.
     accel_bias_ug, accel_scale_ppm, accel_k2_ug_g2 : (3,)
     accel_misalignment_arcsec : (3, 3)
-    lever_arm_cm : (3,)
-        Inner lever arm of each accelerometer along its own axis (seed 001).
+    lever_arm_cm : (3,) or (3, 3)
+        Inner lever arms: (3,) the offset of each accelerometer along its own axis (seed
+        001); (3, 3) the positions, row i = accelerometer i's position from the
+        reference point (IMU axes). See :attr:`lever_arm_matrix_cm`.
     t0_C : float
         Reference temperature of the biases and scale factors.
     gyro_bias_tc, gyro_scale_tc, accel_bias_tc, accel_scale_tc : (order, 3)
         Temperature coefficients: row k multiplies (T - t0)^(k+1), in the unit of the
         quantity per degC^(k+1); at most 4 rows, all four with the same number of rows.
+    accel_delay_ms : float
+        The accelerometers sample this late behind the gyros (first order:
+        f(t - d) = f + d (w x f); csrc/nav/gf_imu_error.h).
     """
 
     gyro_bias_deg_h: np.ndarray | None = None
@@ -78,6 +90,7 @@ class ImuErrors:
     gyro_scale_tc: np.ndarray | None = None
     accel_bias_tc: np.ndarray | None = None
     accel_scale_tc: np.ndarray | None = None
+    accel_delay_ms: float = 0.0
     _c: object = field(default=None, repr=False, compare=False)
 
     def __post_init__(self):
@@ -92,7 +105,13 @@ class ImuErrors:
                                      (3, 3)).ravel() * ARCSEC)
         # K2 [ug/g^2]: error = K2 u^2 with u in g  ->  K2 * 1e-6 g / g^2 = K2 * 1e-6 / g per m/s^2
         c.a_k2_s2_m = list(_vec("accel_k2_ug_g2", self.accel_k2_ug_g2, (3,)) * 1e-6 / G0)
-        c.a_lever_m = list(_vec("lever_arm_cm", self.lever_arm_cm, (3,)) * 0.01)
+        lev = np.zeros(3) if self.lever_arm_cm is None else np.asarray(self.lever_arm_cm, float)
+        lev = _vec("lever_arm_cm", lev, lev.shape if lev.shape in ((3,), (3, 3)) else (3, 3))
+        c.a_lever_pos_m = list((np.diag(lev) if lev.ndim == 1 else lev).ravel() * 0.01)
+        d = np.asarray(self.accel_delay_ms, float)
+        if d.shape != () or not np.isfinite(d):
+            raise ValueError(f"accel_delay_ms must be a finite number; got {self.accel_delay_ms!r}")
+        c.a_delay_s = float(d) * 1e-3
         c.t0 = float(self.t0_C)
         tcs = {"gyro_bias_tc": DEG_H, "gyro_scale_tc": PPM, "accel_bias_tc": UG,
                "accel_scale_tc": PPM}
@@ -117,6 +136,19 @@ class ImuErrors:
                              f"{_FIELDS.get(int(bad[0]), 'a non-finite value')}")
         object.__setattr__(self, "_c", c)
 
+    @property
+    def lever_arm_matrix_cm(self) -> np.ndarray:
+        """The accelerometers' positions (3, 3), cm: row i = accelerometer i's position from
+        the reference point, IMU axes (the diagonal: seed 001's offsets along the axes)."""
+        return np.array(list(self._c.a_lever_pos_m)).reshape(3, 3) / 0.01
+
+    @property
+    def has_transverse_lever_arms(self) -> bool:
+        """True when an accelerometer is offset across its sensing axis (the model then
+        needs the angular acceleration)."""
+        m = self.lever_arm_matrix_cm
+        return bool(np.any(m[~np.eye(3, dtype=bool)] != 0.0))
+
     def fmu_parameters(self) -> dict:
         """The model as start values of the SINS and vehicle FMUs (SI units, FMI 3.0
         array names; the FMUs work at the reference temperature only).
@@ -130,10 +162,13 @@ class ImuErrors:
         if c.temp_order:
             raise ValueError("the FMUs model the IMU at the reference temperature only: "
                              "temperature coefficients are not passed to them")
+        pos = list(c.a_lever_pos_m)
         return dict(gyro_bias=list(c.g_bias_rad_s), gyro_scale=list(c.g_scale),
                     gyro_misalign=list(c.g_misalign_rad), accel_bias=list(c.a_bias_m_s2),
                     accel_scale=list(c.a_scale), accel_misalign=list(c.a_misalign_rad),
-                    accel_k2=list(c.a_k2_s2_m), lever_arm=list(c.a_lever_m))
+                    accel_k2=list(c.a_k2_s2_m), lever_arm=pos[0::4],
+                    lever_arm_transverse=[pos[k] for k in (1, 2, 3, 5, 6, 7)],
+                    accel_delay=float(c.a_delay_s))
 
     @classmethod
     def random(cls, rng: np.random.Generator, gyro_bias_deg_h=0.0, gyro_scale_ppm=0.0,
@@ -158,12 +193,15 @@ class ImuErrors:
                    rng.normal(0, accel_k2_ug_g2, 3), rng.normal(0, lever_arm_cm, 3), t0_C,
                    **(tc if temp_order else {}))
 
-    def _run(self, fn, a, b, temp_C, names):
+    def _run(self, fn, a, b, temp_C, names, omega_dot=None):
         x = as_rows(names[0], a, 3, "rad/s")
         y = as_rows(names[1], b, 3, "m/s^2")
         if x.shape[0] != y.shape[0]:
             raise ValueError(f"{names[0]} and {names[1]} must have the same number of rows")
         n = x.shape[0]
+        wd = None if omega_dot is None else as_rows("omega_dot_rad_s2", omega_dot, 3, "rad/s^2")
+        if wd is not None and wd.shape[0] != n:
+            raise ValueError(f"omega_dot_rad_s2 must have {n} rows like {names[0]}; got {wd.shape[0]}")
         t = None
         if temp_C is not None:
             temp = np.asarray(temp_C)
@@ -171,8 +209,13 @@ class ImuErrors:
                          "degC", finite=False)
         out_w, out_f = np.empty((n, 3)), np.empty((n, 3))
         done = ffi.new("size_t *")
-        status = fn(self._c, n, ptr(x, 3 * n), ptr(y, 3 * n), ptr(t, n) if t is not None else ffi.NULL,
-                    ptr(out_w, 3 * n), ptr(out_f, 3 * n), done)
+        tp = ptr(t, n) if t is not None else ffi.NULL
+        if wd is None:
+            status = fn(self._c, n, ptr(x, 3 * n), ptr(y, 3 * n), tp, ptr(out_w, 3 * n), ptr(out_f, 3 * n), done)
+        else:
+            fn_dw = lib.gf_imu_apply_dw if fn == lib.gf_imu_apply else lib.gf_imu_compensate_dw
+            status = fn_dw(self._c, n, ptr(x, 3 * n), ptr(wd, 3 * n), ptr(y, 3 * n), tp,
+                           ptr(out_w, 3 * n), ptr(out_f, 3 * n), done)
         if status != lib.GF_OK:
             k = int(done[0])
             what = ("is not finite" if status == lib.GF_ERR_NONFINITE_INPUT else
@@ -184,28 +227,56 @@ class ImuErrors:
                                       (out_w[:k].copy(), out_f[:k].copy()))
         return out_w, out_f
 
-    def apply(self, omega_rad_s, f_m_s2, temp_C=None):
+    def apply(self, omega_rad_s, f_m_s2, temp_C=None, omega_dot_rad_s2=None):
         """Sensor outputs (rad/s, m/s^2) of true rates and specific forces (n, 3) at the
-        temperatures ``temp_C`` (scalar or (n,); default t0)."""
-        return self._run(lib.gf_imu_apply, omega_rad_s, f_m_s2, temp_C, ("omega_rad_s", "f_m_s2"))
+        temperatures ``temp_C`` (scalar or (n,); default t0), with the angular
+        acceleration ``omega_dot_rad_s2`` ((n, 3); default 0: it matters only for lever
+        arms across the sensing axes)."""
+        return self._run(lib.gf_imu_apply, omega_rad_s, f_m_s2, temp_C, ("omega_rad_s", "f_m_s2"),
+                         omega_dot_rad_s2)
 
-    def compensate(self, gyro_out_rad_s, accel_out_m_s2, temp_C=None):
-        """Rates and specific forces from sensor outputs: the exact inverse of apply."""
+    def compensate(self, gyro_out_rad_s, accel_out_m_s2, temp_C=None, omega_dot_rad_s2=None):
+        """Rates and specific forces from sensor outputs: the exact inverse of apply
+        (with the same ``omega_dot_rad_s2``)."""
         return self._run(lib.gf_imu_compensate, gyro_out_rad_s, accel_out_m_s2, temp_C,
-                         ("gyro_out_rad_s", "accel_out_m_s2"))
+                         ("gyro_out_rad_s", "accel_out_m_s2"), omega_dot_rad_s2)
 
-    def apply_increments(self, dtheta_rad, dv_m_s, dt_s, temp_C=None):
+    @staticmethod
+    def rate_derivative(omega_rad_s, dt_s) -> np.ndarray:
+        """The angular acceleration the increment methods use: the backward difference of
+        consecutive mean rates (n, 3) over intervals ``dt_s`` (scalar or (n,)), 0 for the
+        first sample (as the compensation of a stream can make it, gf_imu_compensate_step)."""
+        w = np.asarray(omega_rad_s, float)
+        dt = np.broadcast_to(np.asarray(dt_s, float), (w.shape[0],))
+        out = np.zeros_like(w)
+        out[1:] = np.diff(w, axis=0) / dt[1:, None]
+        return out
+
+    def apply_increments(self, dtheta_rad, dv_m_s, dt_s, temp_C=None, omega_dot_rad_s2=None):
         """Sensor increments of true increments over intervals dt_s (scalar or (n,)):
         the model applied to the mean rates over each interval, as the vehicle FMU and
-        the calibration filter (gf_syscal) do."""
+        the calibration filter (gf_syscal) do. ``omega_dot_rad_s2``: the mean angular
+        acceleration over each interval (a simulator knows it); default
+        :meth:`rate_derivative` of the true rates, which makes
+        :meth:`compensate_increments` the exact inverse."""
         dt = np.broadcast_to(np.asarray(dt_s, float), (np.shape(dtheta_rad)[0],))[:, None]
-        w, f = self.apply(np.asarray(dtheta_rad) / dt, np.asarray(dv_m_s) / dt, temp_C)
+        w_true = np.asarray(dtheta_rad) / dt
+        wd = omega_dot_rad_s2
+        if wd is None and self.has_transverse_lever_arms:
+            wd = self.rate_derivative(w_true, dt[:, 0])
+        w, f = self.apply(w_true, np.asarray(dv_m_s) / dt, temp_C, wd)
         return w * dt, f * dt
 
     def compensate_increments(self, dtheta_rad, dv_m_s, dt_s, temp_C=None):
-        """The inverse of :meth:`apply_increments` (mean rates over each interval)."""
+        """The inverse of :meth:`apply_increments` (mean rates over each interval; the
+        angular acceleration from the compensated rates, :meth:`rate_derivative`)."""
         dt = np.broadcast_to(np.asarray(dt_s, float), (np.shape(dtheta_rad)[0],))[:, None]
-        w, f = self.compensate(np.asarray(dtheta_rad) / dt, np.asarray(dv_m_s) / dt, temp_C)
+        wo, fo = np.asarray(dtheta_rad) / dt, np.asarray(dv_m_s) / dt
+        wd = None
+        if self.has_transverse_lever_arms:
+            w0, _ = self.compensate(wo, fo, temp_C)      # the rates do not depend on w_dot
+            wd = self.rate_derivative(w0, dt[:, 0])
+        w, f = self.compensate(wo, fo, temp_C, wd)
         return w * dt, f * dt
 
 

@@ -239,7 +239,8 @@ static void test_equals_core(int imu_errors)
         memcpy(e.g_bias_rad_s, bias, sizeof bias);
         memcpy(e.a_scale, scale, sizeof scale);
         memcpy(e.a_k2_s2_m, k2, sizeof k2);
-        memcpy(e.a_lever_m, lever, sizeof lever);
+        for (int i = 0; i < 3; ++i)
+            e.a_lever_pos_m[4 * i] = lever[i];
         memcpy(e.g_misalign_rad, mis, sizeof mis);
     }
     int worst = -1;
@@ -283,8 +284,13 @@ static void test_rotation_equals_core(void)
     set_int(c, "rotation", 1);
     set_int(c, "imu_errors", 1);
     const double k2[3] = {2e-5, -1e-5, 1.5e-5}, lever[3] = {0.03, -0.02, 0.025};
+    /* issue 22: accelerometers offset across their axes and a delay (the IMU turns, so
+     * the angular acceleration and w x f matter) */
+    const double transverse[6] = {0.01, 0.02, 0.04, -0.05, 0.0, 0.0}, delay = 1e-3;
     set_vec(c, "accel_k2", k2, 3);
     set_vec(c, "lever_arm", lever, 3);
+    set_vec(c, "lever_arm_transverse", transverse, 6);
+    set_real(c, "accel_delay", delay);
     CHECK(fmi2ExitInitializationMode(c) == fmi2OK, "exit: %s", g_log);
     fmi2ValueReference gim[2];
     vrs("gimbal", 2, gim);
@@ -319,20 +325,33 @@ static void test_rotation_equals_core(void)
     gf_imu_errors e;
     memset(&e, 0, sizeof e);
     memcpy(e.a_k2_s2_m, k2, sizeof k2);
-    memcpy(e.a_lever_m, lever, sizeof lever);
+    for (int i = 0; i < 3; ++i)
+        e.a_lever_pos_m[4 * i] = lever[i];
+    const int off[6] = {1, 2, 3, 5, 6, 7};
+    for (int i = 0; i < 6; ++i)
+        e.a_lever_pos_m[off[i]] = transverse[i];
+    e.a_delay_s = delay;
+    /* the model's angular acceleration (model.c sense): the mean over the step from the
+     * IMU's true rates at its ends; the first "previous" rate is the IMU's at the start */
+    double w_prev[3], f0[3];
+    gf_rot_pose pose0;
+    gf_rot_imu_outputs(&rs, 0.0, x.gyro_rad_s, x.accel_m_s2, w_prev, f0, &pose0);
     int worst = -1;
     for (int k = 0; k < N && worst < 0; ++k) {
         s.time_s = k * H_S;
         double imu[12];
         CHECK(gf_rot_vehicle_step(&rs, &s, k * H_S + H_S, &x, imu) == GF_OK, "direct step");
-        double w[3], f[3], mw[3], mf[3], ew[3], ef[3], A[GF_ARRAY_MAX_SENSORS];
+        double w[3], f[3], mw[3], mf[3], ew[3], ef[3], wd[3], A[GF_ARRAY_MAX_SENSORS];
         size_t done;
-        gf_imu_apply(&e, 1, imu, imu + 3, NULL, w, f, &done);
+        for (int i = 0; i < 3; ++i)
+            wd[i] = (imu[i] - w_prev[i]) / H_S;
+        memcpy(w_prev, imu, sizeof w_prev);
+        gf_imu_apply_dw(&e, 1, imu, wd, imu + 3, NULL, w, f, &done);
         for (int i = 0; i < 3; ++i) {
             mw[i] = imu[6 + i] / H_S;
             mf[i] = imu[9 + i] / H_S;
         }
-        gf_imu_apply(&e, 1, mw, mf, NULL, ew, ef, &done);
+        gf_imu_apply_dw(&e, 1, mw, wd, mf, NULL, ew, ef, &done);
         gf_array_forward(&g, 1, x.accel_m_s2, x.gyro_rad_s, x.gyro_dot_rad_s2, A, &done);
         double want[N_OUT], *q = want;
         memcpy(q, x.q_bn, 4 * sizeof *q); q += 4;

@@ -6,6 +6,11 @@
  *     known errors (gf_imu_apply): exact data with no errors leave the estimates at zero;
  *     biases, a lever arm and the accelerometer delay (37 states) are recovered within
  *     3 sigma, the sigmas well below the prior (the path observes them);
+ *   - the full lever-arm model (39/40 states): accelerometers offset across their axes
+ *     (simulated with the exact mean angular acceleration over each sample from the
+ *     mechanism's rates at the sample ends) and the delay recovered within 3 sigma;
+ *   - the error model F against central differences of the filter's own compensation
+ *     (gf_syscal_error_model vs gf_syscal_compensate): every parameter column;
  *   - bad configurations and samples refused, the filter unchanged; a damaged struct
  *     found by the check.
  * The filter runs at 100 Hz on a short path (rest, six turns of the mechanism at 5 deg/s)
@@ -111,6 +116,16 @@ static gf_rot_state short_path(void)
     return st;
 }
 
+/* w_im^m at t on the static base of simulate() (identity base attitude at LAT, HGT) */
+static void rate_at(const gf_rot_state *st, double t, double w[3])
+{
+    const double W = 7.2921151467e-5, g = 9.8;   /* g: does not enter the rate */
+    const double wb[3] = {0.0, W * cos(LAT), W * sin(LAT)}, fb[3] = {0.0, 0.0, g};
+    double f[3];
+    gf_rot_pose pose;
+    gf_rot_imu_outputs(st, t, wb, fb, w, f, &pose);
+}
+
 static size_t simulate(const gf_rot_state *st, const gf_imu_errors *e, double delay_s)
 {
     const size_t n = (size_t)(st->cycle_s / DT);
@@ -126,7 +141,12 @@ static size_t simulate(const gf_rot_state *st, const gf_imu_errors *e, double de
                 w[i] = dth[3 * k + i] / DT;
                 f[i] = dv[3 * k + i] / DT;
             }
-            gf_imu_apply(e, 1, w, f, NULL, wo, fo, &done);
+            double w0[3], w1[3], wd[3];   /* the mean angular acceleration over the sample */
+            rate_at(st, k * DT, w0);
+            rate_at(st, (k + 1) * DT, w1);
+            for (int i = 0; i < 3; ++i)
+                wd[i] = (w1[i] - w0[i]) / DT;
+            gf_imu_apply_dw(e, 1, w, wd, f, NULL, wo, fo, &done);
             for (int i = 0; i < 3; ++i) {
                 dth[3 * k + i] = wo[i] * DT;
                 dv[3 * k + i] = fo[i] * DT;
@@ -146,12 +166,17 @@ static gf_syscal_config config(int n_states)
     c.vel_std_m_s = 1e-5;
     c.gyro_arw_rad_sqrt_s = 0.002 * DEG / 60.0;
     c.accel_vrw_m_s_sqrt_s = 10e-6 * 9.80665 / sqrt(2.0);
-    const double prior[GF_SYSCAL_MAX_STATES] = {
+    const double prior[37] = {
         0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 1.6e-7, 2e-7, 1.0,
         50e-6, 50e-6, 50e-6, 4.85e-5, 4.85e-5, 4.85e-5, 4.85e-8, 4.85e-8, 4.85e-8,
         100e-6, 100e-6, 100e-6, 4.85e-5, 4.85e-5, 4.85e-5, 4.85e-5, 4.85e-5, 4.85e-5,
         9.8e-3, 9.8e-3, 9.8e-3, 2.04e-6, 2.04e-6, 2.04e-6, 0.03, 0.03, 0.03, 5e-3};
     memcpy(c.p0_std, prior, sizeof prior);
+    if (n_states >= GF_SYSCAL_N_FULL) {   /* six lever-arm states of 3 cm, then the delay */
+        for (int k = 33; k < 39; ++k)
+            c.p0_std[k] = 0.03;
+        c.p0_std[39] = 5e-3;
+    }
     return c;
 }
 
@@ -175,8 +200,8 @@ static void test_exact_data(void)
     CHECK(ne + 1 >= (size_t)(n * DT) && ne <= (size_t)(n * DT), "one update a second: %zu", ne);
     double worst = 0.0, std[GF_SYSCAL_MAX_STATES];
     gf_syscal_covariance(&filt, NULL, std);
-    for (int k = 0; k < 27; ++k)
-        worst = fmax(worst, fabs(filt.param[k]) / std[9 + k]);
+    for (int k = 9; k < 36; ++k)
+        worst = fmax(worst, fabs(filt.param[gf_syscal_param_index(36, k)]) / std[k]);
     CHECK(worst < 0.3, "exact data, no errors: every estimate within 0.3 sigma of 0 (%.3g)", worst);
     CHECK(fabs(epochs[ne - 1].residual_m_s[0]) < 1e-4, "velocity residual at the end");
 }
@@ -193,8 +218,8 @@ static void test_recovery(int n_states)
      * the lever arms; calibrate() runs two passes for that (docs/rotating_ins.md) */
     p[18] = 200e-6 * 9.80665;
     p[20] = -300e-6 * 9.80665;
-    p[24] = 0.02;                 /* lever arm x 2 cm */
-    p[26] = -0.03;
+    p[24] = 0.02;                 /* lever arm x 2 cm (r_xx) */
+    p[32] = -0.03;                /* r_zz */
     CHECK(gf_syscal_errors(p, &e) == GF_OK, "truth model");
     const double delay = n_states == 37 ? 2e-3 : 0.0;
     const size_t n = simulate(&st, &e, delay);
@@ -203,18 +228,135 @@ static void test_recovery(int n_states)
     run_filter(&c, n, &ne);
     double std[GF_SYSCAL_MAX_STATES];
     gf_syscal_covariance(&filt, NULL, std);
-    const int idx[6] = {6, 8, 18, 20, 24, 26};
+    const int states[6] = {15, 17, 27, 29, 33, 35};   /* eps_x, eps_z, nabla_x, nabla_z, r_xx, r_zz */
     for (int j = 0; j < 6; ++j) {
-        const int k = idx[j];
-        CHECK(fabs(filt.param[k] - p[k]) < 3.0 * std[9 + k], "%d states: parameter %d: %.6g vs true %.6g "
-              "(sigma %.3g)", n_states, k, filt.param[k], p[k], std[9 + k]);
-        if (k >= 18) /* six 40 s positions do not pin the gyro biases against the noise */
-            CHECK(std[9 + k] < 0.2 * c.p0_std[9 + k], "parameter %d observed: sigma %.3g, prior %.3g",
-                  k, std[9 + k], c.p0_std[9 + k]);
+        const int k = states[j], q = gf_syscal_param_index(n_states, k);
+        CHECK(fabs(filt.param[q] - p[q]) < 3.0 * std[k], "%d states: state %d: %.6g vs true %.6g "
+              "(sigma %.3g)", n_states, k, filt.param[q], p[q], std[k]);
+        if (k >= 27) /* six 40 s positions do not pin the gyro biases against the noise */
+            CHECK(std[k] < 0.2 * c.p0_std[k], "state %d observed: sigma %.3g, prior %.3g",
+                  k, std[k], c.p0_std[k]);
     }
     if (n_states == 37) {
-        CHECK(fabs(filt.param[27] - delay) < 3.0 * std[36] && std[36] < 2e-4,
-              "delay %.6g s vs 2 ms (sigma %.3g)", filt.param[27], std[36]);
+        CHECK(fabs(filt.param[GF_SYSCAL_P_DELAY] - delay) < 3.0 * std[36] && std[36] < 2e-4,
+              "delay %.6g s vs 2 ms (sigma %.3g)", filt.param[GF_SYSCAL_P_DELAY], std[36]);
+    }
+}
+
+/* The full model on accelerometers offset across their axes (the x accelerometer at
+ * [1, 2, 3] cm and the y accelerometer at [4, 5, 6] cm from the z accelerometer, issue 22's
+ * case), with biases and a 1 ms delay: noise-free data, every lever-arm component and the
+ * delay within 3 sigma, and observed (sigma below a fifth of the 3 cm / 5 ms prior). The
+ * seed model on the same data cannot represent them: its worst accelerometer or
+ * lever-arm error is checked to be beyond 3 of its sigmas. */
+static void test_full_model(int n_states)
+{
+    const gf_rot_state st = short_path();
+    gf_imu_errors e;
+    double p[GF_SYSCAL_N_PARAMS] = {0};
+    p[18] = 20e-6 * 9.80665;
+    p[20] = -30e-6 * 9.80665;
+    const double rx[3] = {0.01, 0.02, 0.03}, ry[3] = {0.04, 0.05, 0.06};
+    memcpy(p + GF_SYSCAL_P_LEVER, rx, sizeof rx);
+    memcpy(p + GF_SYSCAL_P_LEVER + 3, ry, sizeof ry);
+    CHECK(gf_syscal_errors(p, &e) == GF_OK, "truth model");
+    const double delay = n_states == GF_SYSCAL_MAX_STATES ? 1e-3 : 0.0;
+    const size_t n = simulate(&st, &e, delay);
+    gf_syscal_config c = config(n_states);
+    size_t ne = 0;
+    run_filter(&c, n, &ne);
+    double std[GF_SYSCAL_MAX_STATES];
+    gf_syscal_covariance(&filt, NULL, std);
+    for (int k = 33; k < 39; ++k) {
+        const int q = gf_syscal_param_index(n_states, k);
+        CHECK(fabs(filt.param[q] - p[q]) < 3.0 * std[k] && std[k] < 0.2 * c.p0_std[k],
+              "%d states: lever state %d: %.6g vs true %.6g (sigma %.3g)", n_states, k,
+              filt.param[q], p[q], std[k]);
+    }
+    if (n_states == GF_SYSCAL_MAX_STATES)
+        CHECK(fabs(filt.param[GF_SYSCAL_P_DELAY] - delay) < 3.0 * std[39] && std[39] < 1e-3,
+              "full model: delay %.6g s vs 1 ms (sigma %.3g)", filt.param[GF_SYSCAL_P_DELAY], std[39]);
+    gf_syscal_config cs = config(36);
+    run_filter(&cs, n, &ne);
+    gf_syscal_covariance(&filt, NULL, std);
+    double worst = 0.0;
+    for (int k = 27; k < 36; ++k) {
+        const int q = gf_syscal_param_index(36, k);
+        const double truth = k >= 33 ? 0.0 : p[q];   /* the seed's r_ii: 0 in this truth */
+        worst = fmax(worst, fabs(filt.param[q] - truth) / std[k]);
+    }
+    CHECK(worst > 3.0, "the seed model cannot fit transverse lever arms: worst accelerometer/"
+          "lever error only %.3g sigma", worst);
+}
+
+/* F against central differences of the filter's compensation (gf_syscal.h): the column of
+ * parameter state k is C_m^n d(w_m)/dp in the attitude rows and -C_m^n d(f_m)/dp in the
+ * velocity rows (states are true - estimated), p = param[gf_syscal_param_index(k)].
+ * Evaluated at zero parameters (where the compensation's derivatives are exactly the
+ * first-order model's) for both models with the delay, on a sample turning about all
+ * three axes while accelerating. Steps h = 1e-3 of a typical parameter scale: central
+ * differences err by h^2 times the third derivative (~1e-9 relative here); the model is
+ * linear in the lever arms and the delay. Tolerance 1e-7 of the column's largest entry
+ * plus 1e-12 absolute (round-off of the differences: ~1e-12 relative). */
+static void test_error_model_jacobian(void)
+{
+    const int models[2] = {37, GF_SYSCAL_MAX_STATES};
+    for (int mi = 0; mi < 2; ++mi) {
+        const int n = models[mi];
+        gf_syscal_config c = config(n);
+        const double q[4] = {0.9, 0.2, -0.3, 0.25};
+        double qn[4];
+        const double nq = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+        for (int i = 0; i < 4; ++i)
+            qn[i] = q[i] / nq;
+        CHECK(gf_syscal_init(&filt, &c, qn, NULL, 0.0, NULL) == GF_OK, "init %d", n);
+        const double T = 0.01;
+        const double dth1[3] = {0.3 * T, -0.2 * T, 0.5 * T}, dvv[3] = {1.5 * T, -2.0 * T, 9.5 * T};
+        const double wp[3] = {0.28, -0.21, 0.47};
+        double w[3], f[3], wd[3];
+        CHECK(gf_syscal_compensate(&filt, NULL, dth1, dvv, T, wp, w, f) == GF_OK, "compensate");
+        for (int i = 0; i < 3; ++i)
+            wd[i] = (w[i] - wp[i]) / T;
+        static double F[GF_SYSCAL_MAX_STATES * GF_SYSCAL_MAX_STATES];
+        double H[3 * GF_SYSCAL_MAX_STATES];
+        CHECK(gf_syscal_error_model(&filt, w, wd, f, F, H) == GF_OK, "error model");
+        double C[3][3];
+        ref_quat_to_dcm(qn, C);
+        double worst = 0.0;
+        for (int k = 9; k < n; ++k) {
+            const int pi = gf_syscal_param_index(n, k);
+            const double scale = pi == GF_SYSCAL_P_DELAY ? 1e-3 : pi >= GF_SYSCAL_P_LEVER ? 0.03
+                                 : (pi >= 6 && pi < 9) ? 1e-5 : (pi >= 18 && pi < 21) ? 1e-3
+                                 : (pi >= 21 && pi < 24) ? 1e-5 : 1e-4;
+            const double h = 1e-3 * scale;
+            double pp[GF_SYSCAL_N_PARAMS] = {0}, pm[GF_SYSCAL_N_PARAMS] = {0};
+            pp[pi] = h;
+            pm[pi] = -h;
+            double wpl[3], fpl[3], wmi[3], fmi[3];
+            CHECK(gf_syscal_compensate(&filt, pp, dth1, dvv, T, wp, wpl, fpl) == GF_OK &&
+                      gf_syscal_compensate(&filt, pm, dth1, dvv, T, wp, wmi, fmi) == GF_OK, "perturbed");
+            double dw[3], df[3], want[6], big = 0.0;
+            for (int i = 0; i < 3; ++i) {
+                dw[i] = (wpl[i] - wmi[i]) / (2 * h);
+                df[i] = (fpl[i] - fmi[i]) / (2 * h);
+            }
+            for (int i = 0; i < 3; ++i) {
+                want[i] = C[i][0] * dw[0] + C[i][1] * dw[1] + C[i][2] * dw[2];
+                want[3 + i] = -(C[i][0] * df[0] + C[i][1] * df[1] + C[i][2] * df[2]);
+            }
+            for (int r = 0; r < 6; ++r)
+                big = fmax(big, fabs(want[r]));
+            for (int r = 0; r < 6; ++r) {
+                const double err = fabs(F[r * n + k] - want[r]);
+                worst = fmax(worst, err / (big + 1e-300));
+                CHECK(err <= 1e-7 * big + 1e-12, "%d states: F[%d][%d] = %.9g, central difference %.9g",
+                      n, r, k, F[r * n + k], want[r]);
+            }
+        }
+        printf("F vs central differences of the compensation (%d states): %.3g relative\n", n, worst);
+        for (int r = 0; r < 3; ++r)
+            for (int k = 0; k < n; ++k)
+                CHECK(H[r * n + k] == (k == 3 + r ? 1.0 : 0.0), "H = [0 I 0]");
     }
 }
 
@@ -245,7 +387,7 @@ static void test_bad(void)
     b.vel_std_m_s = -1.0;
     CHECK(gf_syscal_init(&filt, &b, q, NULL, 0.0, &bad) == GF_ERR_BAD_PARAMETER && bad == GF_SYSCAL_BAD_VEL_STD, "R");
     double p0[GF_SYSCAL_N_PARAMS] = {0};
-    p0[24] = 2.0;
+    p0[26] = 2.0;
     CHECK(gf_syscal_init(&filt, &c, q, p0, 0.0, &bad) == GF_ERR_BAD_PARAMETER && bad == GF_SYSCAL_BAD_PARAM0, "lever 2 m");
     CHECK(gf_syscal_init(&filt, &c, q, NULL, 0.0, &bad) == GF_OK, "valid");
     const double t[2] = {0.01, 0.02}, w[6] = {0, 0, 0, NAN, 0, 0}, f[6] = {0, 0, 0.098, 0, 0, 0.098};
@@ -301,6 +443,9 @@ int main(void)
     test_update_variance();
     test_recovery(36);
     test_recovery(37);
+    test_full_model(GF_SYSCAL_N_FULL);
+    test_full_model(GF_SYSCAL_MAX_STATES);
+    test_error_model_jacobian();
     test_bad();
     TEST_MAIN_END();
 }

@@ -183,3 +183,72 @@ def test_unit_constants_equal_their_definitions():
     assert ie.G0 == 9.80665
     assert ie.UG == pytest.approx(9.80665e-6, rel=1e-15)
     assert ie.PPM == 1e-6
+
+
+# ---- issue 22: lever arms across the sensing axes, the accelerometer delay -----------------
+
+def test_general_lever_arms_and_delay_against_a_rigid_body():
+    """Accelerometer i at r_i (row i of lever_arm_cm (3, 3)) senses along its axis the
+    specific force of its own point, f + w_dot x r_i + w x (w x r_i) (a rigid body, written
+    here with numpy cross products), of the force sampled d late, f + d (w x f) (first
+    order). Scale, K2 and bias then act as in numpy_apply; misalignment 0 (the model puts
+    the lever term after it: first order). Tolerance 1e-14 relative: round-off of sums of
+    ~30 m/s^2 terms."""
+    rng = np.random.default_rng(22)
+    pos = rng.uniform(-6, 6, (3, 3))
+    e = gf.ImuErrors(accel_bias_ug=[10, 20, 30], accel_scale_ppm=[-10, -20, -30],
+                     accel_k2_ug_g2=[10, 20, 30], lever_arm_cm=pos, accel_delay_ms=1.0)
+    assert e.has_transverse_lever_arms
+    np.testing.assert_allclose(e.lever_arm_matrix_cm, pos, rtol=1e-15)   # cm -> m -> cm
+    n = 200
+    w, wd, f = rng.uniform(-2, 2, (n, 3)), rng.uniform(-5, 5, (n, 3)), rng.uniform(-20, 20, (n, 3))
+    _, fo = e.apply(w, f, omega_dot_rad_s2=wd)
+    fd = f + 1e-3 * np.cross(w, f)
+    r = pos * 0.01
+    want = np.empty((n, 3))
+    for i in range(3):
+        pt = fd + np.cross(wd, r[i]) + np.cross(w, np.cross(w, r[i]))
+        u = pt[:, i]
+        s, k2, b = [-10e-6, -20e-6, -30e-6][i], [10, 20, 30][i] * 1e-6 / G0, [10, 20, 30][i] * UG
+        want[:, i] = (1 + s) * u + k2 * u * u + b
+    np.testing.assert_allclose(fo, want, rtol=0, atol=1e-14 * 30)
+    # compensate with the same w_dot inverts it (round-off)
+    wo, fo = e.apply(w, f, omega_dot_rad_s2=wd)
+    wc, fc = e.compensate(wo, fo, omega_dot_rad_s2=wd)
+    np.testing.assert_allclose(fc, f, rtol=0, atol=1e-13 * 30)
+    # along-axis arms (the seed's model): the angular acceleration does not enter
+    e1 = gf.ImuErrors(lever_arm_cm=[3.0, -2.0, 1.0])
+    assert not e1.has_transverse_lever_arms
+    np.testing.assert_array_equal(e1.apply(w, f)[1], e1.apply(w, f, omega_dot_rad_s2=wd)[1])
+
+
+def test_delay_sign_and_increments_round_trip():
+    """The delay's sign, by hand: turning about z at w with f along x, an accelerometer
+    frame that samples d late still sees the force where it was d ago, rotated by +w d
+    about z relative to now: f_y = +d w f (f x is unchanged to first order). Increments:
+    compensate_increments(apply_increments(x)) = x with lever arms across the axes (the
+    angular acceleration of both from the backward difference of the rates)."""
+    e = gf.ImuErrors(accel_delay_ms=2.0)
+    _, fo = e.apply([[0.0, 0.0, 0.5]], [[9.8, 0.0, 0.0]])
+    assert fo[0, 1] == pytest.approx(2e-3 * 0.5 * 9.8, rel=1e-12)
+    rng = np.random.default_rng(3)
+    e = gf.ImuErrors.random(rng, gyro_bias_deg_h=1, gyro_scale_ppm=100, accel_bias_ug=100,
+                            accel_scale_ppm=100, accel_misalignment_arcsec=60, accel_k2_ug_g2=20)
+    e = gf.ImuErrors(**{**{k: getattr(e, k) for k in ("gyro_bias_deg_h", "gyro_scale_ppm",
+                                                      "accel_bias_ug", "accel_scale_ppm",
+                                                      "accel_misalignment_arcsec", "accel_k2_ug_g2")},
+                        "lever_arm_cm": [[1, 2, 3], [4, 5, 6], [0, 0, 0]], "accel_delay_ms": 1.0})
+    t = np.arange(1, 501) * 0.01
+    w = np.c_[0.3 * np.sin(t), 0.2 * np.cos(2 * t), 0.1 * t]
+    dth, dv = w * 0.01, np.c_[np.cos(t), np.sin(t), 9.8 + 0 * t] * 0.01
+    g, a = e.apply_increments(dth, dv, 0.01)
+    gc, ac = e.compensate_increments(g, a, 0.01)
+    np.testing.assert_allclose(gc, dth, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(ac, dv, rtol=0, atol=1e-15)
+    p = e.fmu_parameters()
+    assert p["lever_arm_transverse"] == pytest.approx([0.02, 0.03, 0.04, 0.06, 0.0, 0.0])
+    assert p["lever_arm"] == pytest.approx([0.01, 0.05, 0.0]) and p["accel_delay"] == 1e-3
+    with pytest.raises(ValueError, match="lever_arm_cm"):
+        gf.ImuErrors(lever_arm_cm=np.full((3, 3), 150.0))
+    with pytest.raises(ValueError, match="accel_delay_ms"):
+        gf.ImuErrors(accel_delay_ms=2000.0)

@@ -100,5 +100,13 @@ def imu_error_parameters() -> list:
              description="Accelerometer second-order coefficients K2"),
         dict(name="lever_arm", causality="parameter", variability="fixed", type="Float64",
              shape=(3,), unit="m", start=0.0, field="imu_params.lever_arm_m",
-             description="Inner lever arms of the accelerometers along their axes"),
+             description="Inner lever arms of the accelerometers along their axes (the "
+                         "diagonal of their positions)"),
+        dict(name="lever_arm_transverse", causality="parameter", variability="fixed", type="Float64",
+             shape=(6,), unit="m", start=0.0, field="imu_params.lever_arm_transverse_m",
+             description="Accelerometer positions across their axes: r_xy, r_xz, r_yx, r_yz, "
+                         "r_zx, r_zy (r_ij: component j of accelerometer i's position)"),
+        dict(name="accel_delay", causality="parameter", variability="fixed", type="Float64",
+             shape=(), unit="s", start=0.0, field="imu_params.accel_delay_s",
+             description="Accelerometer samples late behind the gyros by this"),
     ]

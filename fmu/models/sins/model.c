@@ -112,6 +112,8 @@ static FmuStatus start_navigation(FmuInstance *instance, ModelData *d, double st
     }
     d->previous_step_s = 0.0;
     d->started = 0;
+    d->imu_have_prev = 0;
+    memset(d->imu_w_prev_rad_s, 0, sizeof d->imu_w_prev_rad_s);
     if (!publish(d)) {
         fmu_log_error(instance, "input gimbal = [%g, %g] rad is not finite", d->gimbal_rad[0],
                       d->gimbal_rad[1]);
@@ -122,9 +124,12 @@ static FmuStatus start_navigation(FmuInstance *instance, ModelData *d, double st
 
 /* Compensation (exact inverse of the error model) and low-pass of one sample. Increments
  * are compensated as mean rates over the step (exact for the linear terms; K2 and the
- * lever arms then act on the mean). On error the filter state is left unchanged. */
+ * lever arms then act on the mean); the angular acceleration of lever arms across the
+ * axes is the backward difference of the compensated rates (gf_imu_compensate_step), the
+ * rate written to w_comp. On error the filter state is left unchanged. */
 static gf_status condition(ModelData *d, int increments, double dt, const double *gyro_in,
-                           const double *accel_in, double gyro[3], double accel[3])
+                           const double *accel_in, double gyro[3], double accel[3],
+                           double w_comp[3])
 {
     double x[6];
     memcpy(x, gyro_in, 3 * sizeof *x);
@@ -133,10 +138,12 @@ static gf_status condition(ModelData *d, int increments, double dt, const double
         const double k = increments ? 1.0 / dt : 1.0;
         double w_in[3] = {x[0] * k, x[1] * k, x[2] * k}, f_in[3] = {x[3] * k, x[4] * k, x[5] * k};
         double w[3], f[3];
-        size_t done = 0;
-        const gf_status st = gf_imu_compensate(&d->imu, 1, w_in, f_in, NULL, w, f, &done);
+        const gf_status st = gf_imu_compensate_step(&d->imu, w_in, f_in, NULL,
+                                                    d->imu_have_prev ? d->imu_w_prev_rad_s : NULL,
+                                                    dt, w, f);
         if (st != GF_OK)
             return st;
+        memcpy(w_comp, w, sizeof w);
         for (int i = 0; i < 3; ++i) {
             x[i] = w[i] / k;
             x[3 + i] = f[i] / k;
@@ -177,14 +184,14 @@ FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double 
     gf_sins_state next = d->nav;
     const double *gyro = increments ? d->dtheta_rad : d->gyro_rad_s;
     const double *accel = increments ? d->dv_m_s : d->accel_m_s2;
-    double g_c[3], a_c[3], z_backup[8 * 6 * 2]; /* filter state: sections x 6 channels x 2 */
+    double g_c[3], a_c[3], w_comp[3], z_backup[8 * 6 * 2]; /* filter: sections x 6 channels x 2 */
     const size_t z_used = (size_t)d->lowpass_sections * 6 * 2;
     if (z_used)
         memcpy(z_backup, d->lowpass.z, z_used * sizeof *z_backup);
     const double dt = d->previous_step_s > 0.0 ? d->previous_step_s : h_s;
     gf_status st = GF_OK;
     if (d->imu_comp || d->lowpass_sections > 0) {
-        st = condition(d, increments, dt, gyro, accel, g_c, a_c);
+        st = condition(d, increments, dt, gyro, accel, g_c, a_c, w_comp);
         if (st == GF_OK) {
             gyro = g_c;
             accel = a_c;
@@ -211,6 +218,10 @@ FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double 
         return FMU_ERROR;
     }
     d->nav = next;
+    if (d->imu_comp) {
+        memcpy(d->imu_w_prev_rad_s, w_comp, sizeof w_comp);
+        d->imu_have_prev = 1;
+    }
     d->previous_step_s = h_s;
     d->started = 1;
     publish(d); /* the gimbal angles are finite: it cannot fail */
@@ -242,6 +253,8 @@ const char *model_validate_state(const ModelData *d)
         return "rotating is not 0 or 1";
     if (d->imu_comp && gf_imu_errors_check(&d->imu, NULL) != GF_OK)
         return "the IMU error model is invalid";
+    if ((d->imu_have_prev != 0 && d->imu_have_prev != 1) || !gf_all_finite(d->imu_w_prev_rad_s, 3))
+        return "the last compensated rate is invalid";
     /* the low-pass: its section count sizes the filter-state copies of model_do_step */
     if (d->lowpass_sections < 0 || d->lowpass_sections > 8)
         return "lowpass_sections is not in 0..8";

@@ -30,6 +30,8 @@ typedef struct ModelData {
     int32_t skipped;          /* doSteps ignored so far (skip_steps) */
     gf_sins_state nav;
     gf_imu_errors imu;        /* built from the parameters when imu_comp = 1 */
+    double imu_w_prev_rad_s[3]; /* the last compensated rate (angular acceleration of the */
+    int32_t imu_have_prev;      /* lever arms across the axes: gf_imu_compensate_step) */
     gf_biquad lowpass;        /* 6 channels: gyro x y z, accel x y z */
 } ModelData;
 

@@ -24,12 +24,16 @@
  * step leaves the model as it was (the caller commits *o). */
 typedef struct Sensed {
     double gyro_rad_s[3], accel_m_s2[3], dtheta_rad[3], dv_m_s[3], A_m_s2[VEHICLE_ARRAY_MAX];
+    double true_w[3];
     gf_imu_noise_state imu_noise;
     gf_rng array_rng;
 } Sensed;
 
 /* imu (12, may be NULL: the body's): the IMU's true w, f at the sample and dtheta, dv over
- * the step (the rotating IMU's, from gf_rot_vehicle_step) */
+ * the step (the rotating IMU's, from gf_rot_vehicle_step). The angular acceleration of
+ * lever arms across the sensing axes (gf_imu_error.h): over the step, exactly its mean
+ * (w(t + h) - w(t)) / h from the true rates at the step's ends; at the sample, the body's
+ * (fixed IMU) or that mean (rotating IMU). */
 static gf_status sense(const ModelData *d, const gf_vehicle_sample *x, const double *imu,
                        double dt_s, Sensed *o)
 {
@@ -43,9 +47,15 @@ static gf_status sense(const ModelData *d, const gf_vehicle_sample *x, const dou
     memcpy(o->dv_m_s, imu ? imu + 9 : x->dv_m_s, sizeof o->dv_m_s);
     o->imu_noise = d->imu_noise;
     o->array_rng = d->array_rng;
+    memcpy(o->true_w, true_w, sizeof true_w);
     size_t done = 0;
     if (d->imu_errors) {
-        gf_status st = gf_imu_apply(&d->imu, 1, true_w, true_f, NULL, w, f, &done);
+        double mean_dw[3] = {0.0, 0.0, 0.0};
+        if (dt_s > 0.0)
+            for (int i = 0; i < 3; ++i)
+                mean_dw[i] = (true_w[i] - d->imu_w_true_prev[i]) / dt_s;
+        const double *dw_now = imu ? mean_dw : x->gyro_dot_rad_s2;
+        gf_status st = gf_imu_apply_dw(&d->imu, 1, true_w, dw_now, true_f, NULL, w, f, &done);
         if (st != GF_OK)
             return st;
         if (dt_s > 0.0) { /* increments as mean rates over the step, as the SINS FMU compensates */
@@ -54,7 +64,7 @@ static gf_status sense(const ModelData *d, const gf_vehicle_sample *x, const dou
                 mw[i] = o->dtheta_rad[i] / dt_s;
                 mf[i] = o->dv_m_s[i] / dt_s;
             }
-            st = gf_imu_apply(&d->imu, 1, mw, mf, NULL, ew, ef, &done);
+            st = gf_imu_apply_dw(&d->imu, 1, mw, mean_dw, mf, NULL, ew, ef, &done);
             if (st != GF_OK)
                 return st;
             for (int i = 0; i < 3; ++i) {
@@ -99,6 +109,7 @@ static void commit(ModelData *d, const Sensed *o)
     memcpy(d->dtheta_rad, o->dtheta_rad, sizeof d->dtheta_rad);
     memcpy(d->dv_m_s, o->dv_m_s, sizeof d->dv_m_s);
     memcpy(d->A_m_s2, o->A_m_s2, sizeof d->A_m_s2);
+    memcpy(d->imu_w_true_prev, o->true_w, sizeof d->imu_w_true_prev);
     d->imu_noise = o->imu_noise;
     d->array_rng = o->array_rng;
 }
@@ -404,6 +415,8 @@ const char *model_validate_state(const ModelData *d)
         return "command_time is not finite and > 0";
     if (d->imu_errors != 0 && d->imu_errors != 1)
         return "imu_errors is not 0 or 1";
+    if (!gf_all_finite(d->imu_w_true_prev, 3))
+        return "the previous true IMU rate is not finite";
     if (d->imu_errors && gf_imu_errors_check(&d->imu, NULL) != GF_OK)
         return "the IMU error model is invalid";
     if (d->noise != 0 && d->noise != 1)

@@ -44,6 +44,8 @@ typedef struct ModelData {
     gf_vehicle_state vehicle;
     double active_cmd[2];                 /* command being followed (drive = 1); NaN: none */
     gf_imu_errors imu;
+    double imu_w_true_prev[3];            /* the IMU's true rate at the previous sample: the
+                                             mean angular acceleration over a step */
     gf_imu_noise_state imu_noise;         /* the generators are state: restored with it */
     gf_rng array_rng;
     gf_array_geometry array;

@@ -20,6 +20,7 @@ HERE = pathlib.Path(__file__).resolve().parent
 HEADERS = [
     "base/gf_status.h",
     "base/gf_allan.h",
+    "base/gf_text.h",
     "gyrofree/gf_array.h",
     "gyrofree/gf9.h",
     "nav/gf_earth.h",

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import contextlib
 import importlib
+import re
 import signal
 import sys
 import threading
@@ -16,7 +17,30 @@ import warnings
 from gfins_fmi._lib import GfinsError
 from gfins_fmi.cli.parser import build_parser
 
-__all__ = ["main", "Terminated"]
+__all__ = ["main", "Terminated", "Failed"]
+
+#: a value that starts with '-' and is a number or a list of them (``-0.301,0.2,1``,
+#: ``-1e-3``): argparse takes it for an option unless written ``--opt=-0.3,...``
+_NEGATIVE_VALUE = re.compile(r"^-(\d|\.\d)[0-9eE.+\-,:]*$")
+
+
+class Failed(Exception):
+    """A command failed while it ran (not a refused option or input): ``gfins CMD:
+    failed: ...``, exit status 1. The message says what was written before it."""
+
+
+def _negative_values_joined(argv: list[str]) -> list[str]:
+    """``--opt -0.3,1,2`` as ``--opt=-0.3,1,2``: negative numbers and vectors as values,
+    the way people type them (before, argparse refused them: "expected one argument")."""
+    out: list[str] = []
+    for tok in argv:
+        prev = out[-1] if out else ""
+        if (_NEGATIVE_VALUE.match(tok) and prev.startswith("--") and "=" not in prev
+                and prev != "--"):
+            out[-1] = f"{prev}={tok}"
+        else:
+            out.append(tok)
+    return out
 
 
 class Terminated(KeyboardInterrupt):
@@ -64,7 +88,7 @@ def _outputs_note(exc) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     parser, parsers = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(_negative_values_joined(sys.argv[1:] if argv is None else list(argv)))
     problem = args.check(args) if args.check else None
     if problem:   # a combination of options: refused at parse time too
         parsers[args.command].error(problem)
@@ -74,6 +98,9 @@ def main(argv: list[str] | None = None) -> int:
             # with them) would make `gfins --help` ~1.7x slower (tests/repository/test_source_audit.py)
             command = importlib.import_module(f"gfins_fmi.cli.{args.module}")
             return getattr(command, args.function)(args)
+    except Failed as exc:
+        print(f"gfins {args.command}: failed: {exc}{_outputs_note(exc)}", file=sys.stderr)
+        return 1
     except (ValueError, TypeError, OSError, ImportError, GfinsError) as exc:
         print(f"gfins {args.command}: error: {exc}{_outputs_note(exc)}", file=sys.stderr)
         return 2

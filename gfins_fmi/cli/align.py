@@ -1,6 +1,7 @@
 """``gfins align``: initial alignment of recorded IMU files from the shell (issue 13).
 
-    gfins align static IMU --position LAT,LON,H [--window T0,T1] [--grade G] [--fine]
+    gfins align static IMU --position LAT,LON,H [--window T0,T1] [--grade G] [--disturbed]
+                       [--heading DEG [--heading-std DEG]] [--fine [--fine-end T1]]
     gfins align motion IMU SPEED --initial LAT,LON,H,HEADING,PITCH,ROLL [--depth DEPTH]
                        [--passes N] [--grade G] [--heading-std DEG] [--output PASSES.csv]
     gfins align transfer SLAVE_IMU MASTER_NAV [--matching velocity|velocity+attitude]
@@ -9,8 +10,12 @@
                        [--accel-bias UG] [--truth T.csv] [--truth-json T.json]
                        [--output EST.csv] [--plot FIG.png] [--simulate SECONDS]
 
-static: levelling and gyrocompassing over the window at rest (motion in it is refused),
-then with --fine the zero-velocity fine alignment over the whole record. motion: the
+static: levelling and gyrocompassing over the window at rest (motion in it is refused;
+a swaying base is warned of, with the --disturbed hint), or with --disturbed the
+inertial-frame coarse alignment; --heading gives the heading when gyrocompassing cannot
+(or replaces it); then with --fine the zero-velocity fine alignment from the window's end
+to --fine-end (default: the record's end; after --disturbed with a 0.1 m/s velocity std:
+the base sways). motion: the
 seed-003 in-motion alignment with a speed sensor (OdometerRecord CSV: t_s, speed_m_s,
 std_m_s) and optionally depth (BaroRecord CSV, h_m = -depth), forward-backward passes
 over the stored record; prints the attitude after each pass and writes the pass table.
@@ -24,10 +29,12 @@ same), 2 on bad input.
 """
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import pathlib
 import sys
+import warnings
 
 import numpy as np
 
@@ -52,6 +59,31 @@ def _biases(args, noise):
     gb = (args.gyro_bias if args.gyro_bias is not None else noise.gyro_bias_instability_deg_h) * deg / 3600
     ab = (args.accel_bias if args.accel_bias is not None else noise.accel_bias_instability_ug) * UG
     return max(gb, 1e-12), max(ab, 1e-9)
+
+
+def _sway(imu, t0: float, t1: float):
+    """The largest angle (rad) the body turned away from its mean rate inside the window,
+    and what white gyro noise alone would give (3 sigma of its random walk, from the first
+    differences of the increments, which a slow sway does not reach)."""
+    t = np.asarray(imu.t_s)
+    sel = (t > t0) & (t <= t1)
+    g = np.asarray(imu.gyro)[sel]
+    if imu.kind != "increments":
+        g = g * float(np.median(np.diff(t[sel])))
+    if len(g) < 10:
+        return 0.0, 0.0
+    dev = g - g.mean(axis=0)
+    excursion = float(np.linalg.norm(np.cumsum(dev, axis=0), axis=1).max())
+    white = float(np.linalg.norm(np.diff(g, axis=0).std(axis=0)) / math.sqrt(2.0))
+    return excursion, 3.0 * white * math.sqrt(len(g))
+
+
+def _given_heading(co, args):
+    """The coarse alignment with --heading in place of its heading (1-sigma --heading-std)."""
+    deg = math.pi / 180.0
+    e = co.euler_rad.copy()
+    e[0] = (args.heading % 360.0) * deg
+    return dataclasses.replace(co, euler_rad=e, heading_std_rad=args.heading_std * deg, heading_method="given")
 
 
 def run(args) -> int:
@@ -81,17 +113,33 @@ def _run(args, outs) -> int:
         t0, t1 = args.window if args.window else (imu.t_s[0] - 1e-9, imu.t_s[0] + span)
         align = coarse_align_inertial if args.disturbed else coarse_align
         co = align(imu, t0, t1, lat * deg, gyro_bias_std_rad_s=gb, accel_bias_std_m_s2=ab)
+        if not args.disturbed:
+            moved, noise_only = _sway(imu, t0, t1)
+            if moved > max(noise_only, 1e-4):
+                warnings.warn(f"the base turned up to {moved / deg:.3g} deg inside the window at rest (white gyro "
+                              f"noise alone: {noise_only / deg:.2g} deg): on a swaying base (a moored ship, an idling "
+                              "vehicle) the static alignment's attitude is the window's mean and gyrocompassing is "
+                              "biased beyond its reported 1-sigma; use --disturbed",
+                              UserWarning, stacklevel=2)
+        if args.heading is not None:
+            co = _given_heading(co, args)
         e = co.euler_rad / deg
         print(f"coarse ({co.heading_method}): heading {e[0]:.4f} deg, pitch {e[1]:.4f} deg, roll {e[2]:.4f} deg; "
               f"tilt 1-sigma {co.tilt_std_rad / deg:.4f} deg, heading 1-sigma {co.heading_std_rad / deg:.4f} deg")
         for note in co.notes:
             print("note:", note)
         if args.fine:
+            if not math.isfinite(co.euler_rad[0]):
+                raise ValueError("the coarse alignment has no heading (see the note above): give one with "
+                                 "--heading DEG (and its 1-sigma with --heading-std DEG) for --fine")
             cfg = FilterConfig(imu=noise, input=imu.kind, gate_probability=None)
+            given = {"heading_std_rad": co.heading_std_rad} if co.heading_method == "given" else {}
             fa = fine_align(imu, lat * deg, lon * deg, h, config=cfg, coarse=co, gyro_bias_std_rad_s=gb,
-                            accel_bias_std_m_s2=ab)
+                            accel_bias_std_m_s2=ab, t1_s=args.fine_end,
+                            velocity_std_m_s=0.1 if args.disturbed else 1e-3, **given)
             e, s = fa.euler_rad / deg, fa.attitude_std_rad / deg
-            print(f"fine: heading {e[0]:.4f} deg, pitch {e[1]:.4f} deg, roll {e[2]:.4f} deg; 1-sigma E/N/U "
+            t_end = float(imu.t_s[-1]) if args.fine_end is None else args.fine_end
+            print(f"fine ({co.t_s[1]:.10g} to {t_end:.10g} s): heading {e[0]:.4f} deg, pitch {e[1]:.4f} deg, roll {e[2]:.4f} deg; 1-sigma E/N/U "
                   f"{s[0]:.4f}/{s[1]:.4f}/{s[2]:.4f} deg")
         return 0
     speed = io.OdometerRecord.from_csv(args.speed)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import pathlib
 
+from gfins_fmi.cli.integrate_options import INITIAL_OPTION, integrate_parser
 from gfins_fmi.cli.options import GRADES, count, prior_setting, real, vector
 from gfins_fmi.cli.transfer_options import transfer_arguments
 from gfins_fmi.gyrofree.array import MIN_LEVER_ARM_M
@@ -88,17 +89,6 @@ def _check_cosim(args) -> str | None:
     return None
 
 
-def _check_integrate(args) -> str | None:
-    if args.outages is not None:
-        dur, per, first = args.outages
-        if not (dur > 0 and per >= dur and first >= 0):
-            return (f"--outages {dur:g},{per:g},{first:g}: DURATION must be > 0 s, PERIOD >= "
-                    "DURATION and FIRST >= 0 s")
-    if args.noise and args.noise_file:
-        return "give the IMU noise once: --noise or --noise-file"
-    return None
-
-
 def _check_align(args) -> str | None:
     if args.mode == "static" and args.position is None:
         return "static alignment needs --position LAT,LON,H"
@@ -108,9 +98,12 @@ def _check_align(args) -> str | None:
         return "transfer alignment needs the master's navigation record: gfins align transfer SLAVE_IMU MASTER_NAV"
     if args.mode != "transfer" and (args.simulate is not None or args.truth or args.truth_json or args.plot):
         return "--simulate, --truth, --truth-json and --plot belong to transfer alignment"
-    if args.disturbed and (args.mode != "static" or args.fine):
-        return ("--disturbed is a static coarse alignment; the fine alignment's zero-velocity "
-                "updates assume a base at rest (leave out --fine)")
+    if args.disturbed and args.mode != "static":
+        return "--disturbed is a static coarse alignment (on a swaying base)"
+    if args.fine_end is not None and not args.fine:
+        return "--fine-end is the end of the fine alignment: give --fine"
+    if args.heading is not None and args.mode != "static":
+        return "--heading is for the static alignment (motion: --initial holds the heading)"
     if args.position is not None and not abs(args.position[0]) < 90:
         return f"--position: latitude must be in (-90, 90) deg; got {args.position[0]}"
     if args.initial is not None and not abs(args.initial[0]) < 90:
@@ -168,75 +161,15 @@ def state_arguments(p) -> None:
     p.add_argument("--pitch0", type=real("deg"), default=0.0, help="initial pitch, deg")
     p.add_argument("--roll0", type=real("deg"), default=0.0, help="initial roll, deg")
     p.add_argument("--v0", type=vector(3, "E,N,U in m/s"), default=[0.0, 0.0, 0.0],
-                   help="initial velocity E,N,U in m/s (write --v0=-1,2,0 when it starts with -)")
+                   help="initial velocity E,N,U in m/s (e.g. --v0 -1,2,0)")
     p.add_argument("--vertical", choices=["free", "hold", "baro"], default="free",
                    help="vertical channel (baro needs the external height as the last column)")
     p.add_argument("--baro-tau", type=real("s", above=0.0), default=10.0,
                    help="baro loop time constant, s")
 
 
-#: ``--initial`` of integrate and align motion: LAT,LON,H,HEADING,PITCH,ROLL
-_INITIAL = vector(6, "LAT,LON,H,HEADING,PITCH,ROLL in deg, deg, m, deg, deg, deg")
-
-
-def _integrate(sub) -> argparse.ArgumentParser:
-    p = sub.add_parser("integrate", help="integrated navigation (INS/GNSS EKF or UKF, optional RTS "
-                       "smoother) of recorded IMU and GNSS files",
-                       description="Integrated navigation of recorded files (docs/estimation.md).")
-    p.add_argument("imu", type=pathlib.Path, help="IMU file")
-    p.add_argument("gnss", type=pathlib.Path, help="GNSS file")
-    p.add_argument("output", type=pathlib.Path, help="solution CSV to write")
-    p.add_argument("--imu-format", choices=("csv", "kfgins", "rtk_walk"), default="csv",
-                   help="csv: gfins_fmi.io ImuRecord CSV; kfgins: KF-GINS IMU text/.bin (increments, "
-                        "front-right-down); rtk_walk: the rtk_walk CSV (rates in g and rad/s)")
-    p.add_argument("--gnss-format", choices=("pos", "kfgins", "csv"), default="pos",
-                   help="pos: RTKLIB .pos; kfgins: KF-GINS GNSS text; csv: GnssRecord CSV")
-    p.add_argument("--gps-week", type=int, default=None,
-                   help="KF-GINS files: GPS week, to put seconds-of-week on the RTKLIB time scale")
-    p.add_argument("--baro", type=pathlib.Path, help="BaroRecord CSV (barometric height)")
-    p.add_argument("--odometer", type=pathlib.Path, help="OdometerRecord CSV (forward speed)")
-    p.add_argument("--odometer-mount", action="store_true",
-                   help="estimate the odometer's boresight (pitch, heading of the vehicle axes in "
-                        "the IMU's; FilterConfig.odometer_mount): with --odometer and/or --nhc")
-    p.add_argument("--truth", type=pathlib.Path, help="reference: KF-GINS .nav or TruthRecord CSV")
-    p.add_argument("--grade", choices=GRADES, default="tactical",
-                   help="IMU noise model (gfins_fmi.sim.scenarios); overridden by --noise")
-    p.add_argument("--noise", type=vector(5, "ARW deg/sqrt(h), VRW ug/sqrt(Hz), GB deg/h, AB ug, TAU s"),
-                   default=None, metavar="ARW,VRW,GB,AB,TAU",
-                   help="IMU noise: ARW deg/sqrt(h), accelerometer noise ug/sqrt(Hz), gyro bias "
-                        "instability deg/h, accelerometer bias instability ug, correlation time s")
-    p.add_argument("--noise-file", type=pathlib.Path, default=None, metavar="FILE.toml",
-                   help="IMU noise from a noise block (TOML; `gfins noise RECORD --output FILE.toml` "
-                        "writes one; units in its keys); overrides --grade, excludes --noise")
-    imu_errors_argument(p)
-    p.add_argument("--filter", choices=("ekf", "ukf"), default="ekf")
-    p.add_argument("--smooth", action="store_true", help="also run the RTS smoother (its solution is "
-                   "written to OUT.smoothed.csv)")
-    p.add_argument("--propagation-interval", type=real("s", at_least=0.0), default=0.1,
-                   help="covariance propagation interval, s (0: every IMU sample)")
-    p.add_argument("--subsamples", type=int, choices=(1, 2, 3, 4), default=1,
-                   help="IMU increments per navigation update between measurement and propagation "
-                        "instants (multi-sample coning/sculling; one output row per update; a rate "
-                        "record is turned into increments by the trapezoid); 2 makes the filter ~1.5x "
-                        "faster on a 200 Hz IMU")
-    p.add_argument("--static", type=real("s", above=0.0), default=None, metavar="SECONDS",
-                   help="the record starts at rest for SECONDS: level (and gyrocompass if the gyros "
-                        "allow; otherwise heading from GNSS velocity); default when no --initial")
-    p.add_argument("--initial", type=_INITIAL, default=None, metavar="LAT,LON,H,HEADING,PITCH,ROLL",
-                   help="initial state (deg, deg, m, deg, deg, deg) at the first IMU time, at rest")
-    p.add_argument("--lever-arm", type=vector(3, "X,Y,Z in m"), default=(0.0, 0.0, 0.0),
-                   metavar="X,Y,Z", help="IMU -> GNSS antenna, body right, front, up, m")
-    p.add_argument("--outages", type=vector(3, "DURATION,PERIOD,FIRST in s"), default=None,
-                   metavar="DURATION,PERIOD,FIRST",
-                   help="simulate GNSS outages of DURATION s every PERIOD s from FIRST s after the "
-                        "first epoch, and score the drift (needs --truth or scores against GNSS)")
-    p.add_argument("--zupt", action="store_true", help="zero-velocity updates at detected standstill")
-    p.add_argument("--nhc", action="store_true", help="non-holonomic constraints (ground vehicles)")
-    p.add_argument("--plot", type=pathlib.Path, default=None, help="folder for figures")
-    p.add_argument("--progress", action="store_true", help="progress bar")
-    _command(p, "integrate", check=_check_integrate)
-    return p
-
+#: ``--initial`` of integrate and align motion (cli/integrate_options.py)
+_INITIAL = INITIAL_OPTION
 
 def _noise(sub) -> argparse.ArgumentParser:
     p = sub.add_parser("noise", help="noise identification of a static IMU record: Allan deviation "
@@ -405,7 +338,13 @@ def _align(sub) -> argparse.ArgumentParser:
                    metavar="LAT,LON,H", help="static: position (deg, deg, m)")
     p.add_argument("--window", type=vector(2, "T0,T1 in s"), default=None, metavar="T0,T1",
                    help="static: the window at rest for the coarse alignment, s (default: the first 60 s)")
-    p.add_argument("--fine", action="store_true", help="static: fine alignment over the record after it")
+    p.add_argument("--fine", action="store_true", help="static: fine alignment (zero-velocity updates) from "
+                   "the window's end to --fine-end; after --disturbed with a 0.1 m/s velocity 1-sigma")
+    p.add_argument("--fine-end", type=real("s"), default=None, metavar="T1",
+                   help="static: the fine alignment's end time, s, on the record's scale (default: its end)")
+    p.add_argument("--heading", type=real("deg"), default=None, metavar="DEG",
+                   help="static: the heading, deg clockwise from north, when gyrocompassing cannot give one "
+                        "(a MEMS IMU) or to replace it; its 1-sigma is --heading-std")
     p.add_argument("--disturbed", action="store_true",
                    help="static on a swaying base (a moored ship, an idling vehicle): the inertial-frame "
                         "coarse alignment; the attitude is that at the window's end (default window: the "
@@ -417,7 +356,7 @@ def _align(sub) -> argparse.ArgumentParser:
                    help="motion: height record (BaroRecord CSV, h_m = -depth)")
     p.add_argument("--passes", type=count(0), default=5, help="motion: forward-backward passes (default 5)")
     p.add_argument("--heading-std", type=real("deg", above=0.0), default=5.0,
-                   help="motion: 1-sigma of the coarse heading, deg (default 5)")
+                   help="motion, and static with --heading: 1-sigma of the coarse heading, deg (default 5)")
     p.add_argument("--tilt-std", type=real("deg", above=0.0), default=0.5,
                    help="motion: 1-sigma of the coarse pitch/roll, deg (default 0.5)")
     p.add_argument("--gyro-bias", type=real("deg/h", at_least=0.0), default=None,
@@ -500,8 +439,7 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict]:
     p.add_argument("--accel-noise", type=real("m/s^2", above=0.0, at_most=1000.0), default=1e-4,
                    help="accelerometer white-noise std, m/s^2, at most 1000 (fused strategy)")
     p.add_argument("--omega-init", type=vector(3, "x,y,z in rad/s"), default=[0.0, 0.0, 0.0],
-                   help="rate at the first sample, rad/s, x,y,z (write --omega-init=-1,0,0 "
-                        "when it starts with -)")
+                   help="rate at the first sample, rad/s, x,y,z (e.g. --omega-init -1,0,0)")
     state_arguments(p)
     _command(p, "gfnav")
 
@@ -553,7 +491,7 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict]:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     _command(p, "cosim", check=_check_cosim)
 
-    parsers["integrate"] = _integrate(sub)
+    parsers["integrate"] = integrate_parser(sub, imu_errors_argument, _command)
     parsers["noise"] = _noise(sub)
     parsers["calibrate"] = _calibrate(sub)
     parsers["align"] = _align(sub)

@@ -17,12 +17,13 @@ import numpy as np
 
 from gfins_fmi.estimation.error_model import ins_error_model
 from gfins_fmi.estimation.navigator import IntegratedNavigator
-from gfins_fmi.nav.earth import WGS84, attitude_error_rad
+from gfins_fmi.nav.earth import WGS84, attitude_error_rad, quat_to_dcm
 from gfins_fmi.nav.earth import euler_to_quat as earth_euler_to_quat
 from gfins_fmi.nav.strapdown import euler_to_quat, quat_to_euler
 
 __all__ = ["NavErrors", "navigation_errors", "state_errors", "nees", "chi2_band",
-           "outage_windows", "OutageResult", "outage_protocol", "outage_drift",
+           "outage_windows", "kfgins_outage_windows", "without_outages", "OutageResult", "outage_protocol",
+           "outage_drift", "antenna_positions", "GnssResiduals", "gnss_residuals", "gnss_outage_drift",
            "predict_outage_std", "plot_errors", "plot_consistency", "plot_outages"]
 
 def _radii(lat):
@@ -207,28 +208,126 @@ def chi2_band(dof: int, runs: int, prob: float = 0.95) -> tuple:
 
 def outage_windows(t_start_s: float, t_end_s: float, outage_s: float, period_s: float,
                    first_s: float) -> np.ndarray:
-    """(k, 2) outages [t0, t1): one of ``outage_s`` every ``period_s`` from ``first_s``
-    after ``t_start_s``, all ending before ``t_end_s``."""
+    """The older, stricter variant (``protocol="inside"``; not KF-GINS's): (k, 2) outages
+    [t0, t1] of ``outage_s`` every ``period_s`` from ``first_s`` after ``t_start_s``, only
+    those ending before ``t_end_s``, both boundary fixes removed. Its figures are not
+    comparable with KF-GINS's or pyins's: use :func:`kfgins_outage_windows`."""
     if not (outage_s > 0 and period_s >= outage_s and first_s >= 0):
         raise ValueError("need outage_s > 0, period_s >= outage_s and first_s >= 0")
     t0 = np.arange(t_start_s + first_s, t_end_s - outage_s, period_s)
     return np.c_[t0, t0 + outage_s]
 
 
-def outage_drift(solution, reference, windows: np.ndarray) -> dict:
+def kfgins_outage_windows(t_start_s: float, t_end_s: float, outage_s: float, period_s: float,
+                          first_s: float) -> np.ndarray:
+    """The outage protocol of KF-GINS and pyins users: (k, 2) open windows (t_s, t_s + L)
+    with t_s = ``t_start_s`` + ``first_s`` + k ``period_s``, every one that starts inside
+    the record (t_s < ``t_end_s``, even when it ends after it). The fixes with
+    t_s < t < t_s + L are removed (:func:`without_outages`; the boundary fixes kept) and
+    the drift of an outage is the maximum horizontal error inside it."""
+    if not (outage_s > 0 and period_s >= outage_s and first_s >= 0):
+        raise ValueError("need outage_s > 0, period_s >= outage_s and first_s >= 0")
+    t0 = np.arange(t_start_s + first_s, t_end_s, period_s)
+    return np.c_[t0, t0 + outage_s]
+
+
+def without_outages(gnss, windows: np.ndarray):
+    """``gnss`` without its fixes strictly inside any window (t0 < t < t1): the boundary
+    fixes stay, as in KF-GINS's and pyins's protocol."""
+    inner = [(np.nextafter(a, np.inf), np.nextafter(b, -np.inf)) for a, b in np.asarray(windows, float)]
+    t = np.asarray(gnss.t_s)
+    inner = [(a, b) for a, b in inner if np.any((t >= a) & (t <= b))]
+    return gnss.with_outages(inner) if inner else gnss
+
+
+def _inside(t, a, b, protocol):
+    return (t > a) & (t < b) if protocol == "kfgins" else (t >= a) & (t < b)
+
+
+def outage_drift(solution, reference, windows: np.ndarray, protocol: str = "kfgins") -> dict:
     """For each outage window: the maximum horizontal error during it and the error at
-    its end (m), from the solution's rows inside the window."""
+    its end (m), from the solution's rows inside the window (t0 < t < t1; ``protocol=
+    "inside"``: t0 <= t < t1). A window that runs past the solution is scored over the
+    rows it has."""
     err = navigation_errors(solution, reference)
     hz = err.horizontal_m
     t = err.t_s
     mx, end = np.empty(len(windows)), np.empty(len(windows))
     for i, (a, b) in enumerate(windows):
-        sel = (t >= a) & (t < b)
+        sel = _inside(t, a, b, protocol) & np.isfinite(hz)
         if not np.any(sel):
-            raise ValueError(f"the solution has no row in the outage [{a}, {b}) s")
-        mx[i] = np.nanmax(hz[sel])
+            raise ValueError(f"the solution has no row in the outage ({a}, {b}) s")
+        mx[i] = np.max(hz[sel])
         end[i] = hz[np.flatnonzero(sel)[-1]]
     return {"max_m": mx, "end_m": end}
+
+
+def antenna_positions(solution, lever_arm_m) -> tuple:
+    """The GNSS antenna's latitude, longitude (rad) and height (m) at every row of
+    ``solution``: its position + C_b^n ``lever_arm_m`` (body right, front, up, m; the
+    ENU offset turned into latitude and longitude with the radii at the row)."""
+    lat, lon, h = (np.asarray(solution.lat_rad, float), np.asarray(solution.lon_rad, float),
+                   np.asarray(solution.h_m, float))
+    arm = np.asarray(lever_arm_m, float)
+    if not np.any(arm):
+        return lat, lon, h
+    d = np.einsum("kij,j->ki", quat_to_dcm(np.asarray(_quat_of(solution), float)), arm)
+    RM, RN = _radii(lat)
+    return (lat + d[:, 1] / (RM + h), lon + d[:, 0] / ((RN + h) * np.cos(lat)), h + d[:, 2])
+
+
+@dataclass
+class GnssResiduals:
+    """The solution's antenna position minus the GNSS fixes, at the fixes' own times
+    (``t_s``, (m,)), east, north, up in m (``enu_m``, (m, 3)): residuals, not errors —
+    the fixes carry their own noise. Fixes outside the solution's span are left out."""
+    t_s: np.ndarray
+    enu_m: np.ndarray
+
+    @property
+    def horizontal_m(self) -> np.ndarray:
+        return np.hypot(self.enu_m[:, 0], self.enu_m[:, 1])
+
+    def rms(self) -> dict:
+        """RMS of the horizontal and vertical residuals (m); NaN without a fix."""
+        if len(self.t_s) == 0:
+            return {"horizontal_m": float("nan"), "up_m": float("nan")}
+        return {"horizontal_m": float(np.sqrt(np.mean(self.horizontal_m ** 2))),
+                "up_m": float(np.sqrt(np.mean(self.enu_m[:, 2] ** 2)))}
+
+
+def gnss_residuals(solution, gnss, lever_arm_m=(0.0, 0.0, 0.0)) -> GnssResiduals:
+    """The residuals of ``solution`` to ``gnss`` at the antenna (lever arm applied), only
+    where a fix exists: the antenna position of the solution's rows interpolated to each
+    fix's time between the two rows around it (never the fixes interpolated across a
+    gap)."""
+    lat, lon, h = antenna_positions(solution, lever_arm_m)
+    t = np.asarray(solution.t_s, float)
+    tg = np.asarray(gnss.t_s, float)
+    sel = (tg >= t[0]) & (tg <= t[-1]) if len(t) else np.zeros(len(tg), bool)
+    tg = tg[sel]
+    lon = np.unwrap(lon)
+    a_lat, a_lon, a_h = (np.interp(tg, t, x) for x in (lat, lon, h))
+    g_lat, g_lon, g_h = (np.asarray(gnss.lat_rad)[sel], np.asarray(gnss.lon_rad)[sel],
+                         np.asarray(gnss.h_m)[sel])
+    RM, RN = _radii(g_lat)
+    dlon = (a_lon - g_lon + np.pi) % (2 * np.pi) - np.pi
+    enu = np.c_[dlon * (RN + g_h) * np.cos(g_lat), (a_lat - g_lat) * (RM + g_h), a_h - g_h]
+    return GnssResiduals(tg, enu)
+
+
+def gnss_outage_drift(solution, gnss, windows: np.ndarray, lever_arm_m=(0.0, 0.0, 0.0)) -> np.ndarray:
+    """Without a truth: the maximum horizontal residual of ``solution`` to the fixes the
+    outage protocol removed (those strictly inside each window), per window (m; NaN for
+    a window without a fix)."""
+    r = gnss_residuals(solution, gnss, lever_arm_m)
+    hz = r.horizontal_m
+    out = np.full(len(windows), np.nan)
+    for i, (a, b) in enumerate(windows):
+        sel = (r.t_s > a) & (r.t_s < b)
+        if np.any(sel):
+            out[i] = hz[sel].max()
+    return out
 
 
 @dataclass
@@ -246,24 +345,36 @@ class OutageResult:
 
 def outage_protocol(imu, gnss, reference, *, config, initial, outage_s: float = 60.0,
                     period_s: float = 180.0, first_s: float = 300.0, smooth: bool = True,
-                    baro=None, odometer=None, progress: bool = False) -> OutageResult:
+                    baro=None, odometer=None, progress: bool = False,
+                    protocol: str = "kfgins") -> OutageResult:
     """Run the filter with GNSS removed during an outage of ``outage_s`` every
     ``period_s`` (from ``first_s`` after the first GNSS epoch, once converged) and score
-    it: RMS over the outages of the maximum horizontal drift during each (KF-GINS's
-    protocol), for the filter and, with ``smooth``, the RTS smoother."""
+    it: RMS over the outages of the maximum horizontal drift during each, for the filter
+    and, with ``smooth``, the RTS smoother. ``protocol="kfgins"`` (KF-GINS's and pyins's:
+    :func:`kfgins_outage_windows`) or ``"inside"`` (the older variant,
+    :func:`outage_windows`)."""
+    if protocol not in ("kfgins", "inside"):
+        raise ValueError(f"protocol must be 'kfgins' or 'inside'; got {protocol!r}")
     t_g = np.asarray(gnss.t_s)
-    win = outage_windows(t_g[0], min(t_g[-1], np.asarray(imu.t_s)[-1]), outage_s, period_s, first_s)
+    t_end = min(t_g[-1], np.asarray(imu.t_s)[-1])
+    if protocol == "kfgins":
+        win = kfgins_outage_windows(t_g[0], t_end, outage_s, period_s, first_s)
+    else:
+        win = outage_windows(t_g[0], t_end, outage_s, period_s, first_s)
     if len(win) == 0:
         raise ValueError("the record is too short for one outage after first_s")
-    g = gnss.with_outages([tuple(w) for w in win]) if hasattr(gnss, "with_outages") else gnss
+    if protocol == "kfgins":
+        g = without_outages(gnss, win)
+    else:
+        g = gnss.with_outages([tuple(w) for w in win]) if hasattr(gnss, "with_outages") else gnss
     nav = IntegratedNavigator(config, initial)
     sol = nav.run(imu, g, baro, odometer, smoother=smooth, progress=progress)
-    f = outage_drift(sol, reference, win)
+    f = outage_drift(sol, reference, win, protocol)
     sm = None
     s_max = s_score = None
     if smooth:
         sm = sol.smooth()
-        s_max = outage_drift(sm, reference, win)["max_m"]
+        s_max = outage_drift(sm, reference, win, protocol)["max_m"]
         s_score = float(np.sqrt(np.mean(s_max ** 2)))
     return OutageResult(win, f["max_m"], s_max, float(np.sqrt(np.mean(f["max_m"] ** 2))), s_score,
                         sol, sm)

@@ -21,7 +21,17 @@ from gfins_fmi.io.conventions import SECONDS_PER_WEEK, frd_to_rfu, ned_to_enu, r
 from gfins_fmi.io.errors import FileFormatError, not_a_file
 from gfins_fmi.io.records import GnssRecord, ImuRecord, TruthRecord
 
-__all__ = ["read_kfgins_imu", "read_kfgins_gnss", "read_kfgins_nav"]
+__all__ = ["read_kfgins_imu", "read_kfgins_gnss", "read_kfgins_nav", "kfgins_imu_table",
+           "kfgins_gnss_table", "kfgins_nav_table", "KFGINS_NAV_FORMAT", "KFGINS_IMU_FORMAT",
+           "KFGINS_GNSS_FORMAT"]
+
+#: the fixed decimals of KF-GINS's own writers (src/kf-gins.cpp, writeNavResult): week,
+#: seconds of week, lat/lon deg, h m, velocity NED m/s, roll/pitch/yaw deg
+KFGINS_NAV_FORMAT = ("%.0f", "%.9f", "%.12f", "%.12f", "%.6f", "%.6f", "%.6f", "%.6f", "%.9f", "%.9f", "%.9f")
+#: an IMU file: seconds of week, angle increments FRD rad, velocity increments FRD m/s
+KFGINS_IMU_FORMAT = ("%.9f",) + ("%.15e",) * 6
+#: a GNSS file: seconds of week, lat/lon deg, h m, std north, east, down m
+KFGINS_GNSS_FORMAT = ("%.9f", "%.12f", "%.12f", "%.6f", "%.6f", "%.6f", "%.6f")
 
 
 def _table(path, n_columns, what):
@@ -151,3 +161,38 @@ def read_kfgins_nav(path, gps_week: int | None = None) -> TruthRecord:
                            rpy_frd_ned_to_euler_rfu_enu(rad[:, 0], rad[:, 1], rad[:, 2]),
                            f"KF-GINS nav file {path.name} (GPS week {week[0]:.0f}): "
                            "NED/FRD -> ENU/RFU, deg -> rad")
+
+
+def kfgins_imu_table(imu) -> np.ndarray:
+    """An ImuRecord of increments as KF-GINS's IMU file's rows (n, 7): time, angle and
+    velocity increments forward-right-down (the inverse of :func:`read_kfgins_imu`; the
+    time as it is: seconds of week for a record read from KF-GINS)."""
+    if imu.kind != "increments":
+        raise ValueError("a KF-GINS IMU file holds increments: convert the record with to_increments()")
+    return np.column_stack([imu.t_s, frd_to_rfu(imu.gyro), frd_to_rfu(imu.accel)])
+
+
+def kfgins_gnss_table(gnss) -> np.ndarray:
+    """A GnssRecord as KF-GINS's 7-column GNSS file's rows: time, latitude and longitude
+    (deg), height (m), position std north, east, down (m)."""
+    std = np.asarray(gnss.pos_std_m)
+    return np.column_stack([gnss.t_s, np.degrees(gnss.lat_rad), np.degrees(gnss.lon_rad), gnss.h_m,
+                            std[:, 1], std[:, 0], std[:, 2]])
+
+
+def kfgins_nav_table(t_s, lat_rad, lon_rad, h_m, v_enu_m_s, euler_rad, gps_week: int = 0) -> np.ndarray:
+    """A navigation solution or truth as the rows of KF-GINS's ``.nav`` (n, 11): week,
+    seconds of week, latitude and longitude (deg), height (m), velocity north, east,
+    down (m/s), roll, pitch, yaw (deg) of the FRD body in NED. ``euler_rad`` is ours
+    ([heading, pitch, roll] of the RFU body in ENU): the same angles
+    (:func:`~gfins_fmi.io.conventions.rpy_frd_ned_to_euler_rfu_enu`), yaw = heading.
+    ``t_s`` on a GPS-seconds scale (above one week) is written as week and seconds of
+    week; otherwise as given, after ``gps_week``."""
+    t = np.asarray(t_s, float)
+    week = np.full(len(t), float(gps_week))
+    if len(t) and t[0] >= SECONDS_PER_WEEK:
+        week = np.floor(t / SECONDS_PER_WEEK)
+        t = t - week * SECONDS_PER_WEEK
+    e = np.degrees(np.asarray(euler_rad, float))
+    return np.column_stack([week, t, np.degrees(lat_rad), np.degrees(lon_rad), h_m,
+                            ned_to_enu(v_enu_m_s), e[:, 2], e[:, 1], e[:, 0]])

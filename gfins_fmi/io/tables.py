@@ -34,6 +34,7 @@ name the line at fault (:func:`gfins_fmi.io._text.diagnose`).
 from __future__ import annotations
 
 import pathlib
+import re
 import zipfile
 from typing import Iterator
 
@@ -93,8 +94,9 @@ class _TextSource:
 
     format = "csv"
 
-    def __init__(self, path: pathlib.Path, header: bool, what: str, header_hint: str):
-        self.path, self.what = path, what
+    def __init__(self, path: pathlib.Path, header: bool, what: str, header_hint: str, whitespace: bool = False,
+                 block_bytes: int = _TEXT_BLOCK_BYTES):
+        self.path, self.what, self.whitespace, self.block_bytes = path, what, whitespace, block_bytes
         self.header_message = ("the first data line holds text ({text}) where numbers were "
                                f"expected: {header_hint}")
         self.n_rows = None
@@ -107,7 +109,7 @@ class _TextSource:
                     skip, offset = skip + 1, offset + len(raw)
                     comment = body[1:] if body else comment
                     continue
-                fields = body.split(",")
+                fields = body.split() if whitespace else body.split(",")
                 if header and names is None:
                     if not all(is_number(x) for x in fields):
                         names = tuple(x.strip() for x in fields)
@@ -139,7 +141,7 @@ class _TextSource:
         with open(self.path, "rb") as f:
             f.seek(offset)
             while True:
-                buf = f.read(_TEXT_BLOCK_BYTES)
+                buf = f.read(self.block_bytes)
                 if buf:
                     cut = buf.rfind(b"\n") + 1
                     if cut == 0:          # a line longer than a block: read on
@@ -166,7 +168,10 @@ class _TextSource:
         file, its first data line row ``rows`` of the table."""
         import polars as pl   # lazy: polars (~0.1 s) off the start-up path
         k = self.n_columns
-        text = block.translate(None, b" \t") if (b" " in block or b"\t" in block) else block
+        if self.whitespace:
+            text = _whitespace_to_commas(block)
+        else:
+            text = block.translate(None, b" \t") if (b" " in block or b"\t" in block) else block
         # comment lines are looked for only in a block that holds a '#': polars parses
         # 40 % slower when it must look for them
         comment = "#" if b"#" in block else None
@@ -208,6 +213,18 @@ class _TextSource:
 
     def close(self) -> None:
         pass
+
+
+_RUNS = re.compile(rb"[ \t]+")
+_EDGES = re.compile(rb"(?m)^,|,(?=\r?$)")
+
+
+def _whitespace_to_commas(block: bytes) -> bytes:
+    """Fields separated by runs of spaces or tabs (KF-GINS's text files) as CSV: single
+    spaces by a byte replacement (fast), anything else by regular expressions."""
+    if b"\t" not in block and b"  " not in block and not block.startswith(b" ") and b"\n " not in block:
+        return block.replace(b" \n", b"\n").replace(b" ", b",")
+    return _EDGES.sub(b"", _RUNS.sub(b",", block))
 
 
 def _data(line: bytes) -> bool:
@@ -384,6 +401,10 @@ class TableReader:
         (default: how to read it with this class).
     format : {"csv", "npz", "parquet"}, optional
         The format, whatever the file's name (default: from the name).
+    whitespace : bool
+        Text: fields separated by runs of spaces or tabs (KF-GINS's files), not commas.
+    block_bytes : int, optional
+        Text: bytes parsed at a time (default 16 MiB; less memory, a little more time).
 
     Attributes
     ----------
@@ -402,7 +423,8 @@ class TableReader:
     """
 
     def __init__(self, path, *, header: bool = False, chunk_rows: int = DEFAULT_CHUNK_ROWS,
-                 what: str = "table", header_hint: str | None = None, format: str | None = None):
+                 what: str = "table", header_hint: str | None = None, format: str | None = None,
+                 whitespace: bool = False, block_bytes: int | None = None):
         self.path = pathlib.Path(path)
         self.chunk_rows = _chunk_rows(chunk_rows)
         if not self.path.is_file():
@@ -410,7 +432,7 @@ class TableReader:
         self.format = checked_format(self.path, format)
         if self.format == "csv":
             hint = header_hint or "if it is a line of column names, read it with header=True"
-            self._src = _TextSource(self.path, header, what, hint)
+            self._src = _TextSource(self.path, header, what, hint, whitespace, block_bytes or _TEXT_BLOCK_BYTES)
         elif self.format == "parquet":
             self._src = _ParquetSource(self.path, self.chunk_rows)
         else:

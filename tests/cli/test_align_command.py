@@ -87,7 +87,7 @@ def _record(motion, duration_s):
 
 def test_cli_align_disturbed(tmp_path, capsys):
     """`gfins align static --disturbed` prints the inertial-frame attitude of the window's
-    end (the heading within the test above's 0.3 deg) and refuses --fine with it."""
+    end (the heading within the test above's 0.3 deg); --fine may follow it (before: refused)."""
     from gfins_fmi.cli import main
     m = Mooring()
     tr, rec = _record(m, 120.0)
@@ -99,5 +99,8 @@ def test_cli_align_disturbed(tmp_path, capsys):
     heading = float(out.split("heading ")[1].split(" deg")[0])
     truth = np.degrees(quat_to_euler(tr.q_bn[-1])[0])
     assert abs((heading - truth + 180.0) % 360.0 - 180.0) < 0.5, (heading, truth)   # measured 0.30 deg
-    with pytest.raises(SystemExit):
-        main(["align", "static", str(tmp_path / "imu.csv"), "--position", "30,114,100", "--disturbed", "--fine"])
+    # issue 20: --fine follows --disturbed (zero-velocity updates with a 0.1 m/s 1-sigma: the base sways)
+    rc = main(["align", "static", str(tmp_path / "imu.csv"), "--position", "30,114,100", "--disturbed",
+               "--window", "0,60", "--fine"])
+    out = capsys.readouterr().out
+    assert rc == 0 and "fine (60 to 120 s): heading" in out, out

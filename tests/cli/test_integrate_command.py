@@ -22,7 +22,8 @@ def test_cli_integrate(tmp_path):
                "--outages", "15,20,25"])
     assert rc == 0
     sol = np.loadtxt(out, delimiter=",", skiprows=1)
-    assert sol.shape[1] == 35 and np.all(np.isfinite(sol))
+    # 25 columns: no column of a disabled state (issue 20; --all-states: 35)
+    assert sol.shape[1] == 25 and np.all(np.isfinite(sol))
     assert (tmp_path / "walk.innovations.csv").is_file() and (tmp_path / "walk.smoothed.csv").is_file()
     with pytest.raises(SystemExit) as ei:            # refused at parse time, in the CLI's terms
         main(["integrate", str(d / "imu_1730_sf.csv"), str(d / "gnss_1730_sf.pos"), str(out),
@@ -46,7 +47,13 @@ def test_cli_integrate(tmp_path):
     with open(out3) as fh:
         assert fh.readline().strip().split(",")[-2:] == ["odo_pitch_rad", "odo_heading_rad"]
     sol3 = np.loadtxt(out3, delimiter=",", skiprows=1)
-    assert sol3.shape == sol2.shape and np.all(sol3[:, -2:] == 0.0)
+    assert sol3.shape == (len(sol2), sol2.shape[1] + 2) and np.all(sol3[:, -2:] == 0.0)
+    out4 = tmp_path / "walk4.csv"
+    assert main(["integrate", str(d / "imu_1730_sf.csv"), str(d / "gnss_1730_sf.pos"), str(out4),
+                 "--imu-format", "rtk_walk", "--grade", "consumer", "--static", "9",
+                 "--subsamples", "2", "--all-states"]) == 0
+    sol4 = np.loadtxt(out4, delimiter=",", skiprows=1)
+    assert sol4.shape == (len(sol2), 35) and np.all(sol4[:, :25] == sol2)
     with pytest.raises(SystemExit) as ei:
         main(["integrate", str(d / "imu_1730_sf.csv"), str(d / "gnss_1730_sf.pos"), str(out2),
               "--imu-format", "rtk_walk", "--subsamples", "5"])

@@ -104,7 +104,7 @@ def test_integrate_reads_the_noise_file(identified, tmp_path, capsys):
     args = ["integrate", str(tmp_path / "imu.csv"), str(tmp_path / "gnss.csv"), str(tmp_path / "out.csv"),
             "--imu-format", "csv", "--gnss-format", "csv", ini, "--noise-file", str(identified / "noise.toml")]
     assert main(args) == 0
-    assert "horizontal difference to GNSS" in capsys.readouterr().out
+    assert "residuals to the GNSS fixes used" in capsys.readouterr().out
     with pytest.raises(SystemExit):
         main(args + ["--noise", "0.3,100,10,300,100"])
     assert "--noise or --noise-file" in capsys.readouterr().err

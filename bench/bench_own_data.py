@@ -1,0 +1,211 @@
+"""End to end on a user's own recording (issue 20): a simulated town drive at 200 Hz with
+1 Hz RTK GNSS written in KF-GINS's formats with a KF-GINS-style configuration file, then
+the whole `gfins integrate --kfgins-config` command (KF-GINS's .nav, IMU error and std
+outputs) and `gfins integrate ... OUT.parquet` timed in a child process under
+/usr/bin/time -v: wall time, CPU time, peak resident memory, IMU samples per second.
+
+    python bench/bench_own_data.py --minutes 30 [--folder DIR] [--keep]
+
+The machine is shared: say its load with the figures (uptime is printed).
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import pathlib
+import re
+import subprocess
+import sys
+import tempfile
+
+import numpy as np
+
+from gfins_fmi.io.kfgins import (KFGINS_GNSS_FORMAT, KFGINS_NAV_FORMAT, kfgins_gnss_table, kfgins_imu_table,
+                                 kfgins_nav_table)
+from gfins_fmi.io.records import ImuRecord
+from gfins_fmi.sim.scenarios import NAVIGATION, simulate_drive, town_drive
+from gfins_fmi.sim.vehicle import GnssReceiver
+
+LEVER = (-0.3, 0.2, 1.2)
+
+
+def _write_text(path, table, decimals):
+    """A text table fast (polars), one space between the numbers."""
+    import polars as pl
+    pl.DataFrame({f"c{i}": table[:, i] for i in range(table.shape[1])}).write_csv(
+        path, include_header=False, separator=" ", float_precision=decimals)
+
+
+def make(folder: pathlib.Path, minutes: float) -> pathlib.Path:
+    rx = GnssReceiver(rate_hz=1.0, lever_arm_m=LEVER, pos_std_m=(0.02, 0.02, 0.04), vel_std_m_s=(0.01, 0.01, 0.02))
+    d = simulate_drive(town_drive(minutes * 60.0), minutes * 60.0, 0.005, imu=NAVIGATION, gnss=rx, seed=1)
+    _write_text(folder / "imu.txt", kfgins_imu_table(d.imu), 15)
+    np.savetxt(folder / "gnss.txt", kfgins_gnss_table(d.gnss), fmt=KFGINS_GNSS_FORMAT)
+    tr = d.truth
+    k = slice(None, None, 200)   # truth at 1 Hz
+    np.savetxt(folder / "truth.nav", kfgins_nav_table(tr.t_s[k], tr.lat_rad[k], tr.lon_rad[k], tr.h_m[k],
+                                                      tr.v_n_m_s[k], tr.euler_rad[k]), fmt=KFGINS_NAV_FORMAT)
+    ImuRecord(t_s=d.imu.t_s, gyro=d.imu.gyro, accel=d.imu.accel, kind="increments").to_parquet(folder / "imu.parquet") \
+        if hasattr(ImuRecord, "to_parquet") else None
+    e = [float(x) for x in np.degrees(tr.euler_rad[0])]
+    v = [float(x) for x in tr.v_n_m_s[0]]
+    N = NAVIGATION
+    ug = 9.80665e-6
+    vrw = float(N.accel_vrw_ug_sqrt_hz * ug / np.sqrt(2.0) * 60.0)
+    ab = float(N.accel_bias_instability_ug * ug / 1e-5)
+    (folder / "out").mkdir(exist_ok=True)
+    cfg = folder / "kf-gins.yaml"
+    cfg.write_text(f"""imupath: "{folder / 'imu.txt'}"
+gnsspath: "{folder / 'gnss.txt'}"
+outputpath: "{folder / 'out'}"
+imudatalen: 7
+imudatarate: 200
+starttime: {float(d.imu.t_s[0]) - 0.005!r}
+endtime: -1
+initpos: [ {float(np.degrees(tr.lat_rad[0]))!r}, {float(np.degrees(tr.lon_rad[0]))!r}, {float(tr.h_m[0])!r} ]
+initvel: [ {v[1]!r}, {v[0]!r}, {-v[2]!r} ]
+initatt: [ {e[2]!r}, {e[1]!r}, {e[0]!r} ]
+initgyrbias: [ 0, 0, 0 ]
+initaccbias: [ 0, 0, 0 ]
+initgyrscale: [ 0, 0, 0 ]
+initaccscale: [ 0, 0, 0 ]
+initposstd: [ 0.005, 0.004, 0.008 ]
+initvelstd: [ 0.003, 0.004, 0.004 ]
+initattstd: [ 0.003, 0.003, 0.023 ]
+imunoise:
+  arw: [{N.gyro_arw_deg_sqrt_h}, {N.gyro_arw_deg_sqrt_h}, {N.gyro_arw_deg_sqrt_h}]
+  vrw: [{vrw!r}, {vrw!r}, {vrw!r}]
+  gbstd: [{N.gyro_bias_instability_deg_h}, {N.gyro_bias_instability_deg_h}, {N.gyro_bias_instability_deg_h}]
+  abstd: [{ab!r}, {ab!r}, {ab!r}]
+  gsstd: [300.0, 300.0, 300.0]
+  asstd: [300.0, 300.0, 300.0]
+  corrtime: {N.gyro_correlation_time_s / 3600.0!r}
+antlever: [ {LEVER[1]!r}, {LEVER[0]!r}, {-LEVER[2]!r} ]
+""")
+    return cfg
+
+
+def make_static(folder: pathlib.Path, hours: float) -> pathlib.Path:
+    """A long record without a long simulation: a vehicle at rest for ``hours`` (level,
+    heading north, 30 deg N), 200 Hz increments of gravity and the Earth rate with
+    navigation-grade white noise (seeded), 1 Hz GNSS fixes (2 cm), written a chunk at a
+    time. The filter's work per sample does not depend on the motion; what is measured is
+    the pipeline's memory and throughput on 7.2 M samples."""
+    import polars as pl
+    from gfins_fmi.nav.earth import WGS84, gravity
+    lat, h, dt = np.radians(30.0), 20.0, 0.005
+    g = float(gravity(lat, h))
+    w = 7.292115e-5
+    n = int(round(hours * 3600 / dt))
+    rng = np.random.default_rng(5)
+    arw = np.radians(NAVIGATION.gyro_arw_deg_sqrt_h) / 60.0          # rad/sqrt(s)
+    vrw = NAVIGATION.accel_vrw_ug_sqrt_hz * 9.80665e-6 / np.sqrt(2.0)  # m/s/sqrt(s)
+    with open(folder / "imu.txt", "wb") as f:
+        for lo in range(0, n, 1_000_000):
+            m = min(n, lo + 1_000_000) - lo
+            t = (lo + 1 + np.arange(m)) * dt
+            dth = np.tile([w * np.cos(lat) * dt, 0.0, -w * np.sin(lat) * dt], (m, 1)) + rng.normal(0, arw * np.sqrt(dt), (m, 3))
+            dv = np.tile([0.0, 0.0, -g * dt], (m, 1)) + rng.normal(0, vrw * np.sqrt(dt), (m, 3))
+            pl.DataFrame({"t": t, **{f"g{i}": dth[:, i] for i in range(3)}, **{f"a{i}": dv[:, i] for i in range(3)}}
+                         ).write_csv(f, include_header=False, separator=" ", float_precision=15)
+    k = int(hours * 3600)
+    tg = np.arange(1, k + 1, dtype=float)
+    dn, de, du = rng.normal(0, 0.02, (3, k))
+    RM = WGS84.a * (1 - WGS84.e2) / (1 - WGS84.e2 * np.sin(lat) ** 2) ** 1.5
+    RN = WGS84.a / np.sqrt(1 - WGS84.e2 * np.sin(lat) ** 2)
+    gn = np.column_stack([tg, np.degrees(lat + dn / (RM + h)), np.degrees(np.radians(114.0) + de / ((RN + h) * np.cos(lat))),
+                          h + du, np.full(k, 0.02), np.full(k, 0.02), np.full(k, 0.04)])
+    np.savetxt(folder / "gnss.txt", gn, fmt=KFGINS_GNSS_FORMAT)
+    (folder / "out").mkdir(exist_ok=True)
+    N = NAVIGATION
+    vrw_h = float(N.accel_vrw_ug_sqrt_hz * 9.80665e-6 / np.sqrt(2.0) * 60.0)
+    ab = float(N.accel_bias_instability_ug * 9.80665e-6 / 1e-5)
+    cfg = folder / "kf-gins.yaml"
+    cfg.write_text(f"""imupath: "{folder / 'imu.txt'}"
+gnsspath: "{folder / 'gnss.txt'}"
+outputpath: "{folder / 'out'}"
+imudatalen: 7
+imudatarate: 200
+starttime: 0.0
+endtime: -1
+initpos: [ 30.0, 114.0, {h} ]
+initvel: [ 0.0, 0.0, 0.0 ]
+initatt: [ 0.0, 0.0, 0.0 ]
+initgyrbias: [ 0, 0, 0 ]
+initaccbias: [ 0, 0, 0 ]
+initgyrscale: [ 0, 0, 0 ]
+initaccscale: [ 0, 0, 0 ]
+initposstd: [ 0.005, 0.004, 0.008 ]
+initvelstd: [ 0.003, 0.004, 0.004 ]
+initattstd: [ 0.003, 0.003, 0.023 ]
+imunoise:
+  arw: [{N.gyro_arw_deg_sqrt_h}, {N.gyro_arw_deg_sqrt_h}, {N.gyro_arw_deg_sqrt_h}]
+  vrw: [{vrw_h!r}, {vrw_h!r}, {vrw_h!r}]
+  gbstd: [{N.gyro_bias_instability_deg_h}, {N.gyro_bias_instability_deg_h}, {N.gyro_bias_instability_deg_h}]
+  abstd: [{ab!r}, {ab!r}, {ab!r}]
+  gsstd: [300.0, 300.0, 300.0]
+  asstd: [300.0, 300.0, 300.0]
+  corrtime: 1.0
+antlever: [ 0.0, 0.0, 0.0 ]
+""")
+    return cfg
+
+
+def timed(argv: list[str]) -> dict:
+    """The command under /usr/bin/time -v: wall s, user + system s, peak RSS MiB."""
+    r = subprocess.run(["/usr/bin/time", "-v", sys.executable, "-m", "gfins_fmi.cli", *argv],
+                       capture_output=True, text=True)
+    if r.returncode != 0:
+        raise SystemExit(f"{' '.join(argv)} failed:\n{r.stdout}\n{r.stderr}")
+
+    def field(name):
+        return re.search(rf"{re.escape(name)}: ([\d.:]+)", r.stderr).group(1)
+    wall = field("Elapsed (wall clock) time (h:mm:ss or m:ss)").split(":")
+    wall_s = sum(float(x) * 60 ** i for i, x in enumerate(reversed(wall)))
+    return {"wall_s": wall_s, "cpu_s": float(field("User time (seconds)")) + float(field("System time (seconds)")),
+            "peak_mib": int(field("Maximum resident set size (kbytes)")) / 1024.0, "stdout": r.stdout}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--minutes", type=float, default=30.0)
+    ap.add_argument("--static-hours", type=float, default=None,
+                    help="instead: a record at rest of this many hours (memory and throughput on long records)")
+    ap.add_argument("--folder", type=pathlib.Path, default=None)
+    args = ap.parse_args()
+    folder = args.folder or pathlib.Path(tempfile.mkdtemp(prefix="gfins_own_data_"))
+    folder.mkdir(parents=True, exist_ok=True)
+    cfg = folder / "kf-gins.yaml"
+    if not cfg.exists():
+        cfg = make(folder, args.minutes) if args.static_hours is None else make_static(folder, args.static_hours)
+    if args.static_hours is not None:
+        n = sum(1 for _ in open(folder / "imu.txt"))
+        print(f"{n} IMU samples ({n / 200 / 3600:.2f} h at 200 Hz) in {folder}; load: {os.getloadavg()}")
+        for name, argv in (("kfgins-config (.nav, IMU error, std text)", ["integrate", "--kfgins-config", str(cfg)]),
+                           ("Parquet out", ["integrate", str(folder / "imu.txt"), str(folder / "gnss.txt"),
+                                            str(folder / "sol.parquet"), "--imu-format", "kfgins", "--gnss-format",
+                                            "kfgins", "--grade", "navigation", "--initial", "30,114,20,0,0,0"])):
+            t = timed(argv)
+            print(f"{name}: wall {t['wall_s']:.2f} s, CPU {t['cpu_s']:.2f} s, peak {t['peak_mib']:.0f} MiB, "
+                  f"{n / t['cpu_s'] / 1e3:.0f} k samples per CPU second, {n / t['wall_s'] / 1e3:.0f} k per wall second")
+        print(f"load after: {os.getloadavg()}")
+        return
+    n = sum(1 for _ in open(folder / "imu.txt"))
+    print(f"{n} IMU samples ({n / 200 / 60:.1f} min at 200 Hz) in {folder}; load: {os.getloadavg()}")
+    runs = {
+        "kfgins-config (.nav, IMU error, std text)": ["integrate", "--kfgins-config", str(cfg)],
+        "CSV in, Parquet out": ["integrate", str(folder / "imu.txt"), str(folder / "gnss.txt"),
+                                str(folder / "sol.parquet"), "--imu-format", "kfgins", "--gnss-format", "kfgins",
+                                "--grade", "navigation", "--lever-arm", ",".join(map(str, LEVER)),
+                                "--initial", "truth", "--truth", str(folder / "truth.nav")],
+        "kfgins-config + --smooth": ["integrate", "--kfgins-config", str(cfg), "--smooth"],
+    }
+    for name, argv in runs.items():
+        t = timed(argv)
+        print(f"{name}: wall {t['wall_s']:.2f} s, CPU {t['cpu_s']:.2f} s, peak {t['peak_mib']:.0f} MiB, "
+              f"{n / t['cpu_s'] / 1e3:.0f} k samples per CPU second, {n / t['wall_s'] / 1e3:.0f} k per wall second")
+    print(f"load after: {os.getloadavg()}")
+
+
+if __name__ == "__main__":
+    main()

@@ -100,7 +100,7 @@ int main(int argc, char **argv)
         if (gf_ins_init(&f, &cfg, 0.0, q, v0, 0.5, 1.0, 100.0, NULL, P0, &bad) != GF_OK)
             return 2;
         gf_ins_output out = {out_buf, out_buf + n, out_buf + 5 * n, out_buf + 8 * n,
-                             out_buf + 11 * n, out_buf + 20 * n, NULL, 0};
+                             out_buf + 11 * n, out_buf + 20 * n, NULL, 0, NULL, NULL};
         size_t done, mdone;
         const double t0 = now_s();
         const gf_status st = gf_ins_run(&f, n, t, g, a, nm, meas, &out, NULL, NULL, &done, &mdone);

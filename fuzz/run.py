@@ -27,9 +27,10 @@ HERE = pathlib.Path(__file__).resolve().parent
 ROOT = HERE.parent
 C_TARGETS = ["fuzz_sins", "fuzz_accel", "fuzz_filters", "fuzz_rotation", "fuzz_ins_fb",
              "fuzz_fmu_accel9", "fuzz_fmu_sins", "fuzz_fmu_gfnav_cube6", "fuzz_fmu_gfnav_qin9",
-             "fuzz_fmu_gfnav_12", "fuzz_fmu_vehicle", "fuzz_fmu_ins_gnss",
+             "fuzz_fmu_gfnav_12", "fuzz_fmu_vehicle", "fuzz_fmu_ins_gnss", "fuzz_fmu_transfer_align",
              "fuzz_fmu_state_sins", "fuzz_fmu_state_gfnav_cube6", "fuzz_fmu_state_gfnav_qin9",
-             "fuzz_fmu_state_gfnav_12", "fuzz_fmu_state_ins_gnss"]
+             "fuzz_fmu_state_gfnav_12", "fuzz_fmu_state_ins_gnss",
+             "fuzz_fmu_state_transfer_align"]
 PY_TARGETS = ["fuzz_io_readers"]
 MAX_LEN = 2048      # bytes per input: enough for 40 FMI calls or a 16-sample record
 TIMEOUT_S = 10      # an input that runs longer is a hang

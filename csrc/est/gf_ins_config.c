@@ -48,6 +48,9 @@ gf_status gf_ins_config_default(gf_ins_config *cfg)
     cfg->noise.baro_bias_tau_s = 3600.0;
     cfg->noise.odometer_scale_std = 0.01;
     cfg->noise.odometer_mount_std_rad = 0.035;
+    /* flexure (off by default): 1 mrad over ~1 s, the order of a car's or a pod's mount */
+    cfg->noise.flexure_std_rad = 1e-3;
+    cfg->noise.flexure_tau_s = 1.0;
     return GF_OK;
 }
 
@@ -76,12 +79,14 @@ static const char *const kFields[] = {
     "noise.gyro_scale_std", "noise.gyro_scale_tau_s", "noise.accel_scale_std",
     "noise.accel_scale_tau_s", "noise.baro_bias_std_m", "noise.baro_bias_tau_s",
     "noise.odometer_scale_std", "noise.odometer_scale_tau_s", "noise.odometer_mount_std_rad",
-    "noise.odometer_mount_tau_s", "gnss_lever_arm_m", "odometer_lever_arm_m",
+    "noise.odometer_mount_tau_s", "noise.flexure_std_rad", "noise.flexure_tau_s",
+    "gnss_lever_arm_m", "odometer_lever_arm_m",
     "gnss_position_std_floor_m",
     "gate_probability", "gate_reset_count", "nhc", "nhc_std_m_s", "nhc_interval_s", "zupt",
     "zupt_std_m_s", "zaru_std_rad_s", "zupt_interval_s", "standstill_window_s",
     "standstill_accel_std_m_s2", "standstill_gyro_rad_s", "max_latency_s", "speed_min_m_s",
-    "odometer_mount_rad", "subsamples"};
+    "odometer_mount_rad", "subsamples", "master_mount", "master_lever", "master_time_offset",
+    "flexure", "master_mount_rad", "master_lever_arm_m", "master_time_offset_s"};
 #define N_FIELDS ((int32_t)(sizeof kFields / sizeof kFields[0]))
 
 const char *gf_ins_config_field(int32_t code)
@@ -169,6 +174,10 @@ static int32_t config_check(const gf_ins_config *c)
         return BAD(noise.odometer_mount_std_rad);
     if (!nonneg_finite(q->odometer_mount_tau_s))
         return BAD(noise.odometer_mount_tau_s);
+    if (c->flexure == 1 && !pos_finite(q->flexure_std_rad))
+        return BAD(noise.flexure_std_rad);
+    if (c->flexure == 1 && !pos_finite(q->flexure_tau_s))
+        return BAD(noise.flexure_tau_s);
     if (!gf_all_finite(c->gnss_lever_arm_m, 3))
         return BAD(gnss_lever_arm_m);
     if (!gf_all_finite(c->odometer_lever_arm_m, 3))
@@ -209,6 +218,22 @@ static int32_t config_check(const gf_ins_config *c)
     if (c->subsamples < 0 || c->subsamples > GF_SINS_MAX_SUBSAMPLES ||
         (c->subsamples > 1 && c->input != GF_SINS_INPUT_INCREMENTS))
         return BAD(subsamples);
+    if (!flag_ok(c->master_mount))
+        return BAD(master_mount);
+    if (!flag_ok(c->master_lever))
+        return BAD(master_lever);
+    if (!flag_ok(c->master_time_offset))
+        return BAD(master_time_offset);
+    if (!flag_ok(c->flexure))
+        return BAD(flexure);
+    /* the mounting's Euler angles: pitch inside (-pi/2, pi/2), where heading and roll
+     * stay distinct rotations */
+    if (!gf_all_finite(c->master_mount_rad, 3) || !(fabs(c->master_mount_rad[1]) < GF_HALF_PI))
+        return BAD(master_mount_rad);
+    if (!gf_all_finite(c->master_lever_arm_m, 3))
+        return BAD(master_lever_arm_m);
+    if (!isfinite(c->master_time_offset_s))
+        return BAD(master_time_offset_s);
     return 0;
 }
 
@@ -225,7 +250,8 @@ gf_status gf_ins_config_check(const gf_ins_config *cfg, int32_t *bad)
 }
 
 /* The layout of a checked configuration: the optional blocks after the 15 base states in
- * the order of gf_ins_gnss.h (scale factors, barometer bias, odometer scale, boresight). */
+ * the order of gf_ins_gnss.h (scale factors, barometer bias, odometer scale, boresight,
+ * then transfer alignment: mounting, lever arm, time offset, flexure). */
 static void layout_of(const gf_ins_config *cfg, gf_ins_layout *l)
 {
     int32_t next = GF_INS_BASE_STATES;
@@ -235,6 +261,7 @@ static void layout_of(const gf_ins_config *cfg, gf_ins_layout *l)
     l->idx_bg = GF_INS_IDX_BG;
     l->idx_ba = GF_INS_IDX_BA;
     l->idx_sg = l->idx_sa = l->idx_baro = l->idx_odo = l->idx_mount = -1;
+    l->idx_tmount = l->idx_tlever = l->idx_toffset = l->idx_flex = -1;
     if (cfg->scale_factors) {
         l->idx_sg = next;
         l->idx_sa = next + 3;
@@ -247,6 +274,20 @@ static void layout_of(const gf_ins_config *cfg, gf_ins_layout *l)
     if (cfg->odometer_mount) {
         l->idx_mount = next;
         next += 2;
+    }
+    if (cfg->master_mount) {
+        l->idx_tmount = next;
+        next += 3;
+    }
+    if (cfg->master_lever) {
+        l->idx_tlever = next;
+        next += 3;
+    }
+    if (cfg->master_time_offset)
+        l->idx_toffset = next++;
+    if (cfg->flexure) {
+        l->idx_flex = next;
+        next += 6;
     }
     l->n_states = next;
 }
@@ -279,7 +320,8 @@ gf_status gf_ins_state_count(const gf_ins_config *cfg, int32_t *n_states)
 static const char *const kStdFields[] = {
     "velocity_std_m_s", "position_std_m", "attitude_std_rad", "gyro_bias_std_rad_s",
     "accel_bias_std_m_s2", "gyro_scale_std", "accel_scale_std", "baro_bias_std_m",
-    "odometer_scale_std", "odometer_mount_std_rad"};
+    "odometer_scale_std", "odometer_mount_std_rad", "master_mount_std_rad", "master_lever_std_m",
+    "master_time_offset_std_s"};
 
 const char *gf_ins_initial_std_field(int32_t code)
 {
@@ -324,6 +366,9 @@ gf_status gf_ins_initial_covariance(const gf_ins_config *cfg, double lat_rad, do
         {&std->baro_bias_std_m, 1, cfg->baro_bias},
         {&std->odometer_scale_std, 1, cfg->odometer_scale},
         {std->odometer_mount_std_rad, 2, cfg->odometer_mount},
+        {std->master_mount_std_rad, 3, cfg->master_mount},
+        {std->master_lever_std_m, 3, cfg->master_lever},
+        {&std->master_time_offset_std_s, 1, cfg->master_time_offset},
     };
     double sd[GF_INS_MAX_STATES];
     int k = 0;
@@ -337,6 +382,15 @@ gf_status gf_ins_initial_covariance(const gf_ins_config *cfg, double lat_rad, do
         }
         for (int i = 0; i < blocks[b].n; ++i)
             sd[k++] = blocks[b].x[i];
+    }
+    if (cfg->flexure) {   /* stationary: var(f) = sigma^2, var(f') = b^2 sigma^2 */
+        const double sg = cfg->noise.flexure_std_rad;
+        const double b = GF_INS_FLEX_BETA_TAU / cfg->noise.flexure_tau_s;
+        for (int i = 0; i < 3; ++i) {
+            sd[k + i] = sg;
+            sd[k + 3 + i] = b * sg;
+        }
+        k += 6;
     }
     gf_earth e;
     st = gf_earth_update(&e, lat_rad, h_m, NULL, 1.0);
@@ -414,6 +468,10 @@ gf_status gf_ins_init(gf_ins_filter *f, const gf_ins_config *cfg, double t0_s,
     f->idx_baro = lay.idx_baro;
     f->idx_odo = lay.idx_odo;
     f->idx_mount = lay.idx_mount;
+    f->idx_tmount = lay.idx_tmount;
+    f->idx_tlever = lay.idx_tlever;
+    f->idx_toffset = lay.idx_toffset;
+    f->idx_flex = lay.idx_flex;
     f->nav = nav;
     if (sensors0)
         memcpy(f->sensors, sensors0, sizeof f->sensors);
@@ -443,9 +501,10 @@ int ins_layout_is_valid(const gf_ins_filter *f)
     const int n = f->n_states;
     if (n < GF_INS_BASE_STATES || n > NMAX || (size_t)n != f->kf.n)
         return 0;
-    const int32_t idx[5] = {f->idx_sg, f->idx_sa, f->idx_baro, f->idx_odo, f->idx_mount};
-    const int len[5] = {3, 3, 1, 1, 2};
-    for (int i = 0; i < 5; ++i)
+    const int32_t idx[9] = {f->idx_sg,     f->idx_sa,     f->idx_baro,    f->idx_odo,  f->idx_mount,
+                            f->idx_tmount, f->idx_tlever, f->idx_toffset, f->idx_flex};
+    const int len[9] = {3, 3, 1, 1, 2, 3, 3, 1, 6};
+    for (int i = 0; i < 9; ++i)
         if (idx[i] != -1 && (idx[i] < GF_INS_BASE_STATES || idx[i] + len[i] > n))
             return 0;
     return f->ukf_w.n == (size_t)n && f->hist_head >= 0 && f->hist_head < GF_INS_HISTORY &&
@@ -463,7 +522,9 @@ gf_status gf_ins_filter_check(const gf_ins_filter *f)
     const int32_t n = l.n_states;
     if (f->n_states != n || !ins_layout_is_valid(f) || f->idx_sg != l.idx_sg ||
         f->idx_sa != l.idx_sa || f->idx_baro != l.idx_baro || f->idx_odo != l.idx_odo ||
-        f->idx_mount != l.idx_mount)
+        f->idx_mount != l.idx_mount || f->idx_tmount != l.idx_tmount ||
+        f->idx_tlever != l.idx_tlever || f->idx_toffset != l.idx_toffset ||
+        f->idx_flex != l.idx_flex)
         return GF_ERR_BAD_SIZE;
     if ((f->have_sample & ~1) || (f->standstill & ~1))
         return GF_ERR_BAD_PARAMETER;
@@ -475,6 +536,8 @@ gf_status gf_ins_filter_check(const gf_ins_filter *f)
         f->nav.cfg.input != f->cfg.input)
         return GF_ERR_BAD_PARAMETER;
     if (!isfinite(f->t_s) || !gf_all_finite(f->sensors, GF_INS_N_SENSORS) ||
+        !gf_all_finite(f->transfer, GF_INS_N_TRANSFER) || !(f->rate_lag_s >= 0.0) ||
+        !isfinite(f->rate_lag_s) ||
         !gf_all_finite(f->kf.x, (size_t)n))
         return GF_ERR_NONFINITE_INPUT;
     for (int i = 0; i < n; ++i)

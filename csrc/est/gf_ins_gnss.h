@@ -15,7 +15,22 @@
  *   dbb (1) barometer bias b_true - b_estimated, m;  dko (1) odometer scale error;
  *   dmo (2) odometer boresight error (pitch, heading of the odometer axes in the body
  *           frame, true - estimated, rad; the nominal angles are cfg.odometer_mount_rad +
- *           the sensors[] correction, fed back like the other sensor estimates).
+ *           the sensors[] correction, fed back like the other sensor estimates);
+ *   transfer alignment against a master INS (issue 24; equations under "Transfer
+ *   alignment" below; their estimates are the filter's transfer[] array, not sensors[]):
+ *   dma (3) mounting error: heading, pitch, roll of the slave's (this IMU's) axes in the
+ *           master's body axes, true - estimated, rad (a random constant);
+ *   dla (3) lever-arm error: the slave IMU's position from the master IMU, master body
+ *           axes, true - estimated, m (a random constant);
+ *   dto (1) time-offset error: slave stamp - master stamp of one instant, true -
+ *           estimated, s (a random constant);
+ *   dfl (6) structural flexure: three angles added to the mounting's heading, pitch and
+ *           roll (rad), then their rates (rad/s), a second-order Gauss-Markov process per
+ *           axis (Kain & Cloutier, "Rapid transfer alignment for tactical weapon
+ *           applications", AIAA 1989; the wing-flexure model of the transfer-alignment
+ *           literature): f'' + 2 b f' + b^2 f = w, b = 2.146 / flexure_tau_s, E[w w] =
+ *           4 b^3 sigma^2, stationary var(f) = sigma^2, var(f') = b^2 sigma^2.
+ * Up to 15 + 6 + 4 + 13 = 38 states.
  * Sensor errors are first-order Gauss-Markov processes (seed 004: "first-order Markov
  * drifts"), x' = -x / tau + w, E[w w] = 2 sigma^2 / tau; tau = 0 makes a random constant.
  *
@@ -78,6 +93,37 @@
  *   (no current, no lever-arm term: w x l is ~1e-3 of the speed on an AUV). At or below
  *   speed_min_m_s of INS horizontal speed the direction v_h / |v_h| is undefined or
  *   poorly known and the update is refused (logged GF_INS_REJECTED_LOW_SPEED).
+ * Transfer alignment (issue 24; gf_ins_master.c). This filter runs the slave IMU (frame
+ * s = the body b above); a master INS on the same host reports its attitude C_m^n,
+ * velocity and position at its IMU, and its angular rate w_im^m (master axes: the
+ * measurement's aux). The slave's axes in the master's: C_s^m = M(a) = Rz(-psi) Rx(theta)
+ * Ry(gamma) (gf_sins.h's Euler convention), a = master_mount_rad + the transfer[]
+ * mounting estimate + the flexure angles; r = master_lever_arm_m + the transfer[]
+ * lever-arm estimate: the slave IMU from the master IMU in master axes; tau =
+ * master_time_offset_s + the transfer[] estimate. A master value stamped t_m describes
+ * the instant the slave stamps t_m + tau, so the prediction from the filter's state at
+ * t_m is carried forward by tau (in the filter's direction of time, dir tau after
+ * gf_ins_reverse) with the nominal's rates (their errors times tau are second order):
+ *   R_tau = exp([wbar dir tau x]), wbar = (w_ib^s + C_s^m^T w_im^m) / 2 - C_n^s w_in^n
+ *     (slave axes, both compensated/measured, the mean over tau to second order: the
+ *     slave's rate at t_m, the master's at t_m + tau; less the navigation frame's turn
+ *     w_in^n = w_ie^n + w_en^n of the nominal: the attitude's rate w_ns^s, so that the
+ *     offset's column vanishes where the attitude stands still), D = C_s^n R_tau C_s^m^T
+ *     the master attitude predicted at t_m + tau;
+ *   master attitude: the small angle of D C_meas^T (n frame), y = log(D C_meas^T), z = 0
+ *     (z carries the master's heading, pitch, roll; std: east, north, up rad);
+ *   master velocity: v_m = v + dir tau a - D (w_im^m x r) + w_ie^n x (D r), a = C_s^n f^s
+ *     + g^n the nominal's acceleration (Coriolis (2 w_ie + w_en) x v, 2e-5 m/s at 10 m/s
+ *     over 15 ms, left out): the slave's velocity less the lever arm's rotation with the
+ *     master's rate w_em^m = w_im^m - C_n^m w_ie^n (C (a x r) = (C a) x (C r));
+ *   master position: p_m = p + dir tau v - D r (the nominal's local ENU metres).
+ * Their H is exact at the nominal (tests/c/test_ins_meas.c: no allowance); the attitude's
+ * columns go through J_l^-1 of the residual (log's derivative away from 0: the first
+ * updates of an alignment see degrees). Without a measurement
+ * (gf_ins_meas_model) the master's rate is taken as the slave's turned into master axes
+ * and the attitude's reference is the nominal's own D. The master's own errors enter
+ * as the measurement noise (std); the velocity's time-offset term uses the nominal's
+ * specific force and rate, so H has no bias columns from it.
  * The models are one table of the kinds (gf_ins_meas.c: per kind its rows, prediction
  * and Jacobian, one section each); gf_ins_meas_kind_info enumerates it and
  * gf_ins_meas_model evaluates one kind at the filter's state. The linearised models H
@@ -102,12 +148,15 @@
  * (gf_sins.h). gf_ins_reverse() turns the filter around: the nominal through
  * gf_sins_reverse (v and the Earth-rate sign negated; error model and measurement
  * models take the Earth rate with that sign), and the error state x_r = D x,
- * P_r = D P D with D = diag(-1 on dv and dbg, +1 elsewhere). Why: dv_r = v_r,computed -
+ * P_r = D P D with D = diag(-1 on dv, dbg and the flexure rates, +1 elsewhere). Why: dv_r = v_r,computed -
  * v_r,true = -dv; the gyro increments are negated, so the bias the reverse filter sees
  * is -b (dbg_r = -dbg, its estimate negated too); attitude, position, accelerometer
  * bias (f unchanged), scale factors ((1 + s)(-w) - b keeps s) and barometer/odometer
  * errors (scale and boresight angles: the odometer axes do not turn with time) are
- * unchanged. Check on F: with x_r = D x, dx_r/dtau = -D F D x_r, and the
+ * unchanged; so are the mounting, lever arm and time offset (an offset between two
+ * clocks; the predictions carry it forward by dir tau), while a flexure rate, a time
+ * derivative, changes sign with its estimate (the flexure's damping -2 b keeps its sign
+ * like the Gauss-Markov decays below). Check on F: with x_r = D x, dx_r/dtau = -D F D x_r, and the
  * forward formula of F evaluated on the reversed nominal (-v, -w_ie, -w_en, -w_ib, same
  * f, C, position) gives exactly -D F D block by block (e.g. phi-phi: -[w_in x] changes
  * sign, phi-dv: dw_en/dv keeps it, dv-phi: [f^n x] keeps it, dv-dv: -(2 w_ie + w_en) x
@@ -115,7 +164,8 @@
  * stationary first-order Markov process has the same statistics in reversed time, so
  * that is the right backward model (random constants, tau = 0: exact). Reversing twice
  * is the identity on x, P and the nominal. Measurements in reverse are handed in as
- * recorded (true time): GNSS velocity and odometer speed are negated inside, the
+ * recorded (true time): GNSS and master velocity, the master's rate and odometer speed
+ * are negated inside, the
  * tachometer speed magnitude and positions/heights are unchanged. Delayed measurements
  * (max_latency_s) are used forward only; in reverse they are stale.
  */
@@ -143,13 +193,20 @@ extern "C" {
 #define GF_INS_IDX_BG 9
 #define GF_INS_IDX_BA 12
 #define GF_INS_BASE_STATES 15
-#define GF_INS_MAX_STATES 25
+#define GF_INS_MAX_STATES 38
 
 /* Sensor-error estimates, in this order in every array of them ("sensors"):
  * gyro bias (3, rad/s), accelerometer bias (3, m/s^2), gyro scale (3), accelerometer
  * scale (3), barometer bias (m), odometer scale, odometer boresight correction (pitch,
  * heading, rad: added to cfg.odometer_mount_rad). */
 #define GF_INS_N_SENSORS 16
+
+/* Transfer-alignment estimates (the filter's transfer[] array, in this order): mounting
+ * correction heading, pitch, roll (rad, added to cfg.master_mount_rad), lever-arm
+ * correction x, y, z (m, master axes, added to cfg.master_lever_arm_m), time-offset
+ * correction (s, added to cfg.master_time_offset_s), flexure angles heading, pitch, roll
+ * (rad), flexure rates (rad/s). */
+#define GF_INS_N_TRANSFER 13
 
 /* Measurement types */
 #define GF_INS_MEAS_GNSS_POS 1     /* z: antenna lat rad, lon rad, h m; std: E, N, U m */
@@ -161,7 +218,13 @@ extern "C" {
 #define GF_INS_MEAS_ZARU 7         /* internal: angular rate w.r.t. the Earth 0 at standstill */
 #define GF_INS_MEAS_SPEED 8        /* z[0]: horizontal speed magnitude m/s (tachometer, seed
                                       003); std[0] m/s */
-#define GF_INS_N_MEAS_KINDS 9      /* measurement type codes are 1 .. GF_INS_N_MEAS_KINDS - 1 */
+#define GF_INS_MEAS_MASTER_VEL 9   /* z: master IMU velocity E, N, U m/s; std m/s; aux: the
+                                      master's angular rate w_im^m rad/s (master axes) */
+#define GF_INS_MEAS_MASTER_ATT 10  /* z: master heading, pitch, roll rad; std: E, N, U rad
+                                      (small angles); aux: w_im^m rad/s */
+#define GF_INS_MEAS_MASTER_POS 11  /* z: master IMU lat rad, lon rad, h m; std: E, N, U m;
+                                      aux: w_im^m rad/s (unused) */
+#define GF_INS_N_MEAS_KINDS 12     /* measurement type codes are 1 .. GF_INS_N_MEAS_KINDS - 1 */
 
 /* Outcome of one update */
 #define GF_INS_ACCEPTED 0
@@ -195,6 +258,8 @@ typedef struct gf_ins_noise {
     double odometer_scale_tau_s;
     double odometer_mount_std_rad;     /* odometer boresight (pitch and heading) */
     double odometer_mount_tau_s;
+    double flexure_std_rad;            /* structural flexure: stationary std of each angle */
+    double flexure_tau_s;              /* its correlation time, s (> 0): b = 2.146 / tau */
 } gf_ins_noise;
 
 typedef struct gf_ins_config {
@@ -240,6 +305,16 @@ typedef struct gf_ins_config {
                                           (estimated with odometer_mount) */
     int32_t subsamples;                /* 1..4 IMU samples per navigation update in gf_ins_run
                                           (increments only; see gf_ins_run); 0 or 1: one */
+    /* transfer alignment against a master INS (see "Transfer alignment" above) */
+    int32_t master_mount;              /* 1: mounting-error states (heading, pitch, roll) */
+    int32_t master_lever;              /* 1: lever-arm error states (x, y, z) */
+    int32_t master_time_offset;        /* 1: time-offset error state */
+    int32_t flexure;                   /* 1: flexure states (3 angles, 3 rates) */
+    double master_mount_rad[3];        /* nominal heading, pitch, roll of the slave's axes in
+                                          the master's, rad (|pitch| < pi/2) */
+    double master_lever_arm_m[3];      /* nominal slave IMU position from the master IMU,
+                                          master axes right, front, up, m */
+    double master_time_offset_s;       /* nominal slave stamp - master stamp, s */
 } gf_ins_config;
 
 typedef struct gf_ins_meas {
@@ -247,6 +322,9 @@ typedef struct gf_ins_meas {
     double t_s;                     /* time of validity */
     double z[3];
     double std[3];                  /* > 0 */
+    double aux[3];                  /* what a kind reads besides z (the master kinds: the
+                                       master's angular rate w_im^m, rad/s, master axes);
+                                       0 for the others */
 } gf_ins_meas;
 
 /* One update, as logged. */
@@ -291,6 +369,10 @@ typedef struct gf_ins_output {
     double *sensors;                /* n x GF_INS_N_SENSORS */
     int8_t *standstill;             /* n: detector output */
     size_t n_rows;                  /* written by gf_ins_run / gf_ins_run_backward */
+    double *transfer;               /* n x GF_INS_N_TRANSFER (may be NULL): transfer-alignment
+                                       estimates (true-time flexure rates) */
+    double *state_std;              /* n x n_states (may be NULL): 1-sigma of every error
+                                       state, sqrt of P's diagonal, in the layout's order */
 } gf_ins_output;
 
 /* The nominal state after one IMU sample, kept for delayed measurements. */
@@ -308,8 +390,11 @@ typedef struct gf_ins_filter {
     int32_t n_states;
     int32_t idx_sg, idx_sa, idx_baro, idx_odo;   /* first index of each optional block; -1 absent */
     int32_t idx_mount;              /* odometer boresight block (2); -1 absent */
+    int32_t idx_tmount, idx_tlever; /* transfer alignment: mounting (3), lever arm (3) */
+    int32_t idx_toffset, idx_flex;  /* time offset (1), flexure (6: angles, rates) */
     gf_sins_state nav;              /* nominal navigation state (the corrected mechanization) */
     double sensors[GF_INS_N_SENSORS];/* estimated sensor errors, fed back */
+    double transfer[GF_INS_N_TRANSFER]; /* transfer-alignment estimates, fed back */
     gf_kalman kf;                   /* error state (0 between updates) and covariance */
     gf_ukf_weights ukf_w;
     double t_s;                     /* time of the nominal state */
@@ -317,6 +402,9 @@ typedef struct gf_ins_filter {
     double prev_gyro_raw[3], prev_accel_raw[3];  /* last raw sample (rates: for splitting) */
     double w_ib_b_rad_s[3];         /* latest compensated angular rate */
     double f_b_m_s2[3];             /* latest compensated specific force */
+    double rate_lag_s;              /* how long before t_s the two above describe the body:
+                                       half the last (part of a) sample for increments
+                                       (their means), 0 for rates */
     double acc_T_s;                 /* accumulation since the last propagation */
     double acc_dtheta_rad[3], acc_dv_m_s[3];
     gf_sins_state nav0;             /* UKF: nominal at the start of the accumulation */
@@ -356,12 +444,14 @@ typedef struct gf_ins_layout {
     int32_t idx_sg, idx_sa;                              /* 3 each (scale_factors) */
     int32_t idx_baro, idx_odo;                           /* 1 each */
     int32_t idx_mount;                                   /* 2 (odometer_mount) */
+    int32_t idx_tmount, idx_tlever;                      /* 3 each (master_mount, _lever) */
+    int32_t idx_toffset, idx_flex;                       /* 1 (master_time_offset), 6 */
 } gf_ins_layout;
 
 /* The state layout of a configuration. Errors: GF_ERR_BAD_PARAMETER (configuration). */
 gf_status gf_ins_state_layout(const gf_ins_config *cfg, gf_ins_layout *layout);
 
-/* Number of states of a configuration (15 .. 25). Errors: GF_ERR_BAD_PARAMETER. */
+/* Number of states of a configuration (15 .. 38). Errors: GF_ERR_BAD_PARAMETER. */
 gf_status gf_ins_state_count(const gf_ins_config *cfg, int32_t *n_states);
 
 /* The initial 1-sigma of each error block; the blocks a configuration has no states for
@@ -377,11 +467,15 @@ typedef struct gf_ins_initial_std {
     double baro_bias_std_m;
     double odometer_scale_std;
     double odometer_mount_std_rad[2];  /* pitch, heading */
+    double master_mount_std_rad[3];    /* heading, pitch, roll */
+    double master_lever_std_m[3];      /* x, y, z (master axes) */
+    double master_time_offset_std_s;
 } gf_ins_initial_std;
 
 /* P0 (n x n, diagonal) of a configuration starting at lat_rad, h_m: the squares of the
  * stds in the filter's states (position east, north, up in m -> dlat, dlon in rad with the
- * WGS-84 radii at the start, dh in m) — the one P0 of the batch API, the smoother and the
+ * WGS-84 radii at the start, dh in m; the flexure's stationary variances sigma^2 and
+ * b^2 sigma^2 from cfg.noise) — the one P0 of the batch API, the smoother and the
  * FMU. Errors: GF_ERR_BAD_PARAMETER (configuration, or a std of a used block not finite
  * and > 0: *bad, if given, its 1-based block in gf_ins_initial_std's order, named by
  * gf_ins_initial_std_field), GF_ERR_OUT_OF_RANGE (|lat| at or beyond the limit, h not
@@ -389,6 +483,17 @@ typedef struct gf_ins_initial_std {
  * model, with dlon and a transport rate ~ tan L, is singular), or gf_earth_update's error for an absurd height. */
 gf_status gf_ins_initial_covariance(const gf_ins_config *cfg, double lat_rad, double h_m,
                                     const gf_ins_initial_std *std, double *P0, int32_t *bad);
+
+/* Transfer alignment's prior (gf_ins_master.c): a slave started from the master's
+ * attitude turned by the nominal mounting, C_s^n = C_m^n M(a_nominal), has the mounting's
+ * error as its attitude error, phi = G da with G = C_s^n [vee(M^T dM/da_k)]_k (a small
+ * change of the mounting angles turns the slave's axes), so P0 of gf_ins_initial_covariance
+ * (its attitude block then the master's own attitude uncertainty) becomes, in place,
+ * P_phi,phi += G P_aa G^T, P_phi,a = G P_aa (and its transpose): the prior that the
+ * slave's attitude and mounting errors cancel in the master's attitude. q_bn: the start
+ * attitude. Errors: GF_ERR_NULL_POINTER, GF_ERR_BAD_PARAMETER (configuration, or no
+ * mounting states), GF_ERR_NONFINITE_INPUT. */
+gf_status gf_ins_master_start_covariance(const gf_ins_config *cfg, const double *q_bn, double *P0);
 
 /* The gf_ins_initial_std member behind a block code of gf_ins_initial_covariance. */
 const char *gf_ins_initial_std_field(int32_t code);

@@ -5,6 +5,8 @@
  *   gf_ins_state.c      error state <-> navigation hypotheses, feedback
  *   gf_ins_propagate.c  error model and covariance propagation (EKF, UKF)
  *   gf_ins_meas.c       the measurement models: one table, one section per kind
+ *   gf_ins_master.c     the transfer-alignment kinds (master velocity, attitude, position)
+ *                       and the flexure's mean between updates
  *   gf_ins_update.c     the update: gating, innovation log
  *   gf_ins_delayed.c    delayed measurements (the nominal's history)
  *   gf_ins_step.c       the sample step and the batch walks
@@ -42,6 +44,15 @@
 #define S_BARO 12
 #define S_ODO 13
 #define S_MOUNT 14   /* pitch, heading */
+/* where each block's estimates sit in the transfer[] array */
+#define T_MOUNT 0    /* heading, pitch, roll of the slave in master axes */
+#define T_LEVER 3    /* x, y, z, master axes */
+#define T_OFFSET 6   /* slave stamp - master stamp */
+#define T_FLEX 7     /* flexure angles (heading, pitch, roll), then rates at T_FLEX + 3 */
+#define T_FLEX_RATE 10
+/* the flexure's b = 2.146 / tau (the transfer-alignment literature's second-order
+ * Markov model; gf_ins_gnss.h) */
+#define GF_INS_FLEX_BETA_TAU 2.146
 /* two times closer than this are the same instant (s) */
 #define GF_INS_TIME_EPS_S 1e-9
 
@@ -53,6 +64,7 @@ typedef struct nav_hyp {
     double v[3];
     double lat, lon, h;
     double s[GF_INS_N_SENSORS];
+    double t[GF_INS_N_TRANSFER];   /* transfer-alignment estimates + states */
 } nav_hyp;
 
 static inline double wrap_pi(double a)
@@ -116,6 +128,9 @@ typedef struct ins_meas_ctx {
     const double *w_comp;           /* compensated rate w_ib^b at the time of validity (3) */
     const gf_ins_meas *ms;          /* the measurement; NULL for the internal kinds and for
                                        a model asked for without one (gf_ins_meas_model) */
+    const nav_hyp *nom;             /* the nominal hypothesis (no error) at the time of
+                                       validity: what the master kinds carry forward by tau */
+    const double *f_comp;           /* compensated specific force f^b (3) */
 } ins_meas_ctx;
 
 /* One measurement kind (a row of the table in gf_ins_meas.c):
@@ -134,7 +149,9 @@ typedef struct ins_meas_model {
     const char *name;               /* as in the innovation logs of the Python layer */
     int32_t rows;                   /* m: rows of z, H and R */
     int32_t external;               /* 1: handed in by callers; 0: made by the filter */
-    int32_t reverses;               /* 1: a velocity, negated in reverse time (gf_ins_reverse) */
+    int32_t reverses;               /* 1: a velocity, negated in reverse time (gf_ins_reverse),
+                                       with its aux (a rate) */
+    int32_t aux;                    /* 1: reads ms->aux (checked finite) */
     void (*predict)(const ins_meas_ctx *c, const nav_hyp *hy, double *y);
     void (*jacobian)(const ins_meas_ctx *c, const nav_hyp *nom, double *H);
     void (*value)(const local_frame *lf, const gf_ins_meas *ms, double *z);
@@ -142,6 +159,21 @@ typedef struct ins_meas_model {
     void (*std)(const gf_ins_filter *f, const gf_ins_meas *ms, double *sd);
     int32_t (*refuse)(const gf_ins_filter *f, const gf_sins_state *ref);
 } ins_meas_model;
+
+/* the transfer-alignment kinds (gf_ins_master.c), rows of the table */
+void ins_master_vel_predict(const ins_meas_ctx *c, const nav_hyp *hy, double *y);
+void ins_master_vel_jacobian(const ins_meas_ctx *c, const nav_hyp *nom, double *H);
+void ins_master_att_predict(const ins_meas_ctx *c, const nav_hyp *hy, double *y);
+void ins_master_att_jacobian(const ins_meas_ctx *c, const nav_hyp *nom, double *H);
+void ins_master_pos_predict(const ins_meas_ctx *c, const nav_hyp *hy, double *y);
+void ins_master_pos_jacobian(const ins_meas_ctx *c, const nav_hyp *nom, double *H);
+int ins_master_pos_check(const gf_ins_meas *ms);
+/* the flexure's 2 x 2 transition per axis over T (the series of gf_ins_propagate.c:
+ * I + F T (+ (F T)^2 / 2 when second_order)): phi[0..3] = rows (angle, rate) */
+void ins_flexure_transition(const gf_ins_filter *f, double T, int second_order, double phi[4]);
+/* the flexure estimates carried over T by the same transition (their mean between
+ * updates: a closed-loop filter resets the error, so the estimate must move) */
+void ins_flexure_mean(gf_ins_filter *f, double T, int second_order);
 
 /* the table's row of a kind; NULL for a code that is no kind */
 const ins_meas_model *ins_meas_model_of(int32_t kind);

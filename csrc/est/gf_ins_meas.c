@@ -393,6 +393,15 @@ static int32_t speed_refuse(const gf_ins_filter *f, const gf_sins_state *ref)
 
 #undef HH
 
+/* a kind whose prediction is already the difference from the measurement (the master's
+ * attitude: the small angle between predicted and measured) */
+static void zero_value(const local_frame *lf, const gf_ins_meas *ms, double *z)
+{
+    (void)lf;
+    (void)ms;
+    z[0] = z[1] = z[2] = 0.0;
+}
+
 /* ---- the table ----------------------------------------------------------------------- */
 
 /* One row per kind, at the index of its code. */
@@ -417,6 +426,18 @@ static const ins_meas_model kModels[GF_INS_N_MEAS_KINDS] = {
     [GF_INS_MEAS_SPEED] = {.kind = GF_INS_MEAS_SPEED, .name = "speed", .rows = 1, .external = 1,
                            .predict = speed_predict, .jacobian = speed_jacobian,
                            .refuse = speed_refuse},
+    /* transfer alignment against a master INS: gf_ins_master.c */
+    [GF_INS_MEAS_MASTER_VEL] = {.kind = GF_INS_MEAS_MASTER_VEL, .name = "master_vel", .rows = 3,
+                                .external = 1, .reverses = 1, .aux = 1,
+                                .predict = ins_master_vel_predict,
+                                .jacobian = ins_master_vel_jacobian},
+    [GF_INS_MEAS_MASTER_ATT] = {.kind = GF_INS_MEAS_MASTER_ATT, .name = "master_att", .rows = 3,
+                                .external = 1, .aux = 1, .predict = ins_master_att_predict,
+                                .jacobian = ins_master_att_jacobian, .value = zero_value},
+    [GF_INS_MEAS_MASTER_POS] = {.kind = GF_INS_MEAS_MASTER_POS, .name = "master_pos", .rows = 3,
+                                .external = 1, .aux = 1, .predict = ins_master_pos_predict,
+                                .jacobian = ins_master_pos_jacobian, .value = gnss_pos_value,
+                                .check = ins_master_pos_check},
 };
 
 const ins_meas_model *ins_meas_model_of(int32_t kind)
@@ -450,7 +471,8 @@ gf_status ins_meas_check(const gf_ins_meas *ms)
     if (!mm || !mm->external)
         return GF_ERR_BAD_PARAMETER;
     const int m = mm->rows;
-    if (!isfinite(ms->t_s) || !gf_all_finite(ms->z, (size_t)m) || !gf_all_finite(ms->std, (size_t)m))
+    if (!isfinite(ms->t_s) || !gf_all_finite(ms->z, (size_t)m) || !gf_all_finite(ms->std, (size_t)m) ||
+        (mm->aux && !gf_all_finite(ms->aux, 3)))
         return GF_ERR_NONFINITE_INPUT;
     for (int i = 0; i < m; ++i)
         if (!(ms->std[i] > 0.0))
@@ -461,8 +483,9 @@ gf_status ins_meas_check(const gf_ins_meas *ms)
 }
 
 /* the measurement as the filter uses it: in reverse (gf_ins_reverse) velocities change
- * sign (GNSS velocity, odometer forward speed: the rows with `reverses`); positions,
- * heights and the tachometer's speed magnitude do not */
+ * sign (GNSS and master velocity, odometer forward speed: the rows with `reverses`), and
+ * so do the master's rates (aux) of every master kind; positions, heights, attitudes and
+ * the tachometer's speed magnitude do not */
 void ins_meas_directed(const gf_ins_filter *f, const gf_ins_meas *in, gf_ins_meas *out)
 {
     const ins_meas_model *mm = ins_meas_model_of(in->type);
@@ -470,6 +493,9 @@ void ins_meas_directed(const gf_ins_filter *f, const gf_ins_meas *in, gf_ins_mea
     if (dir_of(f) < 0.0 && mm && mm->reverses)
         for (int i = 0; i < 3; ++i)
             out->z[i] = -in->z[i];
+    if (dir_of(f) < 0.0 && mm && mm->aux)
+        for (int i = 0; i < 3; ++i)
+            out->aux[i] = -in->aux[i];
 }
 
 /* ---- entry points -------------------------------------------------------------------- */
@@ -511,16 +537,15 @@ gf_status gf_ins_meas_model(const gf_ins_filter *f, int32_t kind, const gf_ins_m
     gf_ins_meas msd;
     if (ms)
         ins_meas_directed(f, ms, &msd);
-    const ins_meas_ctx mc = {f, &lf, f->w_ib_b_rad_s, ms ? &msd : NULL};
     const double zero[NMAX] = {0};
-    nav_hyp hy;
+    nav_hyp nom, hy;
+    ins_hyp_from_state(f, &f->nav, f->sensors, zero, &nom);
+    const ins_meas_ctx mc = {f, &lf, f->w_ib_b_rad_s, ms ? &msd : NULL, &nom, f->f_b_m_s2};
     if (z_pred) {
         ins_hyp_from_state(f, &f->nav, f->sensors, dx ? dx : zero, &hy);
         mm->predict(&mc, &hy, z_pred);
     }
-    if (H) {
-        ins_hyp_from_state(f, &f->nav, f->sensors, zero, &hy);
-        ins_meas_jacobian(mm, &mc, &hy, H);
-    }
+    if (H)
+        ins_meas_jacobian(mm, &mc, &nom, H);
     return GF_OK;
 }

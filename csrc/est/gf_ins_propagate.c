@@ -28,6 +28,12 @@ static double gm_intensity(double std, double tau_s)
     return tau_s > 0.0 ? 2.0 * std * std / tau_s : 0.0;
 }
 
+/* the flexure's b = 2.146 / tau (1/s) */
+static double flexure_beta(const gf_ins_filter *f)
+{
+    return GF_INS_FLEX_BETA_TAU / f->cfg.noise.flexure_tau_s;
+}
+
 /* the diagonal of Qc = G diag(q) G^T (the white noises are the same on the three axes,
  * so C diag(q) C^T = q I) */
 static void process_noise(const gf_ins_filter *f, double *q_diag)
@@ -51,6 +57,13 @@ static void process_noise(const gf_ins_filter *f, double *q_diag)
         q_diag[f->idx_odo] = gm_intensity(nz->odometer_scale_std, nz->odometer_scale_tau_s);
     for (int i = 0; f->idx_mount >= 0 && i < 2; ++i)
         q_diag[f->idx_mount + i] = gm_intensity(nz->odometer_mount_std_rad, nz->odometer_mount_tau_s);
+    /* the mounting, lever arm and time offset are random constants (no noise); the
+     * flexure's driving noise enters its rate: E[w w] = 4 b^3 sigma^2 (gf_ins_gnss.h) */
+    if (f->idx_flex >= 0) {
+        const double b = flexure_beta(f), sg = nz->flexure_std_rad;
+        for (int i = 0; i < 3; ++i)
+            q_diag[f->idx_flex + 3 + i] = 4.0 * b * b * b * sg * sg;
+    }
 }
 
 _Static_assert(GF_INS_MAX_STATES <= 64, "row masks of F are 64 bits");
@@ -99,6 +112,16 @@ static void error_model(const gf_ins_filter *f, const gf_mat3 *C, const double v
         FF(f->idx_odo, f->idx_odo) = gm_rate(nz->odometer_scale_tau_s);
     for (int i = 0; f->idx_mount >= 0 && nz->odometer_mount_tau_s > 0.0 && i < 2; ++i)
         FF(f->idx_mount + i, f->idx_mount + i) = gm_rate(nz->odometer_mount_tau_s);
+    /* flexure, per axis: f' = r, r' = -b^2 f - 2 b r + w (second-order Markov) */
+    if (f->idx_flex >= 0) {
+        const double b = flexure_beta(f);
+        for (int i = 0; i < 3; ++i) {
+            const int a = f->idx_flex + i, r = f->idx_flex + 3 + i;
+            FF(a, r) = 1.0;
+            FF(r, a) = -b * b;
+            FF(r, r) = -2.0 * b;
+        }
+    }
 #undef FF
     if (q_diag)
         process_noise(f, q_diag);
@@ -183,9 +206,9 @@ static GF_ALWAYS_INLINE void transition_rows(const size_t S, int n, const double
     }
 }
 
-/* the stride is GF_PADDED(n): 16, 20, 24 or 28 for 15 .. 25 states */
-_Static_assert(GF_PADDED(GF_INS_BASE_STATES) == 16 && GF_PADDED(NMAX) == 28,
-               "transition() handles the strides 16, 20, 24 and 28");
+/* the stride is GF_PADDED(n): 16 .. 40 in steps of 4 for 15 .. 38 states */
+_Static_assert(GF_PADDED(GF_INS_BASE_STATES) == 16 && GF_PADDED(NMAX) == 40,
+               "transition() handles the strides 16, 20, ..., 40");
 GF_VECTOR_CLONES
 static void transition(size_t s, int n, const double *F, const uint64_t *fmask, double T,
                        int second_order, double *A, uint64_t *amask)
@@ -196,8 +219,14 @@ static void transition(size_t s, int n, const double *F, const uint64_t *fmask, 
         transition_rows(20, n, F, fmask, T, second_order, A, amask);
     else if (s == 24)
         transition_rows(24, n, F, fmask, T, second_order, A, amask);
-    else
+    else if (s == 28)
         transition_rows(28, n, F, fmask, T, second_order, A, amask);
+    else if (s == 32)
+        transition_rows(32, n, F, fmask, T, second_order, A, amask);
+    else if (s == 36)
+        transition_rows(36, n, F, fmask, T, second_order, A, amask);
+    else
+        transition_rows(40, n, F, fmask, T, second_order, A, amask);
 }
 
 static gf_status propagate_ekf(gf_ins_filter *f, gf_ins_epochs *ep)
@@ -321,7 +350,8 @@ static gf_status move_nominal(const gf_ins_filter *f, const gf_sins_state *nav,
 /* one point of the UKF's time update: dx0 about (nav, sens) -> dx1 about the moved
  * nominal nom1 */
 static gf_status move_point(const gf_ins_filter *f, const gf_sins_state *nav, const double *sens,
-                            const gf_sins_state *nom1, const double *decay, const double *dx0,
+                            const gf_sins_state *nom1, const double *decay,
+                            const double phi_flex[4], const double *dx0,
                             const double dth[3], const double dv[3], double T, double *dx1)
 {
     nav_hyp h0, h1;
@@ -332,6 +362,11 @@ static gf_status move_point(const gf_ins_filter *f, const gf_sins_state *nav, co
     ins_error_from_hyp(f, nom1, sens, &h1, dx1);
     for (int i = IBG; i < f->n_states; ++i)
         dx1[i] = decay[i] * dx0[i];
+    for (int i = 0; f->idx_flex >= 0 && i < 3; ++i) {   /* the flexure's 2 x 2, as the EKF's */
+        const double *x = dx0 + f->idx_flex;
+        dx1[f->idx_flex + i] = phi_flex[0] * x[i] + phi_flex[1] * x[3 + i];
+        dx1[f->idx_flex + 3 + i] = phi_flex[2] * x[i] + phi_flex[3] * x[3 + i];
+    }
     return GF_OK;
 }
 
@@ -350,9 +385,12 @@ gf_status gf_ins_propagate_error(const gf_ins_filter *f, const double *dx0,
     gf_status st = move_nominal(f, &f->nav, f->sensors, dtheta_rad, dv_m_s, T_s, &nom1);
     if (st != GF_OK)
         return st;
-    double decay[NMAX];
+    double decay[NMAX], phi_flex[4] = {1.0, 0.0, 0.0, 1.0};
     state_decay(f, T_s, decay);
-    return move_point(f, &f->nav, f->sensors, &nom1, decay, dx0, dtheta_rad, dv_m_s, T_s, dx1);
+    if (f->idx_flex >= 0)
+        ins_flexure_transition(f, T_s, T_s > GF_INS_FIRST_ORDER_MAX_T_S, phi_flex);
+    return move_point(f, &f->nav, f->sensors, &nom1, decay, phi_flex, dx0, dtheta_rad, dv_m_s, T_s,
+                      dx1);
 }
 
 static gf_status propagate_ukf(gf_ins_filter *f, gf_ins_epochs *ep)
@@ -370,8 +408,11 @@ static gf_status propagate_ukf(gf_ins_filter *f, gf_ins_epochs *ep)
         return st;
     double decay[NMAX];
     state_decay(f, T, decay);
+    double phi_flex[4] = {1.0, 0.0, 0.0, 1.0};   /* the flexure's 2 x 2, as the EKF's */
+    if (f->idx_flex >= 0)
+        ins_flexure_transition(f, T, T > GF_INS_FIRST_ORDER_MAX_T_S, phi_flex);
     for (int p = 0; p < np; ++p) {
-        st = move_point(f, &f->nav0, f->sensors0, &nom1_state, decay, X + p * n,
+        st = move_point(f, &f->nav0, f->sensors0, &nom1_state, decay, phi_flex, X + p * n,
                         f->acc_dtheta_rad, f->acc_dv_m_s, T, Y + p * n);
         if (st != GF_OK)
             return st;
@@ -428,11 +469,48 @@ static gf_status propagate_ukf(gf_ins_filter *f, gf_ins_epochs *ep)
     return ep ? ins_epoch_open(f, ep, Phi) : GF_OK;
 }
 
+/* ---- the flexure's mean between updates ------------------------------------------------ */
+
+void ins_flexure_transition(const gf_ins_filter *f, double T, int second_order, double phi[4])
+{
+    /* per axis F = [[0, 1], [-b^2, -2 b]]; Phi = I + F T (+ (F T)^2 / 2), the series
+     * transition() forms for the covariance */
+    const double b = flexure_beta(f);
+    const double F[4] = {0.0, 1.0, -b * b, -2.0 * b};
+    phi[0] = 1.0 + F[0] * T;
+    phi[1] = F[1] * T;
+    phi[2] = F[2] * T;
+    phi[3] = 1.0 + F[3] * T;
+    if (second_order) {
+        const double half_T2 = 0.5 * T * T;
+        phi[0] += half_T2 * (F[0] * F[0] + F[1] * F[2]);
+        phi[1] += half_T2 * (F[0] * F[1] + F[1] * F[3]);
+        phi[2] += half_T2 * (F[2] * F[0] + F[3] * F[2]);
+        phi[3] += half_T2 * (F[2] * F[1] + F[3] * F[3]);
+    }
+}
+
+void ins_flexure_mean(gf_ins_filter *f, double T, int second_order)
+{
+    double phi[4];
+    ins_flexure_transition(f, T, second_order, phi);
+    double *a = f->transfer + T_FLEX, *r = f->transfer + T_FLEX_RATE;
+    for (int i = 0; i < 3; ++i) {
+        const double ai = a[i], ri = r[i];
+        a[i] = phi[0] * ai + phi[1] * ri;
+        r[i] = phi[2] * ai + phi[3] * ri;
+    }
+}
+
 gf_status ins_propagate(gf_ins_filter *f, gf_ins_epochs *ep)
 {
     if (!(f->acc_T_s > 0.0))
         return GF_OK;
     const gf_status st = f->cfg.filter == GF_INS_UKF ? propagate_ukf(f, ep) : propagate_ekf(f, ep);
+    /* the flexure estimates move with the flexure's mean dynamics (the error state's F
+     * is then theirs too: both the truth and the estimate follow it) */
+    if (st == GF_OK && f->idx_flex >= 0)
+        ins_flexure_mean(f, f->acc_T_s, f->acc_T_s > GF_INS_FIRST_ORDER_MAX_T_S);
     f->acc_T_s = 0.0;
     gf_v3_set(0.0, 0.0, 0.0, f->acc_dtheta_rad);
     gf_v3_set(0.0, 0.0, 0.0, f->acc_dv_m_s);

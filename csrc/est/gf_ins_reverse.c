@@ -23,13 +23,17 @@ gf_status gf_ins_reverse(gf_ins_filter *f)
     st = gf_sins_reverse(&f->nav);
     if (st != GF_OK)
         return st;
-    /* x_r = D x, P_r = D P D, D = -1 on dv and dbg (derivation in the header) */
+    /* x_r = D x, P_r = D P D, D = -1 on dv, dbg and the flexure rates (derivation in the
+     * header) */
     const int n = f->n_states;
     double d[NMAX];
     for (int i = 0; i < n; ++i)
         d[i] = 1.0;
-    for (int i = 0; i < 3; ++i)
+    for (int i = 0; i < 3; ++i) {
         d[IV + i] = d[IBG + i] = -1.0;
+        if (f->idx_flex >= 0)
+            d[f->idx_flex + 3 + i] = -1.0;
+    }
     for (int i = 0; i < n; ++i) {
         f->kf.x[i] *= d[i];
         for (int j = 0; j < n; ++j)
@@ -37,6 +41,7 @@ gf_status gf_ins_reverse(gf_ins_filter *f)
     }
     for (int i = 0; i < 3; ++i) {
         f->sensors[S_BG + i] = -f->sensors[S_BG + i];
+        f->transfer[T_FLEX_RATE + i] = -f->transfer[T_FLEX_RATE + i];
         f->w_ib_b_rad_s[i] = -f->w_ib_b_rad_s[i];
         f->prev_gyro_raw[i] = -f->prev_gyro_raw[i];
         f->still_w[i] = -f->still_w[i];

@@ -11,26 +11,37 @@
 #include "nav/gf_earth.h"
 #include "nav/gf_sins.h"
 
-/* error-state block -> first index of its estimates in sensors[], for the blocks present */
+/* error-state block -> first index of its estimates in sensors[] (transfer = 0) or in
+ * transfer[] (transfer = 1), for the blocks present */
 typedef struct sensor_block {
-    int idx, sens, len;
+    int idx, sens, len, transfer;
 } sensor_block;
 
-static int sensor_blocks(const gf_ins_filter *f, sensor_block b[7])
+#define MAX_BLOCKS 11
+
+static int sensor_blocks(const gf_ins_filter *f, sensor_block b[MAX_BLOCKS])
 {
     int nb = 0;
-    b[nb++] = (sensor_block){IBG, S_BG, 3};
-    b[nb++] = (sensor_block){IBA, S_BA, 3};
+    b[nb++] = (sensor_block){IBG, S_BG, 3, 0};
+    b[nb++] = (sensor_block){IBA, S_BA, 3, 0};
     if (f->idx_sg >= 0)
-        b[nb++] = (sensor_block){f->idx_sg, S_SG, 3};
+        b[nb++] = (sensor_block){f->idx_sg, S_SG, 3, 0};
     if (f->idx_sa >= 0)
-        b[nb++] = (sensor_block){f->idx_sa, S_SA, 3};
+        b[nb++] = (sensor_block){f->idx_sa, S_SA, 3, 0};
     if (f->idx_baro >= 0)
-        b[nb++] = (sensor_block){f->idx_baro, S_BARO, 1};
+        b[nb++] = (sensor_block){f->idx_baro, S_BARO, 1, 0};
     if (f->idx_odo >= 0)
-        b[nb++] = (sensor_block){f->idx_odo, S_ODO, 1};
+        b[nb++] = (sensor_block){f->idx_odo, S_ODO, 1, 0};
     if (f->idx_mount >= 0)
-        b[nb++] = (sensor_block){f->idx_mount, S_MOUNT, 2};
+        b[nb++] = (sensor_block){f->idx_mount, S_MOUNT, 2, 0};
+    if (f->idx_tmount >= 0)
+        b[nb++] = (sensor_block){f->idx_tmount, T_MOUNT, 3, 1};
+    if (f->idx_tlever >= 0)
+        b[nb++] = (sensor_block){f->idx_tlever, T_LEVER, 3, 1};
+    if (f->idx_toffset >= 0)
+        b[nb++] = (sensor_block){f->idx_toffset, T_OFFSET, 1, 1};
+    if (f->idx_flex >= 0)
+        b[nb++] = (sensor_block){f->idx_flex, T_FLEX, 6, 1};
     return nb;
 }
 
@@ -52,11 +63,14 @@ static void hyp_from_error(const gf_ins_filter *f, const double q_nom[4], const 
     out->lon = lon - dx[IP + 1];
     out->h = h - dx[IP + 2];
     memcpy(out->s, sens, sizeof out->s);
-    sensor_block b[7];
+    memcpy(out->t, f->transfer, sizeof out->t);
+    sensor_block b[MAX_BLOCKS];
     const int nb = sensor_blocks(f, b);
-    for (int k = 0; k < nb; ++k)
+    for (int k = 0; k < nb; ++k) {
+        double *est = b[k].transfer ? out->t : out->s;
         for (int i = 0; i < b[k].len; ++i)
-            out->s[b[k].sens + i] += dx[b[k].idx + i];
+            est[b[k].sens + i] += dx[b[k].idx + i];
+    }
 }
 
 void ins_hyp_from_state(const gf_ins_filter *f, const gf_sins_state *nav, const double *sens,
@@ -80,11 +94,12 @@ void ins_error_from_hyp(const gf_ins_filter *f, const gf_sins_state *nom, const 
     gf_q_conj(nom->q_bn, qc);
     gf_q_mul(hy->q, qc, qd);                 /* q(phi) = q_true (x) q_nom^* */
     gf_q_to_rotvec(qd, dx + IA);
-    sensor_block b[7];
+    sensor_block b[MAX_BLOCKS];
     const int nb = sensor_blocks(f, b);
     for (int k = 0; k < nb; ++k)
         for (int i = 0; i < b[k].len; ++i)
-            dx[b[k].idx + i] = hy->s[b[k].sens + i] - sens[b[k].sens + i];
+            dx[b[k].idx + i] = b[k].transfer ? hy->t[b[k].sens + i] - f->transfer[b[k].sens + i]
+                                             : hy->s[b[k].sens + i] - sens[b[k].sens + i];
 }
 
 /* ---- what the filter keeps from its state ------------------------------------------ */
@@ -120,6 +135,7 @@ gf_status ins_feedback(gf_ins_filter *f)
     if (st != GF_OK)
         return GF_ERR_DIVERGED;
     memcpy(f->sensors, hy.s, sizeof f->sensors);
+    memcpy(f->transfer, hy.t, sizeof f->transfer);
     memset(f->kf.x, 0, sizeof f->kf.x);
     ins_refresh_scale(f);
     return GF_OK;

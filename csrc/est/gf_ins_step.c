@@ -37,6 +37,7 @@ static gf_status mech_part(gf_ins_filter *f, const double g_raw[3], const double
         gf_v3_add(f->acc_dv_m_s, a, f->acc_dv_m_s);
         gf_v3_scale(g, 1.0 / dt, f->w_ib_b_rad_s);
         gf_v3_scale(a, 1.0 / dt, f->f_b_m_s2);
+        f->rate_lag_s = 0.5 * dt;
     } else {
         for (int i = 0; i < 3; ++i) {
             f->acc_dtheta_rad[i] += 0.5 * dt * (f->w_ib_b_rad_s[i] + g[i]);
@@ -290,6 +291,7 @@ static gf_status group_step(gf_ins_filter *f, int m, const double *t_s, const do
     const int l = m - 1;
     gf_v3_scale(g + 3 * l, 1.0 / dt[l], f->w_ib_b_rad_s);
     gf_v3_scale(a + 3 * l, 1.0 / dt[l], f->f_b_m_s2);
+    f->rate_lag_s = 0.5 * dt[l];
     f->acc_T_s += t_s[l] - f->t_s;
     f->t_s = t_s[l];
     f->nav.time_s = t_s[l];
@@ -330,6 +332,17 @@ static void write_output(const gf_ins_filter *f, const gf_ins_output *out, size_
     }
     if (out->standstill)
         out->standstill[k] = (int8_t)f->standstill;
+    if (out->transfer) {
+        double *t = out->transfer + GF_INS_N_TRANSFER * k;
+        memcpy(t, f->transfer, sizeof f->transfer);
+        gf_v3_scale(f->transfer + T_FLEX_RATE, dir, t + T_FLEX_RATE);
+    }
+    if (out->state_std) {
+        const int n = f->n_states;
+        double *sd = out->state_std + (size_t)n * k;
+        for (int i = 0; i < n; ++i)
+            sd[i] = sqrt(f->kf.P[i * n + i]);
+    }
 }
 
 static int output_ok(const gf_ins_output *out)

@@ -54,10 +54,10 @@ gf_status ins_update_at(gf_ins_filter *f, int32_t type, const gf_ins_meas *ms, d
     }
     local_frame lf;
     ins_local_frame_of(ref, &lf);
-    const ins_meas_ctx mc = {f, &lf, w_ref, ms};
     const double zero[NMAX] = {0};
     nav_hyp nom;
     ins_hyp_from_state(f, ref, f->sensors, zero, &nom);
+    const ins_meas_ctx mc = {f, &lf, w_ref, ms, &nom, f->f_b_m_s2};
     double y_nom[3], z[3] = {0, 0, 0}, r[3], R[9] = {0}, s_std[3];
     mm->predict(&mc, &nom, y_nom);
     if (ms)

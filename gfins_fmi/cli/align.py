@@ -4,6 +4,11 @@
                        [--heading DEG [--heading-std DEG]] [--fine [--fine-end T1]]
     gfins align motion IMU SPEED --initial LAT,LON,H,HEADING,PITCH,ROLL [--depth DEPTH]
                        [--passes N] [--grade G] [--heading-std DEG] [--output PASSES.csv]
+    gfins align transfer SLAVE_IMU MASTER_NAV [--matching velocity|velocity+attitude]
+                       [--mount H,P,R] [--lever X,Y,Z] [--time-offset S] [--fix lever|offset]
+                       [--flexure STD_DEG,TAU_S] [--grade consumer] [--gyro-bias DEG_H]
+                       [--accel-bias UG] [--truth T.csv] [--truth-json T.json]
+                       [--output EST.csv] [--plot FIG.png] [--simulate SECONDS]
 
 static: levelling and gyrocompassing over the window at rest (motion in it is refused;
 a swaying base is warned of, with the --disturbed hint), or with --disturbed the
@@ -14,27 +19,37 @@ the base sways). motion: the
 seed-003 in-motion alignment with a speed sensor (OdometerRecord CSV: t_s, speed_m_s,
 std_m_s) and optionally depth (BaroRecord CSV, h_m = -depth), forward-backward passes
 over the stored record; prints the attitude after each pass and writes the pass table.
-Exit status 0 when aligned, 1 when the alignment reports that it has not converged (the
-pass table is written all the same), 2 on bad input.
+transfer: a slave IMU aligned and calibrated against a master INS on the same host
+(gfins_fmi.estimation.transfer): prints the mounting, lever arm, time offset, biases and
+attitude with their 1-sigma (and, against a truth, the errors and the share outside 3
+sigma), writes the estimates over time and the convergence figure. Exit status 0 when
+aligned, 1 when the alignment reports that it has not converged (motion: its verdict;
+transfer: the mounting's 1-sigma above --tolerance; the outputs are written all the
+same), 2 on bad input.
 """
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
+import pathlib
 import sys
 import warnings
 
 import numpy as np
 
 from gfins_fmi import io
-from gfins_fmi.cli.files import compensated, outputs
+from gfins_fmi.cli.files import compensated, outputs, run_writing
 from gfins_fmi.cli.initial import from_initial_option, record_start_s
 from gfins_fmi.cli.noise import imu_noise
 from gfins_fmi.estimation.alignment import coarse_align, coarse_align_inertial
 from gfins_fmi.estimation.config import UG, FilterConfig, InitialState
 from gfins_fmi.estimation.fine_alignment import align_in_motion, fine_align
 from gfins_fmi.estimation.noise_file import read_imu_errors
-from gfins_fmi.io.columns import ALIGNMENT_PASS_COLUMNS
+from gfins_fmi.estimation.transfer import MasterErrors, TransferTruth, transfer_align
+from gfins_fmi.io.columns import ALIGNMENT_PASS_COLUMNS, TRANSFER_COLUMNS
+from gfins_fmi.io.navigation import read_navigation, write_navigation
+from gfins_fmi.sim.transfer import SlaveInstallation, simulate_transfer
 
 __all__ = ["run"]
 
@@ -72,6 +87,11 @@ def _given_heading(co, args):
 
 
 def run(args) -> int:
+    if args.mode == "transfer":
+        if args.simulate is not None:
+            _simulate(args)
+        return run_writing(_transfer, args, inputs=(args.imu, args.speed, args.truth, args.truth_json),
+                           files=(args.output, args.plot))
     with outputs(args.imu, args.speed, args.depth) as outs:
         if args.output:
             outs.claim(args.output)
@@ -82,7 +102,7 @@ def run(args) -> int:
 
 def _run(args, outs) -> int:
     deg = math.pi / 180.0
-    noise = imu_noise(args.grade)
+    noise = imu_noise(args.grade or "navigation")
     imu = io.ImuRecord.from_csv(args.imu)
     if args.imu_errors:
         imu = compensated(imu, read_imu_errors(args.imu_errors))
@@ -151,6 +171,119 @@ def _run(args, outs) -> int:
         print(f"{len(al.passes)} passes -> {args.output}")
     if not al.converged:
         print("gfins align: warning: the alignment has not converged (see the note above); exit status 1",
+              file=sys.stderr)
+        return 1
+    return 0
+
+
+# ---- transfer alignment ---------------------------------------------------------------------
+
+_ARCMIN = math.pi / 180.0 / 60.0
+_MG = 9.80665e-3
+
+
+def _simulate(args) -> None:
+    """--simulate: the study's scenario (bench/study_transfer.py) written where the command
+    then reads it, with its truth beside the slave's record."""
+    inst = SlaveInstallation(mount_rad=(20 * _ARCMIN, -15 * _ARCMIN, 25 * _ARCMIN), lever_arm_m=(0.1, 0.0, 0.0),
+                             time_offset_s=0.015)
+    sc = simulate_transfer(args.simulate, installation=inst, seed=args.sim_seed)
+    truth = args.imu.with_name(args.imu.name + ".truth.csv")
+    truth_json = args.imu.with_name(args.imu.name + ".truth.json")
+    info = {"mount_deg": [math.degrees(x) for x in inst.mount_rad], "lever_arm_m": list(inst.lever_arm_m),
+            "time_offset_s": inst.time_offset_s,
+            "gyro_bias_deg_h": [math.degrees(x) * 3600 for x in sc.slave_gyro_bias_rad_s],
+            "accel_bias_mg": [x / _MG for x in sc.slave_accel_bias_m_s2]}
+    with outputs() as outs:     # the scenario's four files as one set (the alignment's inputs)
+        for path in (args.imu, args.speed, truth, truth_json):
+            outs.claim(path)
+        sc.slave_imu.to_csv(outs.file(args.imu))
+        write_navigation(outs.file(args.speed), sc.master, sc.master_rate_rad_s)
+        sc.truth.to_csv(outs.file(truth))
+        outs.write_text(truth_json, json.dumps(info, indent=1) + "\n")
+        outs.commit()
+    print(f"simulated {args.simulate:g} s: slave -> {args.imu}, master -> {args.speed}, truth -> {truth}, "
+          f"{truth_json}")
+
+
+def _read_truth_json(path) -> dict:
+    try:
+        d = json.loads(pathlib.Path(path).read_text())
+    except (OSError, ValueError) as exc:
+        raise ValueError(f"--truth-json {path}: {exc}") from exc
+    conv = {"mount_deg": ("mount_rad", math.pi / 180), "lever_arm_m": ("lever_arm_m", 1.0),
+            "time_offset_s": ("time_offset_s", 1.0), "gyro_bias_deg_h": ("gyro_bias_rad_s", math.pi / 180 / 3600),
+            "accel_bias_mg": ("accel_bias_m_s2", _MG)}
+    unknown = set(d) - set(conv)
+    if unknown:
+        raise ValueError(f"--truth-json {path}: unknown keys {sorted(unknown)}; known: {sorted(conv)}")
+    return {conv[k][0]: np.asarray(v, float) * conv[k][1] for k, v in d.items()}
+
+
+def _transfer(args, outs) -> int:
+    deg = math.pi / 180.0
+    noise = imu_noise(args.grade or "consumer")
+    imu = io.ImuRecord.from_csv(args.imu)
+    if args.imu_errors:
+        imu = compensated(imu, read_imu_errors(args.imu_errors))
+    if args.speed.suffix == ".nav":
+        master, rates = io.read_kfgins_nav(args.speed), None
+    else:
+        master, rates = read_navigation(args.speed)
+    gb, ab = _biases(args, noise)
+    flex = args.flexure is not None
+    cfg = FilterConfig(imu=noise, input=imu.kind, master_mount=args.matching == "velocity+attitude",
+                       master_lever="lever" not in args.fix, master_time_offset="offset" not in args.fix,
+                       flexure=flex, flexure_std_rad=args.flexure[0] * deg if flex else 1e-3,
+                       flexure_tau_s=args.flexure[1] if flex else 1.0,
+                       master_mount_rad=tuple(x * deg for x in args.mount), master_lever_arm_m=tuple(args.lever),
+                       master_time_offset_s=args.time_offset, gate_probability=0.9999)
+    tilt, heading = (x * deg for x in args.master_att_std)
+    bt, bh = (x * deg for x in args.master_att_bias)
+    errors = MasterErrors(velocity_std_m_s=args.master_vel_std, attitude_std_rad=(tilt, tilt, heading),
+                          attitude_bias_std_rad=(bt, bt, bh))
+    ms = args.mount_std * deg
+    res = transfer_align(imu, master, config=cfg, master_rate_rad_s=rates, matching=args.matching,
+                         position=args.master_position, master_errors=errors, progress=args.progress,
+                         attitude_std_rad=1e-3, gyro_bias_std_rad_s=gb, accel_bias_std_m_s2=ab, mount_std_rad=ms,
+                         lever_std_m=args.lever_std, time_offset_std_s=args.offset_std)
+    if rates is None:
+        print("note: the master record has no rate columns: its angular rate is taken from its attitude "
+              "(central differences)")
+    for line in res.report():
+        print(line)
+    if res.mount_derived:
+        print("note: without attitude matching the mounting is the rotation between the slave's estimated "
+              "attitude and the master's")
+    truth = None
+    if args.truth or args.truth_json:
+        kw = _read_truth_json(args.truth_json) if args.truth_json else {}
+        slave = io.TruthRecord.from_csv(args.truth) if args.truth else None
+        truth = TransferTruth(slave=slave, **kw)
+        units = {"mount_rad": ("arcmin", 1 / _ARCMIN), "lever_arm_m": ("m", 1.0), "time_offset_s": ("ms", 1e3),
+                 "gyro_bias_rad_s": ("deg/h", 3600 / deg), "accel_bias_m_s2": ("mg", 1 / _MG),
+                 "attitude": ("arcmin", 1 / _ARCMIN)}
+        for name, e in res.errors(truth).items():
+            unit, k = units[name]
+            err = ", ".join(f"{x * k:.3g}" for x in np.atleast_1d(e["final_error"]))
+            print(f"against the truth: {name} error at the end {err} {unit}; outside 3 sigma in "
+                  f"{100 * e['outside_3sigma']:.2f}% of the (row, axis) pairs")
+    if args.output:
+        k = {"m": 1 / deg, "g": 3600 / deg, "a": 1 / _MG}
+        cols = [res.t_s, *(res.mount_rad * k["m"]).T, *(res.mount_std_rad * k["m"]).T, *res.lever_arm_m.T,
+                *res.lever_std_m.T, res.time_offset_s, res.time_offset_std_s, *(res.gyro_bias_rad_s * k["g"]).T,
+                *(res.gyro_bias_std_rad_s * k["g"]).T, *(res.accel_bias_m_s2 * k["a"]).T,
+                *(res.accel_bias_std_m_s2 * k["a"]).T, *(res.euler_rad * k["m"]).T, *(res.attitude_std_rad * k["m"]).T]
+        outs.write_table(args.output, TRANSFER_COLUMNS, cols)
+        print(f"{len(res.t_s)} rows -> {args.output}")
+    if args.plot:
+        res.plot(outs.file(args.plot), truth)
+        print(f"figure -> {args.plot}")
+    sig = res.mount_std_rad[-1]
+    if not (sig[0] <= args.tolerance * _ARCMIN and sig[2] <= args.tolerance * _ARCMIN):
+        print(f"gfins align: warning: the mounting's heading/roll 1-sigma ({sig[0] / _ARCMIN:.3g}, "
+              f"{sig[2] / _ARCMIN:.3g} arcmin) is above --tolerance {args.tolerance:g} arcmin: not "
+              "converged (a longer record, attitude matching or more manoeuvre; exit status 1)",
               file=sys.stderr)
         return 1
     return 0

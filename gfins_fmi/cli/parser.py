@@ -12,6 +12,7 @@ import pathlib
 
 from gfins_fmi.cli.integrate_options import INITIAL_OPTION, integrate_parser
 from gfins_fmi.cli.options import GRADES, count, prior_setting, real, vector
+from gfins_fmi.cli.transfer_options import transfer_arguments
 from gfins_fmi.gyrofree.array import MIN_LEVER_ARM_M
 from gfins_fmi.nav.earth import WGS84
 
@@ -93,6 +94,10 @@ def _check_align(args) -> str | None:
         return "static alignment needs --position LAT,LON,H"
     if args.mode == "motion" and (args.speed is None or args.initial is None):
         return "motion alignment needs a SPEED record and --initial LAT,LON,H,HEADING,PITCH,ROLL"
+    if args.mode == "transfer" and args.speed is None:
+        return "transfer alignment needs the master's navigation record: gfins align transfer SLAVE_IMU MASTER_NAV"
+    if args.mode != "transfer" and (args.simulate is not None or args.truth or args.truth_json or args.plot):
+        return "--simulate, --truth, --truth-json and --plot belong to transfer alignment"
     if args.disturbed and args.mode != "static":
         return "--disturbed is a static coarse alignment (on a swaying base)"
     if args.fine_end is not None and not args.fine:
@@ -318,13 +323,17 @@ def _check_calibrate(args) -> str | None:
 
 def _align(sub) -> argparse.ArgumentParser:
     p = sub.add_parser("align", help="initial alignment: static (levelling + gyrocompassing, fine "
-                       "alignment) or in motion with a speed sensor and forward-backward passes",
+                       "alignment), in motion with a speed sensor and forward-backward passes, or "
+                       "transfer alignment of a slave IMU against a master INS",
                        description="Initial alignment of recorded files (docs/alignment.md).")
-    p.add_argument("mode", choices=("static", "motion"))
-    p.add_argument("imu", type=pathlib.Path, help="IMU file (ImuRecord CSV / npz / parquet)")
+    p.add_argument("mode", choices=("static", "motion", "transfer"))
+    p.add_argument("imu", type=pathlib.Path, help="IMU file (ImuRecord CSV / npz / parquet); transfer: "
+                   "the slave's")
     imu_errors_argument(p)
-    p.add_argument("speed", type=pathlib.Path, nargs="?", default=None,
-                   help="motion: speed record (OdometerRecord: t_s, speed_m_s, std_m_s)")
+    p.add_argument("speed", type=pathlib.Path, nargs="?", default=None, metavar="SPEED|MASTER_NAV",
+                   help="motion: speed record (OdometerRecord: t_s, speed_m_s, std_m_s); transfer: the "
+                        "master's navigation record (KF-GINS .nav, our navigation CSV with NAV_SOLUTION "
+                        "columns and optionally omega_x_rad_s.. its rate, or a TruthRecord CSV)")
     p.add_argument("--position", type=vector(3, "LAT,LON,H in deg, deg, m"), default=None,
                    metavar="LAT,LON,H", help="static: position (deg, deg, m)")
     p.add_argument("--window", type=vector(2, "T0,T1 in s"), default=None, metavar="T0,T1",
@@ -354,10 +363,13 @@ def _align(sub) -> argparse.ArgumentParser:
                    help="1-sigma turn-on gyro bias, deg/h (default: the grade's bias instability)")
     p.add_argument("--accel-bias", type=real("ug", at_least=0.0), default=None,
                    help="1-sigma turn-on accelerometer bias, ug (default: the grade's)")
-    p.add_argument("--grade", choices=GRADES, default="navigation", help="IMU noise model")
+    p.add_argument("--grade", choices=GRADES, default=None,
+                   help="IMU noise model (default navigation; transfer: consumer, the slave's)")
     p.add_argument("--output", type=pathlib.Path, default=None,
-                   help="motion: CSV of the state after each pass")
+                   help="motion: CSV of the state after each pass; transfer: CSV of the estimates and "
+                        "their 1-sigma over time")
     p.add_argument("--progress", action="store_true", help="report the passes as they run")
+    transfer_arguments(p)
     _command(p, "align", check=_check_align)
     return p
 

@@ -21,7 +21,7 @@ from gfins_fmi.nav.imu_errors import DEG_H, ImuNoise
 from gfins_fmi.nav.strapdown import NavState
 
 __all__ = ["FilterConfig", "InitialState", "FilterError", "MEAS_TYPES", "UPDATE_STATUS",
-           "SENSOR_NAMES", "N_SENSORS", "state_names", "vector3"]
+           "SENSOR_NAMES", "N_SENSORS", "TRANSFER_NAMES", "N_TRANSFER", "state_names", "vector3"]
 
 #: 1 ug in m/s^2 as the filter's noise model converts it. Not gfins_fmi.nav.imu_errors.UG
 #: (1e-6 * G0 = 9.806649999999999e-06, one unit in the last place below): kept, so that
@@ -33,7 +33,9 @@ DEG = deg
 MEAS_TYPES = {int(lib.GF_INS_MEAS_GNSS_POS): "gnss_pos", int(lib.GF_INS_MEAS_GNSS_VEL): "gnss_vel",
               int(lib.GF_INS_MEAS_BARO): "baro", int(lib.GF_INS_MEAS_ODO): "odometer",
               int(lib.GF_INS_MEAS_NHC): "nhc", int(lib.GF_INS_MEAS_ZUPT): "zupt",
-              int(lib.GF_INS_MEAS_ZARU): "zaru", int(lib.GF_INS_MEAS_SPEED): "speed"}
+              int(lib.GF_INS_MEAS_ZARU): "zaru", int(lib.GF_INS_MEAS_SPEED): "speed",
+              int(lib.GF_INS_MEAS_MASTER_VEL): "master_vel", int(lib.GF_INS_MEAS_MASTER_ATT): "master_att",
+              int(lib.GF_INS_MEAS_MASTER_POS): "master_pos"}
 #: outcome of an update (GF_INS_ACCEPTED, GF_INS_REJECTED_*)
 UPDATE_STATUS = {int(lib.GF_INS_ACCEPTED): "accepted", int(lib.GF_INS_REJECTED_GATE): "gate",
                  int(lib.GF_INS_REJECTED_SINGULAR): "singular",
@@ -44,6 +46,13 @@ SENSOR_NAMES = ("bg_x_rad_s", "bg_y_rad_s", "bg_z_rad_s", "ba_x_m_s2", "ba_y_m_s
                 "sg_x", "sg_y", "sg_z", "sa_x", "sa_y", "sa_z", "baro_bias_m", "odo_scale",
                 "odo_pitch_rad", "odo_heading_rad")
 N_SENSORS = int(lib.GF_INS_N_SENSORS)
+#: the transfer-alignment estimates, in the order of every ``transfer`` array: corrections
+#: to the configured mounting (heading, pitch, roll), lever arm (master axes) and time
+#: offset, then the flexure angles and rates (gf_ins_gnss.h GF_INS_N_TRANSFER)
+TRANSFER_NAMES = ("mount_heading_rad", "mount_pitch_rad", "mount_roll_rad", "lever_x_m", "lever_y_m",
+                  "lever_z_m", "time_offset_s", "flex_heading_rad", "flex_pitch_rad", "flex_roll_rad",
+                  "flex_heading_rate_rad_s", "flex_pitch_rate_rad_s", "flex_roll_rate_rad_s")
+N_TRANSFER = int(lib.GF_INS_N_TRANSFER)
 
 
 class FilterError(GfinsError, ValueError):
@@ -60,7 +69,9 @@ def state_names(config: "FilterConfig") -> tuple:
     """The error-state names of a configuration (see
     :func:`gfins_fmi.estimation.error_model.ins_state_names`)."""
     return ins_state_names(config.scale_factors, config.baro_bias, config.odometer_scale,
-                           config.odometer_mount)
+                           config.odometer_mount, master_mount=config.master_mount,
+                           master_lever=config.master_lever,
+                           master_time_offset=config.master_time_offset, flexure=config.flexure)
 
 
 def vector3(name, value, unit):
@@ -114,7 +125,8 @@ def _checked(st: Setting, value):
         if arr.shape != (st.size,) and not (st.size == 3 and arr.ndim == 0):
             raise _refuse(st, value, f" ({st.size} values)")
         arr = np.broadcast_to(arr, (st.size,))
-        ok = np.isfinite(arr) & {"half_pi": np.abs(arr) < np.pi / 2, "nonneg_each": arr >= 0}.get(
+        ok = np.isfinite(arr) & {"half_pi": np.abs(arr) < np.pi / 2, "nonneg_each": arr >= 0,
+                                 "mount": (np.arange(st.size) != 1) | (np.abs(arr) < np.pi / 2)}.get(
             st.bounds, True)
         if not np.all(ok):
             raise _refuse(st, value)
@@ -256,6 +268,11 @@ _STD_LIMITS = {
     "baro_bias_std_m": (1e5, "m", "more than the atmosphere"),
     "odometer_scale_std": (1.0, "", "a scale error of 100 %"),
     "odometer_mount_std_rad": (math.pi / 2, "rad", "a quarter turn, the boresight's range"),
+    "master_mount_std_rad": (math.pi / 2, "rad", "a quarter turn; the mounting's error is taken as "
+                                                 "small angles"),
+    "master_lever_std_m": (1000.0, "m", "a lever arm longer than any host"),
+    "master_time_offset_std_s": (10.0, "s", "streams this far apart are not one host's; align "
+                                            "their time scales first"),
 }
 
 
@@ -279,6 +296,16 @@ class InitialState:
     odometer_scale_std: Optional[float] = None
     odometer_mount_std_rad: Optional[object] = None   # (pitch, heading) or one for both, rad
     sensors: Optional[np.ndarray] = None      # initial estimates (SENSOR_NAMES order)
+    #: transfer alignment (random constants): mounting (heading, pitch, roll, rad), lever
+    #: arm (master axes, m) and time offset (s) about the configured nominal ones
+    master_mount_std_rad: object = 0.02
+    master_lever_std_m: object = 0.1
+    master_time_offset_std_s: float = 0.02
+    #: the start attitude is a master's turned by the configured mounting (transfer
+    #: alignment): with mounting states, the attitude and mounting errors start correlated
+    #: (``gf_ins_master_start_covariance``) and ``attitude_std_rad`` is then the
+    #: uncertainty beyond the mounting's (the master's own attitude error)
+    attitude_from_master: bool = False
 
     def std_blocks(self, config: FilterConfig) -> dict:
         """The 1-sigma of every error block as ``gf_ins_initial_std`` holds it (its member
@@ -299,8 +326,12 @@ class InitialState:
             "baro_bias_std_m": given(self.baro_bias_std_m, config.baro_bias_std_m),
             "odometer_scale_std": given(self.odometer_scale_std, config.odometer_scale_std),
             "odometer_mount_std_rad": given(self.odometer_mount_std_rad, config.odometer_mount_std_rad),
+            "master_mount_std_rad": self.master_mount_std_rad,
+            "master_lever_std_m": self.master_lever_std_m,
+            "master_time_offset_std_s": self.master_time_offset_std_s,
         }
-        sizes = {"baro_bias_std_m": 0, "odometer_scale_std": 0, "odometer_mount_std_rad": 2}
+        sizes = {"baro_bias_std_m": 0, "odometer_scale_std": 0, "odometer_mount_std_rad": 2,
+                 "master_time_offset_std_s": 0}
         out = {}
         for name, value in values.items():
             size = sizes.get(name, 3)
@@ -336,8 +367,13 @@ class InitialState:
         n = config.n_states
         P0 = np.empty((n, n))
         bad = ffi.new("int32_t *")
-        st = lib.gf_ins_initial_covariance(config._c(), float(nav.lat_rad), float(nav.h_m), std,
+        c = config._c()
+        st = lib.gf_ins_initial_covariance(c, float(nav.lat_rad), float(nav.h_m), std,
                                            ptr(P0, P0.size), bad)
+        if st == lib.GF_OK and self.attitude_from_master and config.master_mount:
+            q = np.ascontiguousarray(nav.q_bn, dtype=float)
+            check_status(lib.gf_ins_master_start_covariance(c, ptr(q, 4), ptr(P0, P0.size)),
+                         "gf_ins_master_start_covariance")
         if st == lib.GF_OK:
             return P0
         if bad[0]:

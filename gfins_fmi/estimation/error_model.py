@@ -23,8 +23,11 @@ accelerometer bias (m/s^2) not yet compensated; optional blocks follow (see
 
 
 def ins_state_names(scale_states: bool = False, baro_state: bool = False,
-                    odo_state: bool = False, odo_mount_state: bool = False) -> tuple:
-    """State names of a filter configuration (15 to 25 states, gf_ins_gnss.h order)."""
+                    odo_state: bool = False, odo_mount_state: bool = False, *,
+                    master_mount: bool = False, master_lever: bool = False,
+                    master_time_offset: bool = False, flexure: bool = False) -> tuple:
+    """State names of a filter configuration (15 to 38 states, gf_ins_gnss.h order); the
+    transfer-alignment blocks (issue 24) last."""
     names = list(INS_STATES)
     if scale_states:
         names += ["sg_x", "sg_y", "sg_z", "sa_x", "sa_y", "sa_z"]
@@ -34,12 +37,33 @@ def ins_state_names(scale_states: bool = False, baro_state: bool = False,
         names += ["k_odo"]
     if odo_mount_state:
         names += ["odo_pitch", "odo_heading"]
+    if master_mount:
+        names += ["mount_heading", "mount_pitch", "mount_roll"]
+    if master_lever:
+        names += ["lever_x", "lever_y", "lever_z"]
+    if master_time_offset:
+        names += ["time_offset"]
+    if flexure:
+        names += ["flex_heading", "flex_pitch", "flex_roll", "flex_heading_rate", "flex_pitch_rate",
+                  "flex_roll_rate"]
     return tuple(names)
+
+
+#: the flexure's b = FLEX_BETA_TAU / tau (1/s): the second-order Markov model of the
+#: transfer-alignment literature (Kain & Cloutier 1989), gf_ins_gnss.h
+FLEX_BETA_TAU = 2.146
+
+
+def _transfer_flags(kwargs: dict) -> dict:
+    return {k: bool(kwargs.get(k, False)) for k in ("master_mount", "master_lever",
+                                                    "master_time_offset", "flexure")}
 
 
 def ins_error_matrices(lat_rad: float, h_m: float, v_enu_m_s, q_bn, f_b_m_s2, w_ib_b_rad_s,
                        *, scale_states: bool = False, baro_state: bool = False,
-                       odo_state: bool = False, odo_mount_state: bool = False, tau_s=None):
+                       odo_state: bool = False, odo_mount_state: bool = False, tau_s=None,
+                       master_mount: bool = False, master_lever: bool = False,
+                       master_time_offset: bool = False, flexure: bool = False):
     """The continuous error model of the integrated-navigation filter, x' = F x + G w:
     **the definition** that the C filter (csrc/est/gf_ins_*.c) implements; tests compare
     the two at several states, and this one with a numerical linearisation of the
@@ -57,14 +81,18 @@ def ins_error_matrices(lat_rad: float, h_m: float, v_enu_m_s, q_bn, f_b_m_s2, w_
         dlon' = (dv_E + v_E tan L dL - v_E dh / (R_N + h)) / ((R_N + h) cos L)
         dh'   = dv_U,    dg_U = 2 g dh / (sqrt(R_M R_N) + h)
         sensor states: first-order Gauss-Markov x' = -x / tau (tau 0 or inf: constant)
+        transfer alignment: mounting, lever arm, time offset random constants; flexure per
+        axis f' = r, r' = -b^2 f - 2 b r + w, b = 2.146 / tau_s["flexure"]
 
     Parameters
     ----------
     lat_rad, h_m, v_enu_m_s, q_bn : the navigation state (rad, m, m/s, q_b^n)
     f_b_m_s2, w_ib_b_rad_s : specific force and angular rate, body axes
-    scale_states, baro_state, odo_state : the optional blocks
+    scale_states, baro_state, odo_state, odo_mount_state : the optional blocks
+    master_mount, master_lever, master_time_offset, flexure : the transfer-alignment blocks
     tau_s : dict of correlation times (s) by block name ("bg", "ba", "sg", "sa", "baro",
-        "odo", "odo_mount"); missing or 0: random constant
+        "odo", "odo_mount"; missing or 0: random constant; "flexure": its correlation time,
+        required with ``flexure``)
 
     Returns
     -------
@@ -92,7 +120,9 @@ def ins_error_matrices(lat_rad: float, h_m: float, v_enu_m_s, q_bn, f_b_m_s2, w_
     Jen_p = np.zeros((3, 3))
     Jen_p[:, 0] = [0.0, 0.0, vE / (Rn * cL ** 2)]
     Jen_p[:, 2] = [vN / Rm ** 2, -vE / Rn ** 2, -vE * tL / Rn ** 2]
-    names = ins_state_names(scale_states, baro_state, odo_state, odo_mount_state)
+    names = ins_state_names(scale_states, baro_state, odo_state, odo_mount_state,
+                            master_mount=master_mount, master_lever=master_lever,
+                            master_time_offset=master_time_offset, flexure=flexure)
     n = len(names)
     ix = {k: names.index(k) for k in names}
     V, P, A = slice(0, 3), slice(3, 6), slice(6, 9)
@@ -129,6 +159,16 @@ def ins_error_matrices(lat_rad: float, h_m: float, v_enu_m_s, q_bn, f_b_m_s2, w_
         blocks["odo"] = [ix["k_odo"]]
     if odo_mount_state:
         blocks["odo_mount"] = [ix["odo_pitch"], ix["odo_heading"]]
+    if flexure:
+        t = float(tau.pop("flexure", 0.0))
+        if not (t > 0 and np.isfinite(t)):
+            raise ValueError("flexure needs tau_s['flexure'] > 0 (its correlation time, s)")
+        b = FLEX_BETA_TAU / t
+        for k in range(3):
+            a, r = ix["flex_heading"] + k, ix["flex_heading_rate"] + k
+            F[a, r] = 1.0
+            F[r, a] = -b * b
+            F[r, r] = -2.0 * b
     unknown = set(tau) - set(blocks)
     if unknown:
         raise ValueError(f"tau_s has no block {sorted(unknown)}; blocks: {sorted(blocks)}")
@@ -150,7 +190,8 @@ def ins_error_model(lat_rad: float, h_m: float, v_enu_m_s, q_bn, f_b_m_s2, w_ib_
     import control   # lazy: python-control takes ~1 s to import (start-up of every command)
     F, G = ins_error_matrices(lat_rad, h_m, v_enu_m_s, q_bn, f_b_m_s2, w_ib_b_rad_s, **kwargs)
     names = ins_state_names(kwargs.get("scale_states", False), kwargs.get("baro_state", False),
-                            kwargs.get("odo_state", False), kwargs.get("odo_mount_state", False))
+                            kwargs.get("odo_state", False), kwargs.get("odo_mount_state", False),
+                            **_transfer_flags(kwargs))
     n = len(names)
     inputs = ["w_a_x", "w_a_y", "w_a_z", "w_g_x", "w_g_y", "w_g_z"] + [f"w_{k}" for k in names[9:]]
     return control.ss(F, G, np.eye(n), np.zeros((n, n - 3)), inputs=inputs,

@@ -29,7 +29,7 @@ def _struct_dtype(cname: str, spec) -> np.dtype:
 
 #: one measurement (gf_ins_meas)
 MEAS_DTYPE = _struct_dtype("gf_ins_meas", [("type", "<i4"), ("t_s", "<f8"), ("z", "<f8", (3,)),
-                                            ("std", "<f8", (3,))])
+                                            ("std", "<f8", (3,)), ("aux", "<f8", (3,))])
 #: the state after a forward or backward pass (gf_ins_pass)
 PASS_DTYPE = _struct_dtype("gf_ins_pass", [("direction", "<i4"), ("t_s", "<f8"), ("q_bn", "<f8", (4,)),
                                             ("v_n_m_s", "<f8", (3,)), ("std9", "<f8", (9,)),
@@ -41,10 +41,13 @@ INNOVATION_DTYPE = _struct_dtype("gf_ins_innovation", [("t_s", "<f8"), ("type", 
                                                    ("s_std", "<f8", (3,))])
 
 
-def gather_measurements(gnss, baro, odometer, gnss_velocity: bool, speed=None) -> np.ndarray:
+def gather_measurements(gnss, baro, odometer, gnss_velocity: bool, speed=None,
+                        master=None) -> np.ndarray:
     """All measurements as one array of gf_ins_meas, sorted by time (stable: position
-    before velocity at the same instant); refused with a message when one holds NaN or Inf
-    or a standard deviation <= 0."""
+    before velocity at the same instant; the master's after the sensors' at one instant);
+    refused with a message when one holds NaN or Inf or a standard deviation <= 0.
+    ``master``: rows of the transfer-alignment kinds already in ``MEAS_DTYPE`` (from
+    :func:`gfins_fmi.estimation.transfer.master_measurements`)."""
     parts = []
 
     def block(t, type_, z, std):
@@ -73,18 +76,25 @@ def gather_measurements(gnss, baro, odometer, gnss_velocity: bool, speed=None) -
     if speed is not None:
         block(np.asarray(speed.t_s, float), lib.GF_INS_MEAS_SPEED,
               np.asarray(speed.speed_m_s, float)[:, None], np.asarray(speed.std_m_s, float)[:, None])
+    if master is not None:
+        if not isinstance(master, np.ndarray) or master.dtype != MEAS_DTYPE:
+            raise TypeError("master must be an array of MEAS_DTYPE (see "
+                            "gfins_fmi.estimation.transfer.master_measurements)")
+        parts.append(master)
     if not parts:
         return np.zeros(0, MEAS_DTYPE)
     meas = np.concatenate(parts)
     bad = ~(np.isfinite(meas["t_s"]) & np.all(np.isfinite(meas["z"]), axis=1) &
-            np.all(np.isfinite(meas["std"]), axis=1))
+            np.all(np.isfinite(meas["std"]), axis=1) & np.all(np.isfinite(meas["aux"]), axis=1))
     if np.any(bad):
         k = int(np.flatnonzero(bad)[0])
         raise ValueError(f"measurement {MEAS_TYPES[int(meas['type'][k])]} at t = {float(meas['t_s'][k])!r} s "
                          "holds NaN or Inf (value or standard deviation): remove it or mark the "
                          "epoch invalid")
     for type_, m in ((lib.GF_INS_MEAS_GNSS_POS, 3), (lib.GF_INS_MEAS_GNSS_VEL, 3),
-                     (lib.GF_INS_MEAS_BARO, 1), (lib.GF_INS_MEAS_ODO, 1), (lib.GF_INS_MEAS_SPEED, 1)):
+                     (lib.GF_INS_MEAS_BARO, 1), (lib.GF_INS_MEAS_ODO, 1), (lib.GF_INS_MEAS_SPEED, 1),
+                     (lib.GF_INS_MEAS_MASTER_VEL, 3), (lib.GF_INS_MEAS_MASTER_ATT, 3),
+                     (lib.GF_INS_MEAS_MASTER_POS, 3)):
         sel = meas["type"] == type_
         if np.any(sel) and not np.all(meas["std"][sel, :m] > 0):
             k = int(np.flatnonzero(sel & ~np.all(meas["std"][:, :m] > 0, axis=1))[0])

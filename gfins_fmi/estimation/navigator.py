@@ -16,8 +16,8 @@ import tempfile
 import numpy as np
 
 from gfins_fmi._lib import check_status, ffi, lib, ptr, status_text
-from gfins_fmi.estimation.config import (N_SENSORS, SENSOR_NAMES, FilterConfig, FilterError,
-                                         InitialState, vector3)
+from gfins_fmi.estimation.config import (N_SENSORS, N_TRANSFER, SENSOR_NAMES, FilterConfig,
+                                         FilterError, InitialState, vector3)
 from gfins_fmi.estimation.measurement_checks import check_measurements
 from gfins_fmi.estimation.measurements import INNOVATION_DTYPE, PASS_DTYPE, gather_measurements
 from gfins_fmi.estimation.solution import IntegratedSolution
@@ -140,8 +140,9 @@ class IntegratedNavigator:
         return F, G, q
 
     def run(self, imu, gnss=None, baro=None, odometer=None, *, speed=None, gnss_velocity: bool = True,
-            smoother: bool = False, chunk: int = 200_000, progress: bool = False,
-            spill_bytes: int = 1 << 30, spill_dir=None, checks: str = "raise") -> IntegratedSolution:
+            master=None, state_std: bool = False, smoother: bool = False, chunk: int = 200_000,
+            progress: bool = False, spill_bytes: int = 1 << 30, spill_dir=None,
+            checks: str = "raise") -> IntegratedSolution:
         """Process a record.
 
         Parameters
@@ -155,6 +156,11 @@ class IntegratedNavigator:
         odometer : record with ``t_s``, ``speed_m_s``, ``std_m_s``.
         speed : tachometer record (horizontal speed magnitude, seed 003) with ``t_s``,
             ``speed_m_s``, ``std_m_s`` (an ``OdometerRecord`` serves).
+        master : a master INS's measurements for transfer alignment (an array of
+            ``MEAS_DTYPE`` rows of the master kinds:
+            :func:`gfins_fmi.estimation.transfer.master_measurements`).
+        state_std : also keep the 1-sigma of every error state per row
+            (``IntegratedSolution.state_std``, n x n_states).
         smoother : keep what the RTS smoother needs (at the covariance epochs: ~4 kB per
             epoch with 15 states) for :meth:`IntegratedSolution.smooth`; beyond
             ``spill_bytes`` it goes to memory-mapped files in ``spill_dir``.
@@ -194,7 +200,7 @@ class IntegratedNavigator:
         chunk = -(-int(chunk) // cfg.subsamples) * cfg.subsamples
         if self.reversed:
             raise ValueError("the filter is reversed in time: use run_backward(), or reverse() it again")
-        meas = gather_measurements(gnss, baro, odometer, gnss_velocity, speed)
+        meas = gather_measurements(gnss, baro, odometer, gnss_velocity, speed, master)
         if n and checks != "off":
             check_measurements(self.t_s, float(t[-1]), checks, stacklevel=3, gnss=gnss, baro=baro,
                                odometer=odometer, speed=speed)
@@ -223,6 +229,11 @@ class IntegratedNavigator:
         out = {"t_s": np.empty(n), "q_bn": np.empty((n, 4)), "v_n_m_s": np.empty((n, 3)),
                "pos": np.empty((n, 3)), "std": np.empty((n, 9)), "sensors": np.empty((n, N_SENSORS)),
                "standstill": np.zeros(n, np.int8)}
+        transfer = cfg.master_mount or cfg.master_lever or cfg.master_time_offset or cfg.flexure
+        if transfer:
+            out["transfer"] = np.empty((n, N_TRANSFER))
+        if state_std:
+            out["state_std"] = np.empty((n, self.n_states))
         c_out = ffi.new("gf_ins_output *")
         n_done, m_done = ffi.new("size_t *"), ffi.new("size_t *")
         bar = None
@@ -246,6 +257,10 @@ class IntegratedNavigator:
                 c_out.std = ptr(out["std"][row:r_hi], 9 * (hi - lo))
                 c_out.sensors = ptr(out["sensors"][row:r_hi], N_SENSORS * (hi - lo))
                 c_out.standstill = ptr(out["standstill"][row:r_hi], hi - lo, "int8_t")
+                if transfer:
+                    c_out.transfer = ptr(out["transfer"][row:r_hi], N_TRANSFER * (hi - lo))
+                if state_std:
+                    c_out.state_std = ptr(out["state_std"][row:r_hi], self.n_states * (hi - lo))
                 mptr = ptr(sub, len(sub), "gf_ins_meas") if len(sub) else ffi.NULL
                 status = lib.gf_ins_run(self._f, hi - lo, ptr(t[lo:hi], hi - lo), ptr(g[lo:hi], 3 * (hi - lo)),
                                         ptr(a[lo:hi], 3 * (hi - lo)),
@@ -268,7 +283,9 @@ class IntegratedNavigator:
                                  out["pos"][:k, 0].copy(), out["pos"][:k, 1].copy(), out["pos"][:k, 2].copy(),
                                  out["std"][:k], out["sensors"][:k], out["standstill"][:k].astype(bool),
                                  log_arr[:int(log.count)].copy(), cfg,
-                                 epochs.trimmed() if epochs else None)
+                                 epochs.trimmed() if epochs else None,
+                                 transfer=out["transfer"][:k] if transfer else None,
+                                 state_std=out["state_std"][:k] if state_std else None)
         if status != lib.GF_OK:
             hints = {
                 lib.GF_ERR_BAD_TIME: (f"IMU sample {bad} at t = {float(t[bad])!r} s: the interval from the "

@@ -38,6 +38,7 @@ BOUNDS = {
     "half_pi": "finite and inside (-pi/2, pi/2) (each element)",
     "nonneg_each": "finite and >= 0 (each element)",
     "subsamples": "an integer in 1..4 (more than 1 only with input 'increments')",
+    "mount": "finite, the pitch (the second) inside (-pi/2, pi/2)",
 }
 
 _DEG = math.pi / 180.0
@@ -77,6 +78,8 @@ class Setting:
     fmu : an FMU parameter (False: what the FMU cannot use).
     fmu_default : the FMU's start value when it is not the C default.
     when : the flag without which the setting is not checked nor used (C skips its check).
+    transfer : a setting of transfer alignment against a master INS (issue 24): a parameter
+        of the transfer-alignment FMU, not of ``gfins_ins_gnss`` (which has no master inputs).
     """
     name: str
     unit: Optional[str]
@@ -90,6 +93,7 @@ class Setting:
     fmu: bool = True
     fmu_default: object = None
     when: Optional[str] = None
+    transfer: bool = False
 
     @property
     def member(self) -> str:
@@ -202,6 +206,13 @@ SETTINGS = (
            "Gauss-Markov std", python="odometer_mount_std_rad", default=0.035),
     _noise("odometer_mount_tau_s", "s", "odometer boresight correlation time (0: random "
            "constant)", python="odometer_mount_tau_s"),
+    Setting("noise.flexure_std_rad", "rad", "float", "positive", 1e-3,
+            "structural flexure between master and slave (second-order Gauss-Markov per "
+            "axis, added to the mounting angles): stationary std of each angle",
+            python="flexure_std_rad", when="flexure", transfer=True),
+    Setting("noise.flexure_tau_s", "s", "float", "positive", 1.0,
+            "flexure correlation time: b = 2.146 / tau in f'' + 2 b f' + b^2 f = w",
+            python="flexure_tau_s", when="flexure", transfer=True),
     Setting("gnss_lever_arm_m", "m", "vector", "finite", (0.0, 0.0, 0.0),
             "IMU -> GNSS antenna phase centre, body axes right, front, up", size=3),
     Setting("odometer_lever_arm_m", "m", "vector", "finite", (0.0, 0.0, 0.0),
@@ -249,6 +260,24 @@ SETTINGS = (
             "IMU samples per navigation update in the batch run (increments only): groups "
             "of this many samples with the matching multi-sample coning and sculling between "
             "measurement and propagation instants, one output row per update", fmu=False),
+    _flag("master_mount", False, "transfer alignment: mounting-error states (heading, pitch, "
+          "roll of the slave's axes in the master's; random constants)", transfer=True),
+    _flag("master_lever", False, "transfer alignment: lever-arm error states (the slave IMU "
+          "from the master IMU, master axes; random constants)", transfer=True),
+    _flag("master_time_offset", False, "transfer alignment: time-offset error state (slave "
+          "stamp - master stamp of one instant; a random constant)", transfer=True),
+    _flag("flexure", False, "transfer alignment: structural flexure states (3 angles and "
+          "their rates, second-order Gauss-Markov)", transfer=True),
+    Setting("master_mount_rad", "rad", "vector", "mount", (0.0, 0.0, 0.0),
+            "nominal mounting: heading, pitch, roll of the slave's axes in the master's "
+            "(gf_sins.h's Euler convention); with master_mount the filter estimates a "
+            "correction", size=3, transfer=True),
+    Setting("master_lever_arm_m", "m", "vector", "finite", (0.0, 0.0, 0.0),
+            "nominal lever arm: the slave IMU from the master IMU, master axes right, front, "
+            "up", size=3, transfer=True),
+    _float("master_time_offset_s", "s", "finite", 0.0,
+           "nominal time offset: slave stamp - master stamp of one instant (the master's "
+           "outputs stamped t describe the slave's t + offset)", transfer=True),
 )
 
 _BY_MEMBER = {s.member: s for s in SETTINGS}
@@ -264,6 +293,7 @@ def python_settings() -> tuple:
     return tuple(s for s in SETTINGS if s.python_name)
 
 
-def fmu_settings() -> tuple:
-    """The rows that are FMU parameters."""
-    return tuple(s for s in SETTINGS if s.fmu)
+def fmu_settings(transfer: bool = False) -> tuple:
+    """The rows that are FMU parameters: of ``gfins_ins_gnss``, or with ``transfer`` of the
+    transfer-alignment FMU (every FMU row, the transfer rows included)."""
+    return tuple(s for s in SETTINGS if s.fmu and (transfer or not s.transfer))

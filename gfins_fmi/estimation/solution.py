@@ -30,6 +30,10 @@ class IntegratedSolution:
     innovations: structured array, one row per update (t_s, type, status, m, nis, r[3],
         s_std[3]; ``MEAS_TYPES``, ``UPDATE_STATUS``);
     epochs: what the smoother needs (None unless the run kept it);
+    transfer (n, 13): transfer-alignment estimates (``TRANSFER_NAMES``: corrections to the
+        configured mounting, lever arm and time offset, flexure), None without those states;
+    state_std (n, n_states): 1-sigma of every error state (``state_names(config)``), None
+        unless the run kept it;
     config, n_states.
     """
 
@@ -45,6 +49,8 @@ class IntegratedSolution:
     innovations: np.ndarray
     config: FilterConfig
     epochs: Optional[dict] = None
+    transfer: Optional[np.ndarray] = None
+    state_std: Optional[np.ndarray] = None
     _euler: Optional[np.ndarray] = field(default=None, repr=False)
 
     def __len__(self) -> int:
@@ -73,7 +79,9 @@ class IntegratedSolution:
         return IntegratedSolution(self.t_s[sl].copy(), self.q_bn[sl].copy(), self.v_n_m_s[sl].copy(),
                                   self.lat_rad[sl].copy(), self.lon_rad[sl].copy(), self.h_m[sl].copy(),
                                   self.std[sl].copy(), self.sensors[sl].copy(), self.standstill[sl].copy(),
-                                  self.innovations, self.config, self.epochs)
+                                  self.innovations, self.config, self.epochs,
+                                  None if self.transfer is None else self.transfer[sl].copy(),
+                                  None if self.state_std is None else self.state_std[sl].copy())
 
     def smooth(self, progress: bool = False) -> "SmoothedSolution":
         """Rauch–Tung–Striebel smoothing (backward pass over the stored epochs, one C

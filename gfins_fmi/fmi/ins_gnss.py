@@ -96,7 +96,8 @@ def ins_gnss_fmu_parameters(config, initial) -> dict:
         params[st.short] = [float(x) for x in value] if st.kind == "vector" else value
     nav = initial.nav
     sensors = np.zeros(16) if initial.sensors is None else np.asarray(initial.sensors, float)
-    params.update({INITIAL_STD_PARAMETERS[k]: v for k, v in initial.std_blocks(config).items()})
+    params.update({INITIAL_STD_PARAMETERS[k]: v for k, v in initial.std_blocks(config).items()
+                   if k in INITIAL_STD_PARAMETERS})   # not the transfer-alignment blocks
     params.update(
         q0=np.asarray(nav.q_bn, float).tolist(), v0=np.asarray(nav.v_n_m_s, float).tolist(),
         lat0=float(nav.lat_rad), lon0=float(nav.lon_rad), h0=float(nav.h_m),

@@ -20,7 +20,8 @@ __all__ = ["MODELS", "FmuRunError", "fmu_path", "validate", "fmu_variables"]
 #: model name -> model identifier of the FMUs shipped
 MODELS = {"accel9": "gfins_accel9", "sins": "gfins_sins", "gfnav_cube6": "gfins_gfnav_cube6",
           "gfnav_qin9": "gfins_gfnav_qin9", "gfnav_12": "gfins_gfnav_12",
-          "vehicle": "gfins_vehicle", "ins_gnss": "gfins_ins_gnss"}
+          "vehicle": "gfins_vehicle", "ins_gnss": "gfins_ins_gnss",
+          "transfer_align": "gfins_transfer_align"}
 
 
 class FmuRunError(GfinsError):

@@ -1,8 +1,10 @@
 """Co-simulated systems: which FMUs take part, with which start values, and how they are
 connected (:class:`System`, :class:`Connection`), and the builders of the usual ones: the
-vehicle FMU feeding a navigator FMU (:func:`vehicle_navigation`), and the vehicle with its
+vehicle FMU feeding a navigator FMU (:func:`vehicle_navigation`), the vehicle with its
 aiding sensors feeding the integrated navigator (:func:`vehicle_integrated_navigation`,
-with :class:`InitialError` and the worked example :func:`integrated_example`).
+with :class:`InitialError` and the worked example :func:`integrated_example`), and a host
+with a master INS and a slave IMU feeding the transfer-alignment FMU
+(:func:`vehicle_transfer_alignment`).
 
 Sampling. Every shipped FMU holds, after ``doStep(t, h)``, outputs describing one time:
 the vehicle's describe t + h (``time_s`` output), a navigator's the sample it took at t.
@@ -19,14 +21,17 @@ import numpy as np
 
 from gfins_fmi._lib import as_scalar, as_vector3, lib
 from gfins_fmi.estimation.config import FilterConfig, InitialState
+from gfins_fmi.estimation.transfer import MasterErrors
 from gfins_fmi.fmi.ins_gnss import ins_gnss_fmu_parameters
-from gfins_fmi.nav.earth import quat_multiply, radii
+from gfins_fmi.fmi.transfer import transfer_fmu_parameters
+from gfins_fmi.nav.earth import euler_to_quat, quat_multiply, radii, skew
 from gfins_fmi.nav.strapdown import NavState
-from gfins_fmi.sim.scenarios import TACTICAL
+from gfins_fmi.sim.scenarios import NAVIGATION, TACTICAL
+from gfins_fmi.sim.transfer import MEMS_SLAVE, roll_manoeuvre, straight_road
 from gfins_fmi.sim.vehicle import Barometer, GnssReceiver, Odometer, VehicleProfile, simulate_vehicle
 
 __all__ = ["System", "Connection", "vehicle_navigation", "vehicle_integrated_navigation",
-           "InitialError", "integrated_example", "NAVIGATORS", "AIDING_VARIABLES",
+           "vehicle_transfer_alignment", "InitialError", "integrated_example", "NAVIGATORS", "AIDING_VARIABLES",
            "TRUTH_OUTPUTS", "INS_OUTPUTS"]
 
 #: navigator name -> (FMU model, vehicle outputs connected to the navigator inputs)
@@ -382,3 +387,69 @@ def integrated_example() -> dict:
         initial_error=InitialError(position_m=(1.0, -0.8, 1.2), velocity_m_s=(0.05, -0.04, 0.02),
                                    attitude_rad=(0.002, -0.002, 0.01)),
         imu_noise=TACTICAL, noise_seed=11)
+
+
+# ---- host + master INS + slave IMU -> transfer alignment -----------------------------------
+#: what a run records of the transfer-alignment FMU
+TRANSFER_FMU_OUTPUTS = ["time_s", "euler", "mount", "mount_std", "time_offset", "time_offset_std",
+                        "sensors", "n_updates", "n_rejected"]
+
+
+def vehicle_transfer_alignment(profile=None, schedule=None, *, mount_rad=(0.0058, -0.0044, 0.0073),
+                               slave_gyro_bias_rad_s=(3e-4, -5e-4, 4e-4),
+                               slave_accel_bias_m_s2=(0.02, -0.015, 0.025), slave_noise=MEMS_SLAVE,
+                               master_noise=NAVIGATION, master_interval_s: float = 0.1,
+                               config: FilterConfig | None = None, mount_std_rad: float = 0.02,
+                               master_errors: MasterErrors = MasterErrors((0.015, 0.015, 0.005), 2e-5),
+                               step_s: float = 0.01, stop_s: float = 60.0, seed: int = 1) -> System:
+    """A host, its master INS and a slave IMU co-simulated with the transfer-alignment FMU:
+
+    ``host`` (vehicle FMU: ``profile``, default a straight road at 10 m/s, its platform
+    rolled by ``schedule``, default +-30 deg, its IMU with ``master_noise``) feeds
+    ``master`` (the SINS FMU, height held: the master INS) with its increments;
+    ``slave_imu`` (a second vehicle FMU on the same motion) is the slave: its IMU error
+    model turns its outputs by the mounting (``mount_rad`` heading, pitch, roll of the
+    slave in the master's axes, as the cross-coupling I - [a x], a = (pitch, roll,
+    -heading): first order, 3e-5 of |f| for 25') and adds the biases and ``slave_noise``;
+    ``slave`` (the transfer-alignment FMU) takes the slave's increments, the master's
+    attitude, velocity, position and time (``master_time_s``) and the host's rate, every
+    ``master_interval_s``. Both IMUs sit at one point and share one clock: lever arm and
+    time offset are not simulated here (the Python simulator has them:
+    :mod:`gfins_fmi.sim.transfer`), so the filter estimates the mounting and the biases.
+    In a Jacobi master the master INS's outputs reach the slave one step late: its epoch
+    at t_(k-1) is applied at the filter's time t_(k-1), before sample k (the host's rate
+    then describes t_k: 10 ms apart).
+    """
+    step_s = as_scalar("step_s", step_s, "s", above=0.0)
+    profile = profile or straight_road()
+    schedule = schedule or roll_manoeuvre()
+    a = as_vector3("mount_rad", mount_rad, "rad")
+    cfg = config or FilterConfig(imu=slave_noise, master_mount=True)
+    _, start = _vehicle_start(profile, step_s, 0)
+    q_slave = quat_multiply(np.asarray(start.q_bn, float), euler_to_quat(*cfg.master_mount_rad))
+    nav0 = NavState(q_slave, start.v_n_m_s, start.lat_rad, start.lon_rad, start.h_m, 0.0)
+    initial = InitialState(nav0, attitude_std_rad=1e-3, gyro_bias_std_rad_s=1e-3, accel_bias_std_m_s2=0.03,
+                           master_mount_std_rad=mount_std_rad, attitude_from_master=True)
+    slave = transfer_fmu_parameters(cfg, initial, master_errors=master_errors)
+    slave.update(master_valid=1, master_interval=float(master_interval_s))
+    rot = schedule.fmu_parameters()
+    host = {**_vehicle_parameters(profile, None, master_noise, seed), **rot}
+    N = -skew(np.array([a[1], a[2], -a[0]]))                   # I + N = C_m^s to first order
+    imu = dict(imu_errors=1, gyro_misalign=N.ravel().tolist(), accel_misalign=N.ravel().tolist(),
+               gyro_bias=[float(x) for x in slave_gyro_bias_rad_s],
+               accel_bias=[float(x) for x in slave_accel_bias_m_s2])
+    slave_imu = {**_vehicle_parameters(profile, None, slave_noise, seed + 1), **rot, **imu}
+    master = {**_start_parameters(start), "vertical_mode": 1, "hold_height": profile.h0_m}
+    conns = [Connection("host", v, "master", v, 3) for v in ("dtheta", "dv")]
+    conns += [Connection("slave_imu", v, "slave", v, 3) for v in ("dtheta", "dv")]
+    conns += [Connection("master", "euler", "slave", "master_euler", 3),
+              Connection("master", "v", "slave", "master_vel", 3),
+              Connection("master", "lat", "slave", "master_lat", 1),
+              Connection("master", "lon", "slave", "master_lon", 1),
+              Connection("master", "h", "slave", "master_h", 1),
+              Connection("master", "time_s", "slave", "master_time_s", 1),
+              Connection("host", "gyro_rate", "slave", "master_rate", 3)]
+    outputs = {"host": list(TRUTH_OUTPUTS), "master": list(TRUTH_OUTPUTS), "slave": TRANSFER_FMU_OUTPUTS}
+    return System({"host": ("vehicle", host), "slave_imu": ("vehicle", slave_imu), "master": ("sins", master),
+                   "slave": ("transfer_align", slave)}, conns, outputs, step_s, float(stop_s),
+                  sources={"config": cfg, "initial": initial, "mount_rad": tuple(a)})

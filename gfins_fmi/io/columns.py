@@ -13,7 +13,7 @@ from __future__ import annotations
 
 __all__ = ["TIME", "POSITION_DEG", "VELOCITY_ENU", "EULER_DEG", "QUATERNION", "NAV_SOLUTION",
            "NAV_COLUMNS", "RATE_COLUMNS", "ACCEL9_COLUMNS", "STD_COLUMNS", "integrated_columns",
-           "INNOVATION_COLUMNS", "ALIGNMENT_PASS_COLUMNS"]
+           "INNOVATION_COLUMNS", "ALIGNMENT_PASS_COLUMNS", "TRANSFER_COLUMNS"]
 
 #: time of the row, s
 TIME = ("t_s",)
@@ -44,6 +44,17 @@ INNOVATION_COLUMNS = ("t_s", "kind", "status", "m", "nis", "r0", "r1", "r2", "s0
 #: ``gfins align motion --output``: the state after each forward or backward pass
 ALIGNMENT_PASS_COLUMNS = ("t_s", "direction") + EULER_DEG + STD_COLUMNS[6:] + ("n_updates",
                                                                                 "n_rejected")
+
+
+#: ``gfins align transfer --output``: the estimates over time with their 1-sigma (NaN for
+#: what is not estimated): mounting (deg), lever arm (m, master axes), time offset (s),
+#: gyro (deg/h) and accelerometer (mg) biases, the slave's attitude (deg) and its 1-sigma
+TRANSFER_COLUMNS = (("t_s", "mount_heading_deg", "mount_pitch_deg", "mount_roll_deg", "std_mount_heading_deg",
+                     "std_mount_pitch_deg", "std_mount_roll_deg", "lever_x_m", "lever_y_m", "lever_z_m",
+                     "std_lever_x_m", "std_lever_y_m", "std_lever_z_m", "time_offset_s", "std_time_offset_s",
+                     "bg_x_deg_h", "bg_y_deg_h", "bg_z_deg_h", "std_bg_x_deg_h", "std_bg_y_deg_h", "std_bg_z_deg_h",
+                     "ba_x_mg", "ba_y_mg", "ba_z_mg", "std_ba_x_mg", "std_ba_y_mg", "std_ba_z_mg")
+                    + EULER_DEG + STD_COLUMNS[6:])
 
 
 def integrated_columns(sensor_names) -> tuple:

@@ -360,7 +360,8 @@ def continuous_scheme(inner_rate_deg_s: float = 6.0, middle_rate_deg_s: float = 
 class RotatingImuRecord:
     """An IMU record of a rotating IMU: increments over (t_s[k] - dt, t_s[k]] in the IMU
     frame m, the true C_m^n and gimbal angles at t_s, and the base (static: its position
-    and attitude; on a vehicle: the vehicle's truth per sample in ``vehicle``)."""
+    and attitude; on a vehicle: the vehicle's truth per sample in ``vehicle``, and the IMU
+    frame's exact rate w_im^m at t_s in ``w_im_m_rad_s``)."""
     t_s: np.ndarray
     dtheta_rad: np.ndarray
     dv_m_s: np.ndarray
@@ -375,6 +376,7 @@ class RotatingImuRecord:
     accel_delay_s: float = 0.0
     vehicle: object = None
     initial: object = None
+    w_im_m_rad_s: object = None
 
     @property
     def dt_s_array(self) -> np.ndarray:
@@ -442,9 +444,10 @@ def simulate_on_vehicle(schedule: RotationSchedule, profile, duration_s: float,
     check_status(st, "gf_vehicle_init")
     buf = np.zeros((n, struct_doubles("gf_vehicle_sample")))
     dth, dv, q, g = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 4)), np.empty((n, 2))
+    w = np.empty((n, 3))
     done = ffi.new("size_t *")
     st = lib.gf_rot_imu_vehicle(schedule.c_state(), veh, n, dt, ptr(dth, 3 * n), ptr(dv, 3 * n),
-                                ffi.NULL, ffi.NULL, ptr(g, 2 * n), ptr(q, 4 * n),
+                                ptr(w, 3 * n), ffi.NULL, ptr(g, 2 * n), ptr(q, 4 * n),
                                 ffi.cast("gf_vehicle_sample *", ptr(buf, buf.size)), done)
     check_status(st, f"gf_rot_imu_vehicle (stopped at sample {done[0]} of {n})")
     cols = {k: np.array(v) for k, v in struct_columns(buf, "gf_vehicle_sample").items()}
@@ -453,4 +456,4 @@ def simulate_on_vehicle(schedule: RotationSchedule, profile, duration_s: float,
     return RotatingImuRecord(cols["time_s"], dth, dv, q, g, dt, float(first.lat_rad),
                              float(first.lon_rad), float(first.h_m), qb0, schedule, 0.0, cols,
                              NavState(q0, np.array(list(first.v_n_m_s)), float(first.lat_rad),
-                                      float(first.lon_rad), float(first.h_m), 0.0))
+                                      float(first.lon_rad), float(first.h_m), 0.0), w)

@@ -107,16 +107,16 @@ static size_t core_meas(int k, gf_ins_meas *m)
         double pos[3], vel[3];
         antenna(&g_truth[d.gnss_from], pos, vel);
         m[n++] = (gf_ins_meas){GF_INS_MEAS_GNSS_POS, d.gnss_t, {pos[0], pos[1], pos[2]},
-                               {kPosStd[0], kPosStd[1], kPosStd[2]}};
+                               {kPosStd[0], kPosStd[1], kPosStd[2]}, {0, 0, 0}};
         m[n++] = (gf_ins_meas){GF_INS_MEAS_GNSS_VEL, d.gnss_t, {vel[0], vel[1], vel[2]},
-                               {kVelStd[0], kVelStd[1], kVelStd[2]}};
+                               {kVelStd[0], kVelStd[1], kVelStd[2]}, {0, 0, 0}};
     }
     if (d.baro)
         m[n++] = (gf_ins_meas){GF_INS_MEAS_BARO, d.baro_t, {g_truth[k].h_m + BARO_BIAS_M, 0, 0},
-                               {BARO_STD_M, 0, 0}};
+                               {BARO_STD_M, 0, 0}, {0, 0, 0}};
     if (d.odo)
         m[n++] = (gf_ins_meas){GF_INS_MEAS_ODO, d.odo_t, {g_truth[k].speed_m_s, 0, 0},
-                               {ODO_STD_M_S, 0, 0}};
+                               {ODO_STD_M_S, 0, 0}, {0, 0, 0}};
     /* gf_ins_step takes them sorted by time (stable: kinds in the order above at equal
      * times), as the FMU must hand them over */
     for (size_t i = 1; i < n; ++i)

@@ -94,7 +94,7 @@ static void test_speed_update(void)
         gf_ins_filter free_run = f;          /* the same sample without the update */
         const int n = f.n_states;
         const double z = 5.2, sd = 0.1;
-        gf_ins_meas m = {GF_INS_MEAS_SPEED, 0.0, {z, 0, 0}, {sd, 0, 0}};
+        gf_ins_meas m = {GF_INS_MEAS_SPEED, 0.0, {z, 0, 0}, {sd, 0, 0}, {0, 0, 0}};
         gf_ins_innovation entries[8];
         gf_ins_log log = {8, 0, 0, entries};
         const double g[3] = {0, 0, 0}, acc[3] = {0, 0, 9.79 * 0.01};
@@ -130,7 +130,7 @@ static void test_speed_update(void)
         gf_ins_filter f;
         const double v[3] = {0.1, 0.2, 0.0};
         CHECK(start(&f, &c, v, 0.0) == GF_OK, "init");
-        gf_ins_meas m = {GF_INS_MEAS_SPEED, 0.005, {0.2, 0, 0}, {0.1, 0, 0}};
+        gf_ins_meas m = {GF_INS_MEAS_SPEED, 0.005, {0.2, 0, 0}, {0.1, 0, 0}, {0, 0, 0}};
         gf_ins_innovation entries[8];
         gf_ins_log log = {8, 0, 0, entries};
         const double g[3] = {0, 0, 0}, acc[3] = {0, 0, 9.79 * 0.01};
@@ -176,7 +176,7 @@ static void test_odometer_mounting(void)
     diag_P(15, kStd, P);
     const double q[4] = {1, 0, 0, 0}, v[3] = {0.0, V, 0.0};
     CHECK(gf_ins_init(&f, &c, 0.0, q, v, 30 * DEG, 114 * DEG, 0.0, NULL, P, &bad) == GF_OK, "init");
-    gf_ins_meas m = {GF_INS_MEAS_ODO, 0.0, {0.0, 0, 0}, {0.02, 0, 0}};
+    gf_ins_meas m = {GF_INS_MEAS_ODO, 0.0, {0.0, 0, 0}, {0.02, 0, 0}, {0, 0, 0}};
     gf_ins_innovation e[4];
     gf_ins_log log = {4, 0, 0, e};
     const double g[3] = {0, 0, 0}, a[3] = {0, 0, 0};
@@ -244,7 +244,7 @@ static void mount_run(double dp, double dh, int type, int with_state, double r[2
     gf_ins_log log = {4, 0, 0, lg};
     const double g[3] = {0.001, -0.002, 0.003}, a[3] = {0.01, 0.02, 0.098};
     if (type == GF_INS_MEAS_ODO) {
-        gf_ins_meas m = {GF_INS_MEAS_ODO, 0.0, {4.5, 0, 0}, {0.02, 0, 0}};
+        gf_ins_meas m = {GF_INS_MEAS_ODO, 0.0, {4.5, 0, 0}, {0.02, 0, 0}, {0, 0, 0}};
         CHECK(gf_ins_step(&f, 0.01, g, a, 1, &m, NULL, &log) == GF_OK, "odometer update");
     } else {
         for (int k = 1; k <= 10; ++k)
@@ -459,13 +459,13 @@ static void test_round_trip(void)
     const double v[3] = {4.0, 1.0, 0.0};
     CHECK(start(&f, &c, v, 0.0) == GF_OK, "init");
     const gf_ins_filter f0 = f;
-    gf_ins_output out = {o_t, o_q, o_v, o_p, NULL, NULL, NULL, 0};
+    gf_ins_output out = {o_t, o_q, o_v, o_p, NULL, NULL, NULL, 0, NULL, NULL};
     size_t done, mdone;
     CHECK(gf_ins_run(&f, NREC, g_t, g_g, g_a, 0, NULL, &out, NULL, NULL, &done, &mdone) == GF_OK, "forward");
     CHECK(gf_ins_run_backward(&f, NREC, g_t, g_g, g_a, 0.0, 0, NULL, NULL, NULL, &done, &mdone) ==
               GF_ERR_BAD_PARAMETER, "backward run needs gf_ins_reverse first");
     CHECK(gf_ins_reverse(&f) == GF_OK, "reverse");
-    gf_ins_output bout = {b_t, b_q, b_v, b_p, NULL, NULL, NULL, 0};
+    gf_ins_output bout = {b_t, b_q, b_v, b_p, NULL, NULL, NULL, 0, NULL, NULL};
     CHECK(gf_ins_run_backward(&f, NREC, g_t, g_g, g_a, 0.0, 0, NULL, &bout, NULL, &done, &mdone) == GF_OK &&
               done == NREC, "backward");
     /* back at the start: the nominal against the initial one */
@@ -558,7 +558,7 @@ static void test_forward_backward_driver(void)
     CHECK(gf_ins_forward_backward(&f1, n, g_t, g_g, g_a, nm, m, 2, passes, &log, &np) == GF_OK && np == 5,
           "driver (%d passes)", np);
     /* the same passes by hand */
-    gf_ins_output out = {o_t, o_q, o_v, o_p, NULL, NULL, NULL, 0};
+    gf_ins_output out = {o_t, o_q, o_v, o_p, NULL, NULL, NULL, 0, NULL, NULL};
     size_t done, md;
     CHECK(gf_ins_run(&f2, n, g_t, g_g, g_a, nm, m, &out, NULL, NULL, &done, &md) == GF_OK && md == nm, "fwd");
     for (int p = 0; p < 2; ++p) {
@@ -612,7 +612,7 @@ static void test_subsample_groups(void)
     }
     gf_ins_filter f1, f2;
     CHECK(start(&f1, &c, v, 0.0) == GF_OK && start(&f2, &c, v, 0.0) == GF_OK, "init");
-    gf_ins_output out = {o_t, o_q, o_v, o_p, NULL, NULL, NULL, 0};
+    gf_ins_output out = {o_t, o_q, o_v, o_p, NULL, NULL, NULL, 0, NULL, NULL};
     size_t done, mdone;
     CHECK(gf_ins_run(&f1, N, g_t, g_g, g_a, 2, ms, &out, NULL, NULL, &done, &mdone) == GF_OK &&
               done == N && mdone == 2, "whole record");
@@ -623,11 +623,11 @@ static void test_subsample_groups(void)
         on_grid &= fabs(o_t[r] / dt - rint(o_t[r] / dt)) < 1e-9 && (r == 0 || o_t[r] > o_t[r - 1]);
     CHECK(on_grid && o_t[out.n_rows - 1] == g_t[N - 1], "rows at sample times, increasing, to the end");
     /* in two calls cut at sample 2000 (even) */
-    gf_ins_output out2 = {b_t, b_q, b_v, b_p, NULL, NULL, NULL, 0};
+    gf_ins_output out2 = {b_t, b_q, b_v, b_p, NULL, NULL, NULL, 0, NULL, NULL};
     CHECK(gf_ins_run(&f2, 2000, g_t, g_g, g_a, 1, ms, &out2, NULL, NULL, &done, &mdone) == GF_OK &&
               mdone == 1, "first part");
     const size_t r1 = out2.n_rows;
-    gf_ins_output out3 = {b_t + r1, b_q + 4 * r1, b_v + 3 * r1, b_p + 3 * r1, NULL, NULL, NULL, 0};
+    gf_ins_output out3 = {b_t + r1, b_q + 4 * r1, b_v + 3 * r1, b_p + 3 * r1, NULL, NULL, NULL, 0, NULL, NULL};
     CHECK(gf_ins_run(&f2, N - 2000, g_t + 2000, g_g + 6000, g_a + 6000, 1, ms + 1, &out3, NULL, NULL,
                      &done, &mdone) == GF_OK, "second part");
     CHECK(r1 + out3.n_rows == out.n_rows && memcmp(b_q, o_q, 4 * out.n_rows * sizeof(double)) == 0 &&

@@ -4,8 +4,10 @@
  * Truth never comes from the code under test's linearisation: every kind the enumeration
  * returns has its Jacobian H checked against central differences of its own nonlinear C
  * prediction, column by column, at random (seeded) states with every optional state
- * enabled (scale factors, barometer bias, odometer scale, boresight: 25 states), non-zero
- * lever arms and boresight angles, forward and after gf_ins_reverse. A kind added to the
+ * enabled (scale factors, barometer bias, odometer scale, boresight, and the transfer
+ * alignment's mounting, lever arm, time offset and flexure: 38 states), non-zero lever
+ * arms, boresight and mounting angles, time offset and flexure estimates, forward and
+ * after gf_ins_reverse. A kind added to the
  * table is enumerated and checked like the others, with no allowance (below) unless one
  * is written for it here. The sign convention (gf_ins_gnss.h): z_pred(dx) is the
  * prediction from the nominal corrected by dx, z_err = predicted - measured = H dx, so
@@ -69,10 +71,11 @@ static void test_enumeration(void)
     /* today's kinds, as gf_ins_gnss.h numbers them, and nothing outside 1 .. N - 1 */
     const int32_t expected[] = {GF_INS_MEAS_GNSS_POS, GF_INS_MEAS_GNSS_VEL, GF_INS_MEAS_BARO,
                                 GF_INS_MEAS_ODO, GF_INS_MEAS_NHC, GF_INS_MEAS_ZUPT,
-                                GF_INS_MEAS_ZARU, GF_INS_MEAS_SPEED};
-    const int32_t rows[] = {3, 3, 1, 1, 2, 3, 3, 1};
-    CHECK(n >= 8, "%d kinds enumerated", n);
-    for (int e = 0; e < 8; ++e) {
+                                GF_INS_MEAS_ZARU, GF_INS_MEAS_SPEED, GF_INS_MEAS_MASTER_VEL,
+                                GF_INS_MEAS_MASTER_ATT, GF_INS_MEAS_MASTER_POS};
+    const int32_t rows[] = {3, 3, 1, 1, 2, 3, 3, 1, 3, 3, 3};
+    CHECK(n >= 11, "%d kinds enumerated", n);
+    for (int e = 0; e < 11; ++e) {
         int found = 0;
         for (int i = 0; i < n; ++i)
             if (kinds[i].kind == expected[e]) {
@@ -102,6 +105,7 @@ static void random_filter(test_rng *rng, int reversed, gf_ins_filter *f)
     gf_ins_config c;
     gf_ins_config_default(&c);
     c.scale_factors = c.baro_bias = c.odometer_scale = c.odometer_mount = 1;
+    c.master_mount = c.master_lever = c.master_time_offset = c.flexure = 1;
     c.noise.gyro_arw_rad_sqrt_s = 1e-4;
     c.noise.accel_vrw_m_s_sqrt_s = 1e-3;
     for (int i = 0; i < 3; ++i) {
@@ -110,8 +114,17 @@ static void random_filter(test_rng *rng, int reversed, gf_ins_filter *f)
     }
     c.odometer_mount_rad[0] = test_rng_uniform(rng, -0.05, 0.05);
     c.odometer_mount_rad[1] = test_rng_uniform(rng, -0.05, 0.05);
+    /* a slave mounted anyhow on its master (heading any, pitch and roll up to 60 deg) */
+    c.master_mount_rad[0] = test_rng_uniform(rng, -PI, PI);
+    c.master_mount_rad[1] = test_rng_uniform(rng, -1.0, 1.0);
+    c.master_mount_rad[2] = test_rng_uniform(rng, -1.0, 1.0);
+    for (int i = 0; i < 3; ++i)
+        c.master_lever_arm_m[i] = test_rng_uniform(rng, -3.0, 3.0);
+    c.master_time_offset_s = test_rng_uniform(rng, -0.05, 0.05);
+    c.noise.flexure_std_rad = 2e-3;
+    c.noise.flexure_tau_s = 0.7;
     int32_t n = 0;
-    CHECK(gf_ins_state_count(&c, &n) == GF_OK && n == GF_INS_MAX_STATES, "25 states: %d", n);
+    CHECK(gf_ins_state_count(&c, &n) == GF_OK && n == GF_INS_MAX_STATES, "38 states: %d", n);
     const double e[3] = {test_rng_uniform(rng, -PI, PI), test_rng_uniform(rng, -0.5, 0.5),
                          test_rng_uniform(rng, -0.5, 0.5)};
     double q[4];
@@ -138,11 +151,16 @@ static void random_filter(test_rng *rng, int reversed, gf_ins_filter *f)
                                      test_rng_uniform(rng, -PI, PI),
                                      test_rng_uniform(rng, -50.0, 3000.0), s, P, &bad);
     CHECK(st == GF_OK, "init: %d (bad %d)", st, bad);
-    /* the rates the models read: the latest compensated rate, the detector's mean rate */
+    /* the rates the models read: the latest compensated rate, the detector's mean rate;
+     * the specific force (the master kinds' time offset) */
     for (int i = 0; i < 3; ++i) {
         f->w_ib_b_rad_s[i] = test_rng_uniform(rng, -0.3, 0.3);
         f->still_w[i] = test_rng_uniform(rng, -0.05, 0.05);
+        f->f_b_m_s2[i] = test_rng_uniform(rng, -3.0, 3.0) + (i == 2 ? 9.8 : 0.0);
     }
+    /* transfer-alignment estimates: mounting, lever arm, offset corrections, flexure */
+    for (int i = 0; i < GF_INS_N_TRANSFER; ++i)
+        f->transfer[i] = test_rng_uniform(rng, -0.01, 0.01);
     if (reversed)
         CHECK(gf_ins_reverse(f) == GF_OK, "reverse");
 }
@@ -162,7 +180,9 @@ static double step_of(const gf_ins_filter *f, int j)
         return 1e-4;                                           /* m/s^2 */
     if (j == f->idx_baro)
         return 1e-2;                                           /* m */
-    return 1e-5;                                               /* scales, boresight rad */
+    if (f->idx_tlever >= 0 && j >= f->idx_tlever && j < f->idx_tlever + 3)
+        return 1e-4;                                           /* m */
+    return 1e-5;            /* scales, boresight and mounting rad, offset s, flexure rad(/s) */
 }
 
 /* E_ij: the Earth-rate terms H leaves out (see the top of the file) */
@@ -249,8 +269,8 @@ static void test_model_is_the_update(void)
         gf_ins_filter f;
         random_filter(&rng, 0, &f);
         const int32_t kind = kinds[k].kind;
-        gf_ins_meas ms = {kind, f.t_s, {0.5, -0.2, 0.1}, {1.0, 1.0, 1.0}};
-        if (kind == GF_INS_MEAS_GNSS_POS) {
+        gf_ins_meas ms = {kind, f.t_s, {0.5, -0.2, 0.1}, {1.0, 1.0, 1.0}, {0.02, -0.03, 0.05}};
+        if (kind == GF_INS_MEAS_GNSS_POS || kind == GF_INS_MEAS_MASTER_POS) {
             ms.z[0] = f.nav.lat_rad;
             ms.z[1] = f.nav.lon_rad;
             ms.z[2] = f.nav.h_m;
@@ -271,13 +291,18 @@ static void test_model_is_the_update(void)
         if (st != GF_OK || log.count < 1)
             continue;
         for (int i = 0; i < rows; ++i) {
-            const double zi = kind == GF_INS_MEAS_GNSS_POS ? 0.0 : ms.z[i];
+            /* the kinds whose value is not ms.z: positions (the local frame about the
+             * nominal, where z sits) and the master's attitude (the prediction is the
+             * small angle from it) */
+            const int local = kind == GF_INS_MEAS_GNSS_POS || kind == GF_INS_MEAS_MASTER_POS ||
+                              kind == GF_INS_MEAS_MASTER_ATT;
+            const double zi = local ? 0.0 : ms.z[i];
             CHECK(entry[0].r[i] == z[i] - zi, "kind %d row %d: residual %.17g, model %.17g",
                   kind, i, entry[0].r[i], z[i] - zi);
         }
     }
-    CHECK(n_external == 5, "%d kinds a caller hands in (GNSS position and velocity, "
-          "barometer, odometer, speed)", n_external);
+    CHECK(n_external == 8, "%d kinds a caller hands in (GNSS position and velocity, "
+          "barometer, odometer, speed, master velocity, attitude and position)", n_external);
 }
 
 static void test_errors(void)
@@ -294,14 +319,14 @@ static void test_errors(void)
     CHECK(gf_ins_meas_kind_info(0, NULL, NULL) == GF_ERR_BAD_PARAMETER &&
               gf_ins_meas_kind_info(GF_INS_N_MEAS_KINDS, NULL, NULL) == GF_ERR_BAD_PARAMETER,
           "kind_info outside the kinds");
-    const gf_ins_meas baro = {GF_INS_MEAS_BARO, f.t_s, {10.0, 0, 0}, {1.0, 0, 0}};
+    const gf_ins_meas baro = {GF_INS_MEAS_BARO, f.t_s, {10.0, 0, 0}, {1.0, 0, 0}, {0, 0, 0}};
     CHECK(gf_ins_meas_model(&f, GF_INS_MEAS_ODO, &baro, NULL, z, H, NULL) == GF_ERR_BAD_PARAMETER,
           "a measurement of another kind");
     gf_ins_meas bad = baro;
     bad.std[0] = 0.0;
     CHECK(gf_ins_meas_model(&f, GF_INS_MEAS_BARO, &bad, NULL, z, H, NULL) == GF_ERR_BAD_PARAMETER,
           "std 0");
-    const gf_ins_meas nhc = {GF_INS_MEAS_NHC, f.t_s, {0, 0, 0}, {1.0, 1.0, 0}};
+    const gf_ins_meas nhc = {GF_INS_MEAS_NHC, f.t_s, {0, 0, 0}, {1.0, 1.0, 0}, {0, 0, 0}};
     CHECK(gf_ins_meas_model(&f, GF_INS_MEAS_NHC, &nhc, NULL, z, H, NULL) == GF_ERR_BAD_PARAMETER,
           "an internal kind is not handed in");
     dx[3] = NAN;

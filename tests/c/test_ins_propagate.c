@@ -39,7 +39,8 @@
 #define PI 3.14159265358979323846
 #define N_TRIALS 10
 #define T_S 0.005
-#define NS GF_INS_MAX_STATES
+#define NS (GF_INS_BASE_STATES + 10) /* every optional sensor state (the transfer-alignment
+                                          * blocks, off here, have their own test) */
 #define IV GF_INS_IDX_VEL
 #define IP GF_INS_IDX_POS
 #define IA GF_INS_IDX_ATT

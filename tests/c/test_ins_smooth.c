@@ -176,10 +176,10 @@ static size_t forward_run(int filter)
         if (k % 100 == 37) {             /* between the 0.1 s propagation epochs */
             const gf_vehicle_sample *x = &g_truth[k];
             m[nm++] = (gf_ins_meas){GF_INS_MEAS_GNSS_POS, k * H_S, {x->lat_rad, x->lon_rad, x->h_m},
-                                    {pos_std[0], pos_std[1], pos_std[2]}};
+                                    {pos_std[0], pos_std[1], pos_std[2]}, {0, 0, 0}};
             m[nm++] = (gf_ins_meas){GF_INS_MEAS_GNSS_VEL, k * H_S,
                                     {x->v_n_m_s[0], x->v_n_m_s[1], x->v_n_m_s[2]},
-                                    {vel_std[0], vel_std[1], vel_std[2]}};
+                                    {vel_std[0], vel_std[1], vel_std[2]}, {0, 0, 0}};
         }
         const gf_status st = gf_ins_step(&g_f, k * H_S, g_truth[k].dtheta_rad, g_truth[k].dv_m_s,
                                          nm, m, &ep, NULL);

@@ -66,18 +66,31 @@ def _filter_at(lat, h, v, euler, **cfg_kw):
 @pytest.mark.parametrize("opts", [{}, {"scale_factors": True, "baro_bias": True, "odometer_scale": True,
                                        "odometer_mount": True, "odometer_mount_tau_s": 900.0,
                                        "gyro_scale_tau_s": 5100.0, "accel_scale_std": 7e-4,
-                                       "accel_scale_tau_s": 4700.0, "odometer_scale_tau_s": 6100.0}])
+                                       "accel_scale_tau_s": 4700.0, "odometer_scale_tau_s": 6100.0},
+                                  {"scale_factors": True, "baro_bias": True, "odometer_scale": True,
+                                   "odometer_mount": True, "odometer_mount_tau_s": 900.0,
+                                   "gyro_scale_tau_s": 5100.0, "accel_scale_std": 7e-4,
+                                   "accel_scale_tau_s": 4700.0, "odometer_scale_tau_s": 6100.0,
+                                   "master_mount": True, "master_lever": True, "master_time_offset": True,
+                                   "flexure": True, "flexure_tau_s": 0.8, "flexure_std_rad": 2e-3}],
+                         ids=["15", "25", "38"])
 def test_c_error_model_is_the_definition(state, opts):
-    """The C filter's F and G equal error_models.ins_error_matrices (the definition)."""
+    """The C filter's F and G equal error_models.ins_error_matrices (the definition), the
+    transfer-alignment blocks (random constants, the flexure's second-order Markov) too."""
     lat, h, v, euler, fb, wb = state
     nav = _filter_at(lat, h, v, euler, **opts)
     F_c, G_c, q_c = nav.error_model(fb, wb)
     tau = {"bg": 300.0, "ba": 600.0}
     if opts:
         tau.update({"baro": 3600.0, "odo_mount": 900.0, "sg": 5100.0, "sa": 4700.0, "odo": 6100.0})
+    transfer = {k: bool(opts.get(k)) for k in ("master_mount", "master_lever", "master_time_offset",
+                                               "flexure")}
+    if transfer["flexure"]:
+        tau["flexure"] = opts["flexure_tau_s"]
     F_py, G_py = ins_error_matrices(lat, h, v, list(nav._f.nav.q_bn), fb, wb,
                                     scale_states=bool(opts), baro_state=bool(opts),
-                                    odo_state=bool(opts), odo_mount_state=bool(opts), tau_s=tau)
+                                    odo_state=bool(opts), odo_mount_state=bool(opts), tau_s=tau,
+                                    **transfer)
     # same formulas evaluated in a different order: round-off relative to each entry's
     # terms (largest products ~ 1e1; entries as small as 1e-13 rad/(m s))
     scale = np.maximum(np.abs(F_py), 1e-300)
@@ -97,7 +110,11 @@ def test_c_error_model_is_the_definition(state, opts):
             + [(c.baro_bias_std_m, c.baro_bias_tau_s), (c.odometer_scale_std, c.odometer_scale_tau_s)] \
             + [(c.odometer_mount_std_rad, c.odometer_mount_tau_s)] * 2
         want = [2 * s * s / tau if tau > 0 else 0.0 for s, tau in gm]
-        np.testing.assert_allclose(q_c[12:], want, rtol=1e-12, atol=0)
+        np.testing.assert_allclose(q_c[12:22], want, rtol=1e-12, atol=0)
+    if transfer["flexure"]:   # E[w w] = 4 b^3 sigma^2 on the rates, none on the angles
+        b = 2.146 / 0.8
+        np.testing.assert_allclose(q_c[-6:], [0.0] * 3 + [4 * b ** 3 * 4e-6] * 3, rtol=1e-12)
+        np.testing.assert_array_equal(q_c[-13:-6], 0.0)      # random constants
 
 
 @pytest.mark.parametrize("state", STATES[:2])

@@ -36,19 +36,24 @@ def test_python_names_the_c_table_s_kinds():
 
 
 def _filter(reversed_: bool):
-    """A filter with all 25 states, lever arms, a boresight, rates and sensor estimates."""
+    """A filter with all 38 states, lever arms, a boresight, a slave's mounting, lever arm,
+    time offset and flexure, rates, sensor and transfer estimates."""
     rng = np.random.default_rng(7)
     cfg = FilterConfig(imu=gf.ImuNoise(gyro_arw_deg_sqrt_h=0.1, accel_vrw_ug_sqrt_hz=50,
                                        gyro_bias_instability_deg_h=1, accel_bias_instability_ug=100),
                        scale_factors=True, baro_bias=True, odometer_scale=True, odometer_mount=True,
                        gnss_lever_arm_m=(0.7, -1.1, 1.4), odometer_lever_arm_m=(-0.6, 1.8, -0.4),
-                       odometer_mount_rad=(0.03, -0.02))
+                       odometer_mount_rad=(0.03, -0.02), master_mount=True, master_lever=True,
+                       master_time_offset=True, flexure=True, master_mount_rad=(2.5, 0.4, -0.7),
+                       master_lever_arm_m=(0.4, -2.0, 0.6), master_time_offset_s=-0.03)
     q = gf.euler_to_quat(np.array([2.1, 0.2, -0.3]))
     nav = gf.NavState(q, np.array([6.0, -9.0, 0.4]), 0.7, 2.0, 450.0, 100.0)
     sensors = np.r_[rng.uniform(-1e-4, 1e-4, 3), rng.uniform(-0.05, 0.05, 3),
                     rng.uniform(-1e-3, 1e-3, 6), 2.0, 0.01, 0.01, -0.015]
     f = IntegratedNavigator(cfg, InitialState(nav, sensors=sensors))._f
     f.w_ib_b_rad_s = [0.12, -0.07, 0.21]
+    f.f_b_m_s2 = [0.8, -1.3, 9.6]
+    f.transfer = list(rng.uniform(-0.01, 0.01, 13))
     f.still_w = [0.01, -0.02, 0.015]
     if reversed_:
         assert lib.gf_ins_reverse(f) == lib.GF_OK
@@ -77,6 +82,8 @@ def _step(j: int) -> float:
     if j < 12:
         return 1e-6
     if j < 15:
+        return 1e-4
+    if 28 <= j < 31:                        # lever arm, m (the C test's step)
         return 1e-4
     return 1e-2 if j == 21 else 1e-5
 

@@ -57,6 +57,8 @@ def test_the_table_s_defaults_are_the_c_defaults():
 def bad_c_value(st):
     """A value outside a row's bounds, in C form."""
     if st.kind == "vector":
+        if st.bounds == "mount":           # a pitch of 2 rad (heading and roll are free)
+            return [0.0, 2.0, 0.0]
         return [0.0] * (st.size - 1) + [2.0 if st.bounds == "half_pi" else math.nan]
     return {"flag": 2, "enum": 7, "count": -1, "subsamples": 9, "nonneg": -1.0, "positive": 0.0,
             "finite": math.nan, "probability": 1.5}[st.bounds]
@@ -81,7 +83,8 @@ def bad_python_value(st):
     return {"flag": "yes", "enum": "kalman", "int": -1 if st.bounds == "count" else 9,
             "float": 1.5 if st.bounds == "probability" else
             (math.nan if st.bounds == "finite" else (0.0 if st.bounds == "positive" else -1.0)),
-            "vector": (0.0, 2.0) if st.bounds == "half_pi" else (0.0, math.nan, 0.0)}[st.kind]
+            "vector": (0.0, 2.0) if st.bounds == "half_pi" else
+            ((3.0, 2.0, -3.0) if st.bounds == "mount" else (0.0, math.nan, 0.0))}[st.kind]
 
 
 @pytest.mark.parametrize("st", python_settings(), ids=[s.python_name for s in python_settings()])
@@ -113,24 +116,39 @@ def test_noise_rows_reach_c_from_the_imu_model_and_the_fields():
 
 
 def test_fmu_parameters_are_the_fmu_rows():
+    """gfins_ins_gnss takes every FMU row but the transfer-alignment ones (it has no master
+    inputs); the transfer-alignment FMU takes them all."""
+    transfer = {st.short for st in SETTINGS if st.transfer}
+    assert transfer == {"flexure_std_rad", "flexure_tau_s", "master_mount", "master_lever",
+                        "master_time_offset", "flexure", "master_mount_rad", "master_lever_arm_m",
+                        "master_time_offset_s"}
     assert {st.short for st in fmu_settings()} == {st.short for st in SETTINGS} - {
+        "speed_min_m_s", "subsamples"} - transfer
+    assert {st.short for st in fmu_settings(transfer=True)} == {st.short for st in SETTINGS} - {
         "speed_min_m_s", "subsamples"}
 
 
 FLAGS = ("scale_factors", "baro_bias", "odometer_scale", "odometer_mount")
+TRANSFER_FLAGS = ("master_mount", "master_lever", "master_time_offset", "flexure")
 
 
-@pytest.mark.parametrize("flags", list(itertools.product([False, True], repeat=4)))
+@pytest.mark.parametrize("flags", list(itertools.product([False, True], repeat=4)) +
+                         [(True, False, True, True, True, True, False, True),
+                          (False, True, False, False, True, False, True, True),
+                          (True,) * 8])
 def test_layout_from_c_is_the_error_model_s_order(flags):
     """The C layout (gf_ins_state_layout) against the numpy error model's state names (the
-    definition the C filter is tested against): blocks where the names put them."""
-    cfg = FilterConfig(**dict(zip(FLAGS, flags)))
+    definition the C filter is tested against): blocks where the names put them (the
+    transfer-alignment blocks in three combinations, 38 states with everything)."""
+    flags = tuple(flags) + (False,) * (8 - len(flags))
+    cfg = FilterConfig(**dict(zip(FLAGS + TRANSFER_FLAGS, flags)))
     lay = cfg.layout()
-    names = ins_state_names(*flags)
+    names = ins_state_names(*flags[:4], **dict(zip(TRANSFER_FLAGS, flags[4:])))
     assert lay.n_states == cfg.n_states == len(names)
     where = {"idx_vel": "dv_E", "idx_pos": "dL", "idx_att": "phi_E", "idx_bg": "bg_x",
              "idx_ba": "ba_x", "idx_sg": "sg_x", "idx_sa": "sa_x", "idx_baro": "b_baro",
-             "idx_odo": "k_odo", "idx_mount": "odo_pitch"}
+             "idx_odo": "k_odo", "idx_mount": "odo_pitch", "idx_tmount": "mount_heading",
+             "idx_tlever": "lever_x", "idx_toffset": "time_offset", "idx_flex": "flex_heading"}
     for field, first in where.items():
         idx = getattr(lay, field)
         assert idx == (names.index(first) if first in names else -1), (field, names)
@@ -156,6 +174,19 @@ def test_initial_covariance_from_c_against_numpy():
     np.testing.assert_allclose(np.sqrt(np.diag(P)), want, rtol=1e-15)
     with pytest.raises(ValueError, match=r"InitialState.position_std_m = \[2.0, 0.0, 5.0\]"):
         InitialState(nav, position_std_m=(2.0, 0.0, 5.0)).covariance(cfg)
+    # the transfer-alignment blocks: mounting, lever arm and offset as given, the flexure's
+    # stationary std sigma and b sigma (b = 2.146 / tau, gf_ins_gnss.h)
+    cfg = FilterConfig(master_mount=True, master_lever=True, master_time_offset=True, flexure=True,
+                       flexure_std_rad=2e-3, flexure_tau_s=0.5)
+    init = InitialState(nav, gyro_bias_std_rad_s=1e-5, accel_bias_std_m_s2=1e-3,
+                        master_mount_std_rad=(0.01, 0.02, 0.03), master_lever_std_m=0.2,
+                        master_time_offset_std_s=0.03)
+    b = 2.146 / 0.5
+    want = [0.01, 0.02, 0.03, 0.2, 0.2, 0.2, 0.03] + [2e-3] * 3 + [b * 2e-3] * 3
+    np.testing.assert_allclose(np.sqrt(np.diag(init.covariance(cfg)))[15:], want, rtol=1e-15)
+    with pytest.raises(ValueError, match=r"InitialState.master_lever_std_m = \[0.1, -0.1, 0.1\]"):
+        InitialState(nav, gyro_bias_std_rad_s=1e-5, accel_bias_std_m_s2=1e-3,
+                     master_lever_std_m=(0.1, -0.1, 0.1)).covariance(cfg)
     polar = NavState(np.array([1.0, 0, 0, 0]), np.zeros(3), math.radians(89.5), 0.0, 0.0, 0.0)
     with pytest.raises(ValueError, match="beyond \\+-89 deg"):
         InitialState(polar).covariance(FilterConfig())

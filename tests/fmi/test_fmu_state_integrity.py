@@ -1,7 +1,7 @@
 """Damaged and crafted FMU states are refused with a logged reason, never used (issue 15).
 
-Every shipped FMU (accel9, sins, the three gyro-free navigators, vehicle; FMI 2.0 and
-3.0) is run a few steps, its state serialized, and the body of the serialized state
+Every shipped FMU (accel9, sins, the three gyro-free navigators, vehicle, transfer
+alignment; FMI 2.0 and 3.0) is run a few steps, its state serialized, and the body of the serialized state
 damaged while the header (magic, format, size, instantiation token) is kept:
 
 * damaged:  the model data replaced by random bytes, or one bit flipped anywhere in the
@@ -54,6 +54,10 @@ SETUPS = {
     "gfnav_12": ({}, {"A": np.zeros(12)}),
     "vehicle": ({"imu_errors": 1, "noise": 1, "gyro_arw": 1e-4, "accel_vrw": 1e-4,
                  "array_noise": 1e-4}, {}),
+    # every transfer-alignment state live (38 with the flexure and scale factors)
+    "transfer_align": ({"master_mount": 1, "master_lever": 1, "master_time_offset": 1, "flexure": 1,
+                        "scale_factors": 1},
+                       {"dtheta": np.zeros(3), "dv": np.array([0.0, 0.0, 9.8 * H_S])}),
 }
 
 

@@ -583,7 +583,8 @@ static int gather(FmuInstance *instance, const ModelData *d, double t_s, gf_ins_
             return 0;
         }
         meas[n] = (gf_ins_meas){GF_INS_MEAS_GNSS_POS, t_m, {pos[0], pos[1], pos[2]},
-                                {d->gnss_pos_std_m[0], d->gnss_pos_std_m[1], d->gnss_pos_std_m[2]}};
+                                {d->gnss_pos_std_m[0], d->gnss_pos_std_m[1], d->gnss_pos_std_m[2]},
+                                {0.0, 0.0, 0.0}};
         ++n;
         if (d->gnss_vel_valid != 0 && d->gnss_vel_valid != 1) {
             fmu_log_error(instance, "t = %.9g s: input gnss_vel_valid = %d must be 0 or 1", t_s,
@@ -596,7 +597,7 @@ static int gather(FmuInstance *instance, const ModelData *d, double t_s, gf_ins_
                 return 0;
             const double *v = d->gnss_vel_enu_m_s, *s = d->gnss_vel_std_m_s;
             meas[n++] = (gf_ins_meas){GF_INS_MEAS_GNSS_VEL, t_m, {v[0], v[1], v[2]},
-                                      {s[0], s[1], s[2]}};
+                                      {s[0], s[1], s[2]}, {0.0, 0.0, 0.0}};
         }
     }
     if (d->baro_valid) {
@@ -605,7 +606,7 @@ static int gather(FmuInstance *instance, const ModelData *d, double t_s, gf_ins_
                        &d->baro_std_m, 1))
             return 0;
         meas[n++] = (gf_ins_meas){GF_INS_MEAS_BARO, t_m, {d->baro_h_m, 0.0, 0.0},
-                                  {d->baro_std_m, 0.0, 0.0}};
+                                  {d->baro_std_m, 0.0, 0.0}, {0.0, 0.0, 0.0}};
     }
     if (d->odo_valid) {
         if (!take_time(instance, "odo", d->odo_valid, d->odo_time_s, t_s, &t_m) ||
@@ -613,7 +614,7 @@ static int gather(FmuInstance *instance, const ModelData *d, double t_s, gf_ins_
                        &d->odo_std_m_s, 1))
             return 0;
         meas[n++] = (gf_ins_meas){GF_INS_MEAS_ODO, t_m, {d->odo_speed_m_s, 0.0, 0.0},
-                                  {d->odo_std_m_s, 0.0, 0.0}};
+                                  {d->odo_std_m_s, 0.0, 0.0}, {0.0, 0.0, 0.0}};
     }
     /* stable insertion sort by time: kinds in the order above at equal times */
     for (size_t i = 1; i < n; ++i) {

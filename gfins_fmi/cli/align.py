@@ -92,12 +92,7 @@ def run(args) -> int:
             _simulate(args)
         return run_writing(_transfer, args, inputs=(args.imu, args.speed, args.truth, args.truth_json),
                            files=(args.output, args.plot))
-    with outputs(args.imu, args.speed, args.depth) as outs:
-        if args.output:
-            outs.claim(args.output)
-        status = _run(args, outs)
-        outs.commit()
-        return status
+    return run_writing(_run, args, inputs=(args.imu, args.speed, args.depth), files=(args.output,))
 
 
 def _run(args, outs) -> int:

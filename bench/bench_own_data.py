@@ -4,7 +4,11 @@ the whole `gfins integrate --kfgins-config` command (KF-GINS's .nav, IMU error a
 outputs) and `gfins integrate ... OUT.parquet` timed in a child process under
 /usr/bin/time -v: wall time, CPU time, peak resident memory, IMU samples per second.
 
-    python bench/bench_own_data.py --minutes 30 [--folder DIR] [--keep]
+    python bench/bench_own_data.py --minutes 30 [--folder DIR]
+    python bench/bench_own_data.py --static-hours 10 --folder DIR [--one-core]
+
+``--static-hours`` also writes the record's KF-GINS binary form (imu.bin) and times the
+Parquet-output run from it as well as from the text.
 
 The machine is shared: say its load with the figures (uptime is printed).
 """
@@ -151,9 +155,26 @@ antlever: [ 0.0, 0.0, 0.0 ]
     return cfg
 
 
-def timed(argv: list[str]) -> dict:
-    """The command under /usr/bin/time -v: wall s, user + system s, peak RSS MiB."""
-    r = subprocess.run(["/usr/bin/time", "-v", sys.executable, "-m", "gfins_fmi.cli", *argv],
+def write_bin(folder: pathlib.Path) -> pathlib.Path:
+    """imu.bin beside imu.txt: KF-GINS's binary IMU form (seven little-endian float64 a
+    sample, the text's columns), written from the text a block at a time."""
+    from gfins_fmi.io.tables import TableReader
+    out = folder / "imu.bin"
+    if not out.exists():
+        tmp = folder / "imu.bin.part"
+        with open(tmp, "wb") as f, TableReader(folder / "imu.txt", chunk_rows=1_000_000, what="KF-GINS IMU",
+                                               whitespace=True, block_bytes=4 << 20) as r:
+            for _, block in r:
+                np.ascontiguousarray(block[:, :7], dtype="<f8").tofile(f)
+        tmp.rename(out)
+    return out
+
+
+def timed(argv: list[str], one_core: bool = False) -> dict:
+    """The command under /usr/bin/time -v (pinned to CPU 0 with ``one_core``): wall s,
+    user + system s, peak RSS MiB."""
+    pin = ["taskset", "-c", "0"] if one_core else []
+    r = subprocess.run(["/usr/bin/time", "-v", *pin, sys.executable, "-m", "gfins_fmi.cli", *argv],
                        capture_output=True, text=True)
     if r.returncode != 0:
         raise SystemExit(f"{' '.join(argv)} failed:\n{r.stdout}\n{r.stderr}")
@@ -172,6 +193,7 @@ def main() -> None:
     ap.add_argument("--static-hours", type=float, default=None,
                     help="instead: a record at rest of this many hours (memory and throughput on long records)")
     ap.add_argument("--folder", type=pathlib.Path, default=None)
+    ap.add_argument("--one-core", action="store_true", help="pin each command to CPU 0 (taskset -c 0)")
     args = ap.parse_args()
     folder = args.folder or pathlib.Path(tempfile.mkdtemp(prefix="gfins_own_data_"))
     folder.mkdir(parents=True, exist_ok=True)
@@ -181,11 +203,13 @@ def main() -> None:
     if args.static_hours is not None:
         n = sum(1 for _ in open(folder / "imu.txt"))
         print(f"{n} IMU samples ({n / 200 / 3600:.2f} h at 200 Hz) in {folder}; load: {os.getloadavg()}")
+        imu_bin = write_bin(folder)
+        parquet = [str(folder / "gnss.txt"), str(folder / "sol.parquet"), "--imu-format", "kfgins", "--gnss-format",
+                   "kfgins", "--grade", "navigation", "--initial", "30,114,20,0,0,0"]
         for name, argv in (("kfgins-config (.nav, IMU error, std text)", ["integrate", "--kfgins-config", str(cfg)]),
-                           ("Parquet out", ["integrate", str(folder / "imu.txt"), str(folder / "gnss.txt"),
-                                            str(folder / "sol.parquet"), "--imu-format", "kfgins", "--gnss-format",
-                                            "kfgins", "--grade", "navigation", "--initial", "30,114,20,0,0,0"])):
-            t = timed(argv)
+                           ("IMU text in, Parquet out", ["integrate", str(folder / "imu.txt"), *parquet]),
+                           ("IMU .bin in, Parquet out", ["integrate", str(imu_bin), *parquet])):
+            t = timed(argv, one_core=args.one_core)
             print(f"{name}: wall {t['wall_s']:.2f} s, CPU {t['cpu_s']:.2f} s, peak {t['peak_mib']:.0f} MiB, "
                   f"{n / t['cpu_s'] / 1e3:.0f} k samples per CPU second, {n / t['wall_s'] / 1e3:.0f} k per wall second")
         print(f"load after: {os.getloadavg()}")

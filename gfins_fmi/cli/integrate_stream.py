@@ -90,6 +90,11 @@ class ImuChunks:
     def __init__(self, path, n_columns: int = 7, gps_week=None, chunk: int = STREAM_CHUNK):
         self.path, self.n_columns, self.gps_week, self.chunk = pathlib.Path(path), n_columns, gps_week, chunk
         self.lo, self.hi = -np.inf, np.inf
+        if self.path.suffix.lower() == ".bin" and self.path.is_file():
+            size = self.path.stat().st_size
+            if size == 0 or size % 56:
+                raise io.FileFormatError(self.path, None, f"{size} bytes is not a whole number of 56-byte samples "
+                                         "(seven float64: time, 3 angle and 3 velocity increments)")
         self.t_end = _last_time(self.path, n_columns) + (0 if gps_week is None else int(gps_week) * 604800)
         gen = self._raw()
         try:
@@ -117,10 +122,14 @@ class ImuChunks:
 
     def _blocks(self):
         if self.path.suffix.lower() == ".bin":
-            table = np.memmap(self.path, dtype="<f8", mode="r").reshape(-1, 7)
-            for lo in range(0, len(table), self.chunk):
-                yield np.array(table[lo:lo + self.chunk])
-            return
+            # read, not mapped: a map's pages stay resident (and count in the peak) as the
+            # record passes: 541 MiB for 10 h at 200 Hz where a chunk is 2.7 MB
+            with open(self.path, "rb") as f:
+                while True:
+                    block = np.fromfile(f, dtype="<f8", count=7 * self.chunk)
+                    if len(block) == 0:
+                        return
+                    yield block.reshape(-1, 7)
         with TableReader(self.path, chunk_rows=self.chunk, what="KF-GINS IMU", whitespace=True,
                          block_bytes=4 << 20) as r:
             if r.n_columns < 7:

@@ -110,3 +110,25 @@ def imu_error_parameters() -> list:
              shape=(), unit="s", start=0.0, field="imu_params.accel_delay_s",
              description="Accelerometer samples late behind the gyros by this"),
     ]
+
+
+def refusal_table(settings) -> str:
+    """C (model_extra.h): the FMU parameter, unit and bounds of each configuration field
+    the core can refuse, by its member name (gf_ins_config_field), for the refusal message
+    of common/ins_settings.h; ``settings``: the settings table's rows the FMU exposes."""
+    rows = []
+    for st in settings:
+        is_int = 0 if st.kind in ("float", "vector") else 1
+        bounds = " or ".join(f"{v} ({k})" for k, v in st.choices.items()) if st.choices \
+            else st.describe_bounds()
+        rows.append(f'    {{"{st.member}", "{st.short}", offsetof(ModelData, cfg.{st.member}), '
+                    f'{is_int}, {st.size}, "{st.unit or ""}", "{bounds}"}},')
+    return "\n".join([
+        "/* the filter settings the FMU exposes (gfins_fmi/estimation/settings.py) */",
+        "typedef struct InsSetting {",
+        "    const char *member, *parameter;",
+        "    size_t offset;",
+        "    int is_int, count;",
+        "    const char *unit, *bounds;",
+        "} InsSetting;",
+        "static const InsSetting kInsSettings[] = {", *rows, "};", ""])

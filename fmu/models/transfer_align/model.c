@@ -25,6 +25,7 @@
 #include "base/gf_math.h"
 #include "model.h"
 #include "model_extra.h"   /* kInsSettings: generated from the settings table */
+#include "ins_settings.h"  /* log_bad_config, all_positive */
 #include "skip_steps.h"
 
 #define N_MEAS_MAX 3   /* master velocity, attitude, position */
@@ -79,47 +80,6 @@ static void record_update(ModelData *d, int32_t type, int32_t status, double nis
     d->update_status[k] = status;
     if (d->update_count[k] < INT32_MAX)
         d->update_count[k]++;
-}
-
-static int all_positive(const double *x, int n)
-{
-    for (int i = 0; i < n; ++i)
-        if (!(isfinite(x[i]) && x[i] > 0.0))
-            return 0;
-    return 1;
-}
-
-/* The configuration refused by the core, named by its parameter (kInsSettings). */
-static void log_bad_config(FmuInstance *instance, const ModelData *d, int32_t bad)
-{
-    const char *member = gf_ins_config_field(bad);
-    for (size_t i = 0; member && i < sizeof kInsSettings / sizeof kInsSettings[0]; ++i) {
-        const InsSetting *st = &kInsSettings[i];
-        if (strcmp(st->member, member) != 0)
-            continue;
-        const char *base = (const char *)d + st->offset;
-        char value[160];
-        int used = 0;
-        for (int k = 0; k < st->count && used < (int)sizeof value - 32; ++k) {
-            used += snprintf(value + used, sizeof value - (size_t)used, "%s",
-                             k == 0 ? (st->count > 1 ? "[" : "") : ", ");
-            if (st->is_int) {
-                int32_t v;
-                memcpy(&v, base + (size_t)k * sizeof v, sizeof v);
-                used += snprintf(value + used, sizeof value - (size_t)used, "%d", (int)v);
-            } else {
-                double v;
-                memcpy(&v, base + (size_t)k * sizeof v, sizeof v);
-                used += snprintf(value + used, sizeof value - (size_t)used, "%g", v);
-            }
-        }
-        if (st->count > 1)
-            snprintf(value + used, sizeof value - (size_t)used, "]");
-        fmu_log_error(instance, "parameter %s = %s%s%s refused: must be %s", st->parameter,
-                      value, st->unit[0] ? " " : "", st->unit, st->bounds);
-        return;
-    }
-    fmu_log_error(instance, "filter configuration refused (field %s)", member ? member : "unknown");
 }
 
 /* Validates the parameters and starts the filter at t0_s from q0, v0, lat0, lon0, h0. */

@@ -59,27 +59,6 @@ def _filter_parameters():
     return out
 
 
-def _refusal_table():
-    """C: the FMU parameter, unit and bounds of each configuration field the core can
-    refuse, by its member name (gf_ins_config_field), for model.c's refusal message."""
-    rows = []
-    for st in _SETTINGS["fmu_settings"](transfer=True):
-        is_int = 0 if st.kind in ("float", "vector") else 1
-        bounds = " or ".join(f"{v} ({k})" for k, v in st.choices.items()) if st.choices \
-            else st.describe_bounds()
-        rows.append(f'    {{"{st.member}", "{st.short}", offsetof(ModelData, cfg.{st.member}), '
-                    f'{is_int}, {st.size}, "{st.unit or ""}", "{bounds}"}},')
-    return "\n".join([
-        "/* the filter settings the FMU exposes (gfins_fmi/estimation/settings.py) */",
-        "typedef struct InsSetting {",
-        "    const char *member, *parameter;",
-        "    size_t offset;",
-        "    int is_int, count;",
-        "    const char *unit, *bounds;",
-        "} InsSetting;",
-        "static const InsSetting kInsSettings[] = {", *rows, "};", ""])
-
-
 def _initial_uncertainty():
     return [
         _p("sensors0", None, 0.0, "sensors0", "Initial sensor-error estimates (gyro bias 3 "
@@ -202,5 +181,5 @@ MODEL = dict(
         *_master_inputs(),
         *_outputs(),
     ],
-    c_extra=_refusal_table(),
+    c_extra=_COMMON["refusal_table"](_SETTINGS["fmu_settings"](transfer=True)),
 )

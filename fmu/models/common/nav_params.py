@@ -3,6 +3,34 @@ vertical channel and the initial state. Each entry is a spec variable dict (see
 fmu/tools/fmugen.py); ModelData field names are the same in every navigation model."""
 
 
+def parameter(name, unit, start, field, description, type_="Float64", shape=()) -> dict:
+    """A fixed parameter (unit None or '' for a dimensionless one)."""
+    d = dict(name=name, causality="parameter", variability="fixed", type=type_, shape=shape,
+             start=start, field=field, description=description)
+    if unit:
+        d["unit"] = unit
+    return d
+
+
+def model_input(name, unit, start, field, description, type_="Float64", shape=()) -> dict:
+    """An input: continuous when Float64, else discrete."""
+    d = dict(name=name, causality="input", variability="continuous" if type_ == "Float64"
+             else "discrete", type=type_, shape=shape, start=start, field=field,
+             description=description)
+    if unit:
+        d["unit"] = unit
+    return d
+
+
+def model_output(name, unit, shape, field, description, type_="Float64") -> dict:
+    """A discrete output."""
+    d = dict(name=name, causality="output", variability="discrete", type=type_,
+             shape=shape, field=field, description=description)
+    if unit:
+        d["unit"] = unit
+    return d
+
+
 def vertical_channel() -> list:
     return [
         dict(name="vertical_mode", causality="parameter", variability="fixed", type="Int32",

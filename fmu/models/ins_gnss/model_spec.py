@@ -11,6 +11,9 @@ import pathlib
 import runpy
 
 _COMMON = runpy.run_path(str(pathlib.Path(__file__).resolve().parent.parent / "common" / "nav_params.py"))
+_p = _COMMON["parameter"]
+_in = _COMMON["model_input"]
+_out = _COMMON["model_output"]
 # the filter's settings table, read by path (the build runs without the package)
 _SETTINGS = runpy.run_path(str(pathlib.Path(__file__).resolve().parents[3] / "gfins_fmi" /
                                "estimation" / "settings.py"))
@@ -23,31 +26,6 @@ _ACCEL_BIAS = _SETTINGS["FMU_IMU_NOISE"]["accel_bias_std_m_s2"]
 
 #: measurement kinds of the per-kind monitoring outputs, index = GF_INS_MEAS_* - 1
 KINDS = "gnss_pos, gnss_vel, baro, odometer, nhc, zupt, zaru"
-
-
-def _p(name, unit, start, field, description, type_="Float64", shape=()):
-    d = dict(name=name, causality="parameter", variability="fixed", type=type_, shape=shape,
-             start=start, field=field, description=description)
-    if unit:
-        d["unit"] = unit
-    return d
-
-
-def _in(name, unit, start, field, description, type_="Float64", shape=()):
-    d = dict(name=name, causality="input", variability="continuous" if type_ == "Float64"
-             else "discrete", type=type_, shape=shape, start=start, field=field,
-             description=description)
-    if unit:
-        d["unit"] = unit
-    return d
-
-
-def _out(name, unit, shape, field, description, type_="Float64"):
-    d = dict(name=name, causality="output", variability="discrete", type=type_,
-             shape=shape, field=field, description=description)
-    if unit:
-        d["unit"] = unit
-    return d
 
 
 _NAN = float("nan")

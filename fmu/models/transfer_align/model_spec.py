@@ -12,36 +12,14 @@ import pathlib
 import runpy
 
 _COMMON = runpy.run_path(str(pathlib.Path(__file__).resolve().parent.parent / "common" / "nav_params.py"))
+_p = _COMMON["parameter"]
+_in = _COMMON["model_input"]
+_out = _COMMON["model_output"]
 _SETTINGS = runpy.run_path(str(pathlib.Path(__file__).resolve().parents[3] / "gfins_fmi" /
                                "estimation" / "settings.py"))
 _GYRO_BIAS = _SETTINGS["FMU_IMU_NOISE"]["gyro_bias_std_rad_s"]
 _ACCEL_BIAS = _SETTINGS["FMU_IMU_NOISE"]["accel_bias_std_m_s2"]
 _NAN = float("nan")
-
-
-def _p(name, unit, start, field, description, type_="Float64", shape=()):
-    d = dict(name=name, causality="parameter", variability="fixed", type=type_, shape=shape,
-             start=start, field=field, description=description)
-    if unit:
-        d["unit"] = unit
-    return d
-
-
-def _in(name, unit, start, field, description, type_="Float64", shape=()):
-    d = dict(name=name, causality="input", variability="continuous" if type_ == "Float64"
-             else "discrete", type=type_, shape=shape, start=start, field=field,
-             description=description)
-    if unit:
-        d["unit"] = unit
-    return d
-
-
-def _out(name, unit, shape, field, description, type_="Float64"):
-    d = dict(name=name, causality="output", variability="discrete", type=type_,
-             shape=shape, field=field, description=description)
-    if unit:
-        d["unit"] = unit
-    return d
 
 
 def _filter_parameters():

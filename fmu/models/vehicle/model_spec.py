@@ -10,6 +10,8 @@ import pathlib
 import runpy
 
 _COMMON = runpy.run_path(str(pathlib.Path(__file__).resolve().parent.parent / "common" / "nav_params.py"))
+_p = _COMMON["parameter"]
+_out = _COMMON["model_output"]
 MAX_SEGMENTS = 32  # GF_VEHICLE_MAX_SEGMENTS
 # default profile: seed 001's vehicle test with a 60 s alignment (VehicleProfile.seed001(60))
 _DEFAULT = [(60.0, 0.0, 0.0, 0.0), (20.0, 15.0, 0.0, 0.0), (220.0, 0.0, 0.0, 0.0),
@@ -18,22 +20,6 @@ _DEFAULT = [(60.0, 0.0, 0.0, 0.0), (20.0, 15.0, 0.0, 0.0), (220.0, 0.0, 0.0, 0.0
 
 def _column(k):
     return [row[k] for row in _DEFAULT] + [0.0] * (MAX_SEGMENTS - len(_DEFAULT))
-
-
-def _p(name, unit, start, field, description, type_="Float64", shape=()):
-    d = dict(name=name, causality="parameter", variability="fixed", type=type_, shape=shape,
-             start=start, field=field, description=description)
-    if unit:
-        d["unit"] = unit
-    return d
-
-
-def _out(name, unit, shape, field, description, type_="Float64"):
-    d = dict(name=name, causality="output", variability="discrete", type=type_,
-             shape=shape, field=field, description=description)
-    if unit:
-        d["unit"] = unit
-    return d
 
 
 MAX_OUTAGES = 8  # GF_AIDING_MAX_OUTAGES

@@ -238,6 +238,48 @@ static int eisel_lemire(uint64_t m, int64_t e10, double *x) {
     return 1;
 }
 
+/* eight digits at once where the byte order allows (SWAR: Lemire's "fast_float"); the
+ * plain loop elsewhere */
+#if defined(__BYTE_ORDER__) && defined(__ORDER_LITTLE_ENDIAN__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+#define GF_TEXT_SWAR 1
+/* the value of the eight ASCII digits at p */
+static uint64_t eight_digits(const uint8_t *p) {
+    uint64_t v;
+    memcpy(&v, p, 8);
+    v -= 0x3030303030303030u;
+    v = (v * 10u) + (v >> 8);
+    v = (((v & 0x000000FF000000FFu) * 0x000F424000000064u) +
+         (((v >> 16) & 0x000000FF000000FFu) * 0x0000271000000001u)) >> 32;
+    return v;
+}
+#else
+#define GF_TEXT_SWAR 0
+#endif
+
+/* the end of the run of digits that starts at p (SWAR: eight bytes checked at once) */
+static const uint8_t *skip_digits(const uint8_t *p, const uint8_t *end) {
+#if GF_TEXT_SWAR
+    for (; end - p >= 8; p += 8) {
+        uint64_t v;
+        memcpy(&v, p, 8);
+        if (((v & 0xF0F0F0F0F0F0F0F0u) | (((v + 0x0606060606060606u) & 0xF0F0F0F0F0F0F0F0u) >> 4)) !=
+            0x3333333333333333u)
+            break;
+    }
+#endif
+    while (p < end && (uint8_t)(*p - '0') < 10u) ++p;
+    return p;
+}
+
+/* m * 10^(q1 - q0) + the digits [q0, q1) (all digits; the product may wrap beyond 19) */
+static uint64_t add_digits(uint64_t m, const uint8_t *q0, const uint8_t *q1) {
+#if GF_TEXT_SWAR
+    for (; q1 - q0 >= 8; q0 += 8) m = m * 100000000u + eight_digits(q0);
+#endif
+    for (; q0 < q1; ++q0) m = m * 10u + (uint64_t)(*q0 - '0');
+    return m;
+}
+
 /* One number at p (a field's first character) in [p, end): its value in *v and the
  * pointer after it, or NULL when no number starts there. The digits are accumulated
  * into a uint64 without a check per digit (it wraps beyond 19 digits, when the slow path
@@ -268,7 +310,8 @@ static const uint8_t *parse_number(const uint8_t *p, const uint8_t *end, double 
     uint64_t m = 0;
     while (p < end && *p == '0') ++p;                   /* leading zeros */
     const uint8_t *sig = p;
-    for (; p < end && (uint8_t)(*p - '0') < 10u; ++p) m = m * 10u + (uint64_t)(*p - '0');
+    p = skip_digits(p, end);
+    m = add_digits(m, sig, p);
     size_t nsig = (size_t)(p - sig), ndig = (size_t)(p - start);
     int64_t e10 = 0;
     if (p < end && *p == '.') {
@@ -276,11 +319,11 @@ static const uint8_t *parse_number(const uint8_t *p, const uint8_t *end, double 
         if (nsig == 0)
             while (p < end && *p == '0') ++p;           /* zeros before the first significant digit */
         const uint8_t *f1 = p;
-        while (p < end && (uint8_t)(*p - '0') < 10u) ++p;
+        p = skip_digits(p, end);
         /* trailing zeros add nothing ("36000.005000000000000": 8 digits, not 20) */
         const uint8_t *f2 = p;
         while (f2 > f1 && f2[-1] == '0') --f2;
-        for (const uint8_t *q = f1; q < f2; ++q) m = m * 10u + (uint64_t)(*q - '0');
+        m = add_digits(m, f1, f2);
         nsig += (size_t)(f2 - f1);
         ndig += (size_t)(p - f0);
         e10 = -(int64_t)(f2 - f0);

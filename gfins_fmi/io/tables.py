@@ -20,8 +20,8 @@ anything else
     CSV text: comma-separated numbers, one row per line (``whitespace=True``: separated
     by runs of spaces or tabs, as KF-GINS's files); ``#`` comment lines and blank lines
     are skipped, spaces and tabs around a field ignored, CRLF line ends taken; with
-    ``header=True`` the first other line holds the column names (or, when that line holds numbers, the comment line
-    before it, as numpy's ``savetxt`` writes a header). Numbers in the usual forms,
+    ``header=True`` the first other line holds the column names (or, when that line
+    holds numbers, the comment line before it, as numpy's ``savetxt`` writes a header). Numbers in the usual forms,
     ``nan`` and ``inf`` included; written as the shortest decimal that reads back as
     the same float64 (``0.1``, ``1e-7``, ``0.00002201446582700049``), so every value
     round-trips bit for bit.

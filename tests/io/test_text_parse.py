@@ -46,9 +46,11 @@ def test_values_are_what_float_reads(whitespace, tmp_path, monkeypatch):
                                                for i, r in enumerate(rows)))
     got = np.concatenate([b for _, b in TableReader(p, whitespace=whitespace, chunk_rows=700)])
     want = np.array([[float(x) for x in r] for r in rows])
-    assert got.shape == (len(rows), k)
+    assert got.shape == (len(rows), k), f"{got.shape} read where the file holds {(len(rows), k)}"
     # bit for bit (no tolerance: both claim correct rounding)
-    assert np.array_equal(got.view(np.uint64), want.view(np.uint64))
+    diff = np.argwhere(got.view(np.uint64) != want.view(np.uint64))
+    assert len(diff) == 0, (f"{len(diff)} values differ from float(); the first: "
+                            f"{rows[diff[0][0]][diff[0][1]]!r} read as {got[tuple(diff[0])]!r}" if len(diff) else "")
 
 
 def test_nan_inf_and_forms_as_before(tmp_path):

@@ -58,6 +58,8 @@ DEFAULT_CHUNK_ROWS = 1 << 18
 #: bytes of text read at a time: the parser costs nothing per call, so a block only has
 #: to be long against a line (a longer line doubles the buffer)
 _TEXT_BLOCK_BYTES = 4 << 20
+#: rows allocated for a text chunk at first (doubled up to chunk_rows as rows come)
+_FIRST_CHUNK_ROWS = 1 << 16
 
 
 def table_format(path) -> str:
@@ -149,15 +151,21 @@ class _TextSource:
         lo = hi = 0                 # buf[lo:hi]: read from the file, not parsed yet
         final = False               # the file's end is in buf
         line, rows = self._skip, 0  # lines of the file before buf[lo]; rows before `out`
-        out, filled = np.empty((want, k)), 0
+        # a chunk's rows: allocated as they come (doubling) up to chunk_rows, so that a
+        # huge chunk_rows (the whole record at once) costs only the rows there are
+        out, filled = np.empty((min(want, _FIRST_CHUNK_ROWS), k)), 0
         n_rows, n_used, n_lines = ffi.new("size_t *"), ffi.new("size_t *"), ffi.new("size_t *")
         self.position = self._offset
         with open(self.path, "rb") as f:
             f.seek(self._offset)
             while True:
+                if filled == len(out):      # full below chunk_rows: room for more
+                    grown = np.empty((min(want, 2 * len(out)), k))
+                    grown[:filled] = out
+                    out = grown
+                room = len(out) - filled
                 status = lib.gf_text_parse(ptr(buf[lo:hi], hi - lo, "uint8_t"), hi - lo, int(final), k, sep,
-                                           ptr(out[filled:], (want - filled) * k), want - filled,
-                                           n_rows, n_used, n_lines)
+                                           ptr(out[filled:], room * k), room, n_rows, n_used, n_lines)
                 filled += n_rows[0]
                 lo += n_used[0]
                 line += n_lines[0]
@@ -168,7 +176,9 @@ class _TextSource:
                 if filled == want:
                     yield out
                     rows += want
-                    out, filled = np.empty((want, k)), 0
+                    out, filled = np.empty((want, k)), 0    # a file that filled one fills more
+                    continue
+                if filled == len(out):      # stopped for room: grow and parse on
                     continue
                 if final:
                     break
@@ -184,7 +194,8 @@ class _TextSource:
                 final = not n
                 hi += n or 0
         if filled:
-            yield out[:filled]
+            # the last chunk: copied when most of its rows would be empty
+            yield out[:filled] if 2 * filled > len(out) else out[:filled].copy()
 
     def _bad_line(self, text: bytes, before: int, row: int) -> FileFormatError:
         """The error for the line at the start of ``text``: line ``before + 1`` of the

@@ -96,3 +96,17 @@ def test_text_is_read_without_polars(tmp_path):
             "assert b[0].shape == (2, 7); print('polars' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False", "reading text imported polars"
+
+
+def test_a_chunk_larger_than_the_file_costs_its_rows(tmp_path, monkeypatch):
+    """chunk_rows of 10^9 (a whole record at once, as the commands' tests ask): the rows
+    are allocated as they come, not 10^9 rows (52 GiB) up front; chunks that grow across
+    the first allocation keep every row."""
+    monkeypatch.setattr(tables, "_FIRST_CHUNK_ROWS", 64)
+    p = tmp_path / "g.csv"
+    p.write_text("".join(f"{i},{i * 0.25!r}\n" for i in range(1000)))
+    (start, b), = list(TableReader(p, chunk_rows=10 ** 9))
+    assert start == 0 and b.shape == (1000, 2) and b[:, 0].tolist() == list(range(1000))
+    got = [b for _, b in TableReader(p, chunk_rows=300)]
+    assert [len(b) for b in got] == [300, 300, 300, 100]
+    assert np.concatenate(got)[:, 1].tolist() == [i * 0.25 for i in range(1000)]

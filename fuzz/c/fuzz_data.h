@@ -128,7 +128,7 @@ static inline int fz_all_finite(const double *x, size_t n)
 }
 
 /* A status of the enumeration (gf_status.h: GF_OK .. GF_ERR_DIVERGED). */
-#define FZ_STATUS(st, what) FZ_REQUIRE((int)(st) >= 0 && (int)(st) <= 9, "%s returned %d", what, (int)(st))
+#define FZ_STATUS(st, what) FZ_REQUIRE((int)(st) >= 0 && (int)(st) <= 8, "%s returned %d", what, (int)(st))
 
 /* On GF_OK the n outputs at x are finite. */
 #define FZ_FINITE_ON_OK(st, x, n, what)                                                      \

@@ -19,7 +19,7 @@ and works in three passes of bounded size:
    interpolated between them.
 
 The result is :func:`~gfins_fmi.estimation.solution.smooth`'s, bit for bit (one recursion
-in C; a row between two epochs reads only those two). Disk: 8 (1 + 10 + 2 n + n(n+1) + n²)
+in C; a row between two epochs reads only those two). Disk: 8 (1 + 10 + n + n(n+1) + n²)
 + 8 (n + 9) bytes per epoch (n states; 7.7 kB with 21) and 224 bytes per row, in a
 temporary folder removed by :meth:`~StreamingSmoother.close` (or when the smoother is
 collected, or at exit).

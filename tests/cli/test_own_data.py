@@ -654,8 +654,8 @@ def test_smoother_in_chunks_gives_the_whole_records_result(kf_drive, tmp_path, c
 def test_smoother_in_chunks_keeps_the_solution_and_leaves_nothing_on_failure(kf_drive, tmp_path, capsys,
                                                                               monkeypatch):
     """A failure in the smoother (a full disk) exits 1 with the forward solution kept and
-    no smoothed file; a Ctrl-C in it exits 130 and leaves nothing; neither leaves the
-    smoother's temporary folder behind."""
+    no smoothed file; a Ctrl-C in it exits 130 and leaves nothing; a sample the filter
+    refuses leaves the partial tables; none leaves the smoother's temporary folder behind."""
     import gfins_fmi.estimation.smoother_stream as smoother_stream
     _, d = kf_drive
     short = _short_drive(kf_drive, tmp_path, 20.0)
@@ -677,3 +677,14 @@ def test_smoother_in_chunks_keeps_the_solution_and_leaves_nothing_on_failure(kf_
         else:
             assert "interrupted" in err and left == [], (err, left)
         assert not [p for p in tmp_path.rglob("*") if ".tmp" in p.name], "temporary files left"
+    # a sample the filter refuses (50 rad in one 5 ms increment) in the forward pass: the
+    # rows before it kept as partial tables, nothing smoothed, nothing temporary left
+    lines = (short / "imu.txt").read_text().splitlines(keepends=True)
+    cols = lines[3000].split()
+    lines[3000] = " ".join([cols[0], "50.0", *cols[2:]]) + "\n"
+    (short / "imu.txt").write_text("".join(lines))
+    assert main(_args(short, tmp_path / "bad.csv", *_initial(d), "--smooth")) == 1
+    assert "the 3000 samples before it are in" in capsys.readouterr().err
+    left = sorted(p.name for p in tmp_path.iterdir() if p.name.startswith("bad"))
+    assert left == ["bad.config.partial.json", "bad.innovations.partial.csv", "bad.partial.csv"], left
+    assert not [p for p in tmp_path.rglob("*") if ".tmp" in p.name], "temporary files left"

@@ -38,9 +38,9 @@ def drive():
     return d.imu, gnss, init
 
 
-def _whole(drive, filter_):
+def _whole(drive, filter_, **settings):
     imu, gnss, init = drive
-    cfg = FilterConfig(imu=TACTICAL, filter=filter_, scale_factors=True)
+    cfg = FilterConfig(imu=TACTICAL, filter=filter_, scale_factors=True, **settings)
     return IntegratedNavigator(cfg, init).run(imu, gnss, smoother=True).smooth(), cfg
 
 
@@ -64,13 +64,16 @@ def _streamed(drive, cfg, piece, block, rows):
     return parts, np.array(ends), sm
 
 
-@pytest.mark.parametrize("filter_, piece, block, rows", [
-    ("ekf", 100, 1, 37),      # pieces end on every GNSS epoch; every epoch a block boundary
-    ("ekf", 333, 7, 250),     # pieces end between epochs; row chunks start on epochs (250 = 2.5 s)
-    ("ukf", 97, 64, 1000),
+@pytest.mark.parametrize("filter_, piece, block, rows, settings", [
+    ("ekf", 100, 1, 37, {}),      # pieces end on every GNSS epoch; every epoch a block boundary
+    ("ekf", 333, 7, 250, {}),     # pieces end between epochs; row chunks start on epochs (250 = 2.5 s)
+    ("ukf", 97, 64, 1000, {}),
+    # non-holonomic and zero-velocity updates on the 0.1 s grid (at every piece's end), and
+    # two samples per navigation update (coning/sculling over pairs)
+    ("ekf", 100, 3, 101, {"nhc": True, "zupt": True, "subsamples": 2}),
 ])
-def test_streamed_smoother_equals_the_whole_record_one_bit_for_bit(drive, filter_, piece, block, rows):
-    ref, cfg = _whole(drive, filter_)
+def test_streamed_smoother_equals_the_whole_record_one_bit_for_bit(drive, filter_, piece, block, rows, settings):
+    ref, cfg = _whole(drive, filter_, **settings)
     parts, ends, sm = _streamed(drive, cfg, piece, block, rows)
     imu, gnss, _ = drive
     if piece == 100:

@@ -26,6 +26,7 @@ import time
 import numpy as np
 
 from gfins_fmi import io
+from gfins_fmi._lib import GfinsError
 from gfins_fmi._version import __version__
 from gfins_fmi.cli import Failed
 from gfins_fmi.cli.files import cause, compensated, outputs, read_gnss, read_imu, read_optional, read_truth
@@ -479,7 +480,7 @@ def _stream_run(args, outs, nav, smoother, chunks, gnss, baro, odo, scores, inn_
             n = write_smoothed(outs, smoother, sm_path, scores[1], args.all_states, STREAM_CHUNK, args.progress)
             print(f"{n} samples (smoothed) -> {sm_path} ({smoother.n_epochs} epochs smoothed in blocks of "
                   f"{smoother.block_epochs}; {smoother.bytes_on_disk / 1e6:.0f} MB of temporary files, removed)")
-        except (ValueError, FilterError, OSError) as exc:
+        except (ValueError, FilterError, OSError, GfinsError) as exc:   # GfinsError: a block refused in C
             _failed_after_solution(outs, "the smoother", exc)
     try:
         for line in [line for s, name in zip(scores, ("filter", "smoother")) for line in s.lines(name)]:

@@ -205,11 +205,26 @@ class StreamingSmoother:
 
     # ---- 1. forward -----------------------------------------------------------------
     def run(self, imu, gnss=None, baro=None, odometer=None, **kwargs) -> IntegratedSolution:
-        """The navigator's :meth:`~IntegratedNavigator.run` over the next piece of the
-        record (same arguments; not ``smoother``), its epochs and rows stored for the
-        smoother. Returns the piece's forward solution. A
-        :class:`~gfins_fmi.estimation.config.FilterError` ends the forward pass: the
-        solution before it cannot be smoothed here."""
+        """The forward pass over the next piece of the record, its epochs and rows stored.
+
+        Parameters
+        ----------
+        imu, gnss, baro, odometer, **kwargs
+            As :meth:`IntegratedNavigator.run` (not ``smoother``): the pieces in time
+            order, each with the measurements of its own span (after the filter's time,
+            up to the piece's last sample).
+
+        Returns
+        -------
+        IntegratedSolution
+            The piece's forward solution (``epochs`` None: they are on disk).
+
+        Raises
+        ------
+        FilterError
+            As :meth:`IntegratedNavigator.run`; it ends the forward pass (the solution
+            before it cannot be smoothed here).
+        """
         if self._smoothed or self._rows.closed:
             raise ValueError("smooth() was called: the forward pass is over")
         if kwargs.get("smoother"):
@@ -248,7 +263,21 @@ class StreamingSmoother:
 
     def smooth(self, progress: bool = False) -> None:
         """The backward pass, a block of ``block_epochs`` at a time from the end; ends the
-        forward pass. ``progress``: a bar over the epochs (tqdm)."""
+        forward pass.
+
+        Parameters
+        ----------
+        progress : bool
+            A bar over the epochs (tqdm).
+
+        Raises
+        ------
+        ValueError
+            Nothing run yet, a failed forward pass, or called twice.
+        RuntimeError
+            ``gf_ins_smooth_block`` refused a block (a prior covariance not positive
+            definite), with the epochs named.
+        """
         if self._smoothed:
             raise ValueError("smooth() was already called")
         if self._rows.closed:
@@ -314,10 +343,23 @@ class StreamingSmoother:
 
     # ---- 3. the smoothed rows ---------------------------------------------------------
     def solutions(self, rows: int = 48_000, progress: bool = False) -> Iterator[SmoothedSolution]:
-        """The smoothed solution, ``rows`` rows at a time in time order (after
-        :meth:`smooth`): the fields of :class:`SmoothedSolution` (``innovations`` empty:
-        the forward solution's log is the record of the updates; ``epochs``,
-        ``epoch_t_s`` and ``epoch_std`` None). ``progress``: a bar over the rows."""
+        """The smoothed solution a chunk of rows at a time, in time order (after
+        :meth:`smooth`).
+
+        Parameters
+        ----------
+        rows : int
+            Rows per chunk (the memory of the pass: ~1 kB a row).
+        progress : bool
+            A bar over the rows (tqdm).
+
+        Yields
+        ------
+        SmoothedSolution
+            The rows of :func:`~gfins_fmi.estimation.solution.smooth`'s result, bit for
+            bit (``innovations`` empty: the forward solution's log is the record of the
+            updates; ``epochs``, ``epoch_t_s`` and ``epoch_std`` None).
+        """
         if not self._smoothed:
             raise ValueError("call smooth() before solutions()")
         if isinstance(rows, bool) or not isinstance(rows, (int, np.integer)) or rows < 1:

@@ -653,27 +653,31 @@ def test_smoother_in_chunks_gives_the_whole_records_result(kf_drive, tmp_path, c
 
 def test_smoother_in_chunks_keeps_the_solution_and_leaves_nothing_on_failure(kf_drive, tmp_path, capsys,
                                                                               monkeypatch):
-    """A failure in the smoother (a full disk) exits 1 with the forward solution kept and
-    no smoothed file; a Ctrl-C in it exits 130 and leaves nothing; a sample the filter
+    """A failure in the smoother (a full disk, a block refused in C) exits 1 with the
+    forward solution kept and no smoothed file; a Ctrl-C in it exits 130 and leaves nothing; a sample the filter
     refuses leaves the partial tables; none leaves the smoother's temporary folder behind."""
     import gfins_fmi.estimation.smoother_stream as smoother_stream
     _, d = kf_drive
     short = _short_drive(kf_drive, tmp_path, 20.0)
     real = smoother_stream.StreamingSmoother.solutions
-    for exc, code in ((OSError("No space left on device"), 1), (KeyboardInterrupt(), 130)):
+    from gfins_fmi._lib import GfinsError
+    cases = (("disk", OSError("No space left on device"), 1),
+             ("c", GfinsError("gf_ins_smooth_block (epochs 0 to 5 of 9): not positive definite"), 1),
+             ("ctrl_c", KeyboardInterrupt(), 130))
+    for name, exc, code in cases:
         def broken(self, *a, **k):
             it = real(self, *a, **k)
             yield next(it)
             raise exc
-        out = tmp_path / f"sol{code}.csv"
+        out = tmp_path / f"sol_{name}.csv"
         with monkeypatch.context() as m:
             m.setattr(smoother_stream.StreamingSmoother, "solutions", broken)
-            assert main(_args(short, out, *_initial(d), "--smooth")) == code
+            assert main(_args(short, out, *_initial(d), "--smooth")) == code, name
         err = capsys.readouterr().err
-        left = sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(f"sol{code}"))
+        left = sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(f"sol_{name}"))
         if code == 1:
-            assert "failed: the smoother: No space left on device; the solution was kept" in err, err
-            assert left == [f"sol{code}.config.json", f"sol{code}.csv", f"sol{code}.innovations.csv"], left
+            assert f"failed: the smoother: {exc}; the solution was kept" in err, err
+            assert left == [f"sol_{name}.config.json", f"sol_{name}.csv", f"sol_{name}.innovations.csv"], left
         else:
             assert "interrupted" in err and left == [], (err, left)
         assert not [p for p in tmp_path.rglob("*") if ".tmp" in p.name], "temporary files left"

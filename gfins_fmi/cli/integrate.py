@@ -327,6 +327,8 @@ def _run(args, outs, inn_path, sm_path, figures) -> int:
             t_end = min(t_end, kf.end_s)
         print(f"KF-GINS configuration {args.kfgins_config}: IMU samples from {t0:.10g} s to {t_end:.10g} s, "
               f"GNSS {args.gnss}, outputs in {kf.output}")
+        for note in kf.notes:
+            print(f"KF-GINS configuration: {note}")
         if streamed:
             chunks.keep(t0, kf.end_s)
     elif args.initial:
@@ -362,7 +364,8 @@ def _run(args, outs, inn_path, sm_path, figures) -> int:
                        inn_path, cfg)
     try:
         # checked above, on the whole record ("warn": the alignment may have taken its start)
-        sol = nav.run(rec, g_used, baro, odo, smoother=args.smooth, progress=args.progress, checks="warn")
+        sol = nav.run(rec, g_used, baro, odo, smoother=args.smooth, progress=args.progress, checks="warn",
+                      state_std=kf is not None)     # KF-GINS's std file: every error state's 1-sigma
     except FilterError as exc:
         sol = exc.partial
         _write_solution(args, outs, sol, quiet=True)
@@ -431,7 +434,7 @@ def _stream(args, outs, nav, chunks, gnss, baro, odo, scores, inn_path, cfg) -> 
             hi = float(rec.t_s[-1]) + 1e-9      # the navigator's own cut: measurements up to the last sample
             parts = [time_slice(r, lo, hi) for r in (gnss, baro, odo)]
             try:
-                sol = nav.run(rec, *parts, checks="warn" if k == 0 else "off")
+                sol = nav.run(rec, *parts, checks="warn" if k == 0 else "off", state_std=kf is not None)
             except FilterError as exc:
                 write(exc.partial)
                 why = cause(exc)

@@ -29,7 +29,7 @@ from gfins_fmi import io
 from gfins_fmi._version import __version__
 from gfins_fmi.cli import Failed
 from gfins_fmi.cli.files import cause, compensated, outputs, read_gnss, read_imu, read_optional, read_truth
-from gfins_fmi.cli.config_file import apply_config, config_template
+from gfins_fmi.cli.config_file import config_template, configured
 from gfins_fmi.cli.initial import from_initial_option, record_start_s
 from gfins_fmi.cli.kfgins_config import initial_state as kfgins_initial_state
 from gfins_fmi.cli.kfgins_config import (kfgins_outputs, kfgins_tables, open_kfgins_writers, read_kfgins_config,
@@ -183,16 +183,7 @@ def _bias_stds(args) -> dict:
 def _configured(args) -> None:
     """--config: the file's values where the command line gave none, then the checks of
     the combinations (at parse time without a file) on the result."""
-    parser = build_parser()[1]["integrate"]
-    defaults = {a.dest: a.default for a in parser._actions}   # argparse's own list of the options
-    args.given_options = sorted(k for k, v in vars(args).items() if k in defaults and v != defaults[k])
-    args.filter_settings = {}
-    if args.config is not None:
-        apply_config(parser, args, set(args.given_options))
-        args.config_applied = True
-        problem = check_integrate(args)
-        if problem:
-            raise ValueError(problem)
+    configured(args, build_parser()[1]["integrate"], "integrate", check_integrate)
 
 
 def run(args) -> int:

@@ -215,3 +215,26 @@ json = "b/p.json"
     cfg.write_text(f'imu = "{cal_record}"\nlat = 34\n')
     assert main(["calibrate", "--config", str(cfg)]) == 2
     assert "the following arguments are required: --lat, --height" in capsys.readouterr().err
+
+
+def test_calibrate_poses_from_a_file(tmp_path, capsys):
+    """`gfins calibrate poses --config hand.toml` (the word poses typed, the rest from the
+    file) runs the pose calibration as the typed options do (the output byte for byte);
+    CAL.config.json beside its output records the word and the record (the replay itself
+    is the system-level test's: the same mechanism). A 14-pose record at 50 Hz keeps it
+    short."""
+    from gfins_fmi.nav.imu_errors import ImuErrors
+    from gfins_fmi.sim.hand_poses import CONSUMER_MEMS_ERRORS, hand_turned_record
+    errs = ImuErrors.random(np.random.default_rng(5), **CONSUMER_MEMS_ERRORS)
+    rec = hand_turned_record(errs, ImuNoise(gyro_arw_deg_sqrt_h=0.6, accel_vrw_ug_sqrt_hz=150.0), n_poses=14,
+                             still_s=(4.0, 5.0), first_still_s=20.0, rate_hz=50.0, seed=5, lat_rad=np.radians(40.0),
+                             h_m=100.0)
+    rec.imu.to_csv(tmp_path / "hand.csv")
+    (tmp_path / "hand.toml").write_text('record = "hand.csv"\nlat = 40\nheight = 100\noutput = "b.toml"\n')
+    assert main(["calibrate", "poses", "--config", str(tmp_path / "hand.toml")]) == 0
+    assert main(["calibrate", "poses", str(tmp_path / "hand.csv"), "--lat", "40", "--height", "100",
+                 "--output", str(tmp_path / "a.toml")]) == 0
+    assert (tmp_path / "a.toml").read_bytes() == (tmp_path / "b.toml").read_bytes()
+    doc = json.loads((tmp_path / "b.config.json").read_text())
+    assert doc["options"]["imu"] == "poses" and doc["options"]["record"] == str(tmp_path / "hand.csv")
+    capsys.readouterr()

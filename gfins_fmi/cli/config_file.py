@@ -25,6 +25,7 @@ were typed for that run).
 from __future__ import annotations
 
 import argparse
+import copy
 import datetime
 import json
 import os
@@ -49,7 +50,7 @@ __all__ = ["apply_config", "config_template", "configured", "config_deferred", "
 _PATHS = ("imu", "gnss", "output", "baro", "odometer", "truth", "noise_file", "imu_errors", "plot", "kfgins_config")
 #: what a configuration file does not set (nor a run records as an option)
 _NOT_SET = ("config", "print_config", "command", "module", "function", "check", "given_options", "config_applied",
-            "save_config", "resolved")
+            "save_config", "resolved", "argv")
 #: the commands whose files hold the filter's [filter] table and the noise block
 _FILTER_COMMANDS = ("integrate",)
 
@@ -158,13 +159,36 @@ def config_deferred(args) -> bool:
         getattr(args, "config", None) is not None and not getattr(args, "config_applied", False))
 
 
+def _typed(parser: argparse.ArgumentParser, tokens: list) -> set:
+    """The destinations the command line set (``tokens``: what was typed after the
+    command's name), whatever their values: the command's parser again, every default
+    suppressed (so an option typed with its default value counts as given)."""
+    quiet = copy.deepcopy(parser)
+    for a in quiet._actions:   # argparse's own list of the options
+        # a positional stays None when absent (a suppressed default would meet its choices)
+        a.default = argparse.SUPPRESS if a.option_strings else None
+        a.required = False
+    try:
+        ns, _ = quiet.parse_known_args(tokens)
+    except SystemExit:         # pragma: no cover - the same tokens were parsed once already
+        return set()
+    return {k for k, v in vars(ns).items() if v is not None}
+
+
 def configured(args, parser: argparse.ArgumentParser, command: str, check=None) -> None:
-    """``--config``: the file's values where the command line gave none (an option is
-    given when its value differs from its default), then ``check`` (the command's
-    parse-time check of option combinations) on the result; ``args.given_options`` := the
-    options given on the command line. Raises ValueError with the check's message."""
+    """``--config``: the file's values where the command line gave none, then ``check``
+    (the command's parse-time check of option combinations) on the result;
+    ``args.given_options`` := the options given on the command line (typed, from
+    ``args.argv``; without it, those whose value differs from the default). Raises
+    ValueError with the check's message."""
     defaults = {a.dest: a.default for a in parser._actions}   # argparse's own list of the options
-    args.given_options = sorted(k for k, v in vars(args).items() if k in defaults and v != defaults[k])
+    tokens = getattr(args, "argv", None)
+    name = command.split()[0]
+    if tokens is not None and name in tokens:
+        typed = _typed(parser, tokens[tokens.index(name) + 1:])
+        args.given_options = sorted(k for k in typed if k in defaults and k not in _NOT_SET)
+    else:
+        args.given_options = sorted(k for k, v in vars(args).items() if k in defaults and v != defaults[k])
     args.filter_settings = {}
     if args.config is None:
         return

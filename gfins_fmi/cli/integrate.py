@@ -107,7 +107,7 @@ def _effective_config(args, cfg, init, windows) -> str:
         "inputs": {k: _input(getattr(args, k)) for k in ("imu", "gnss", "baro", "odometer", "truth",
                                                              "kfgins_config")},
         "options": {k: (str(v) if isinstance(v, pathlib.Path) else v) for k, v in sorted(vars(args).items())
-                    if k not in ("check", "module", "function", "kfgins", "given_options", "config_applied")},
+                    if k not in ("check", "module", "function", "kfgins", "given_options", "config_applied", "argv")},
         "filter": dataclasses.asdict(cfg),
         "initial": {"t_s": float(nav.t_s), "lat_deg": float(np.degrees(nav.lat_rad)),
                     "lon_deg": float(np.degrees(nav.lon_rad)), "h_m": float(nav.h_m),

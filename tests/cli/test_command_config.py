@@ -238,3 +238,18 @@ def test_calibrate_poses_from_a_file(tmp_path, capsys):
     doc = json.loads((tmp_path / "b.config.json").read_text())
     assert doc["options"]["imu"] == "poses" and doc["options"]["record"] == str(tmp_path / "hand.csv")
     capsys.readouterr()
+
+
+def test_an_option_typed_with_its_default_value_overrides_the_file(rest_record, tmp_path, capsys):
+    """The command line overrides the file even where the typed value is the option's
+    default (before: an option counted as given only when its value differed from the
+    default, so the file's value won): --grade navigation typed over a file's tactical
+    (integrate's default is tactical: the same rule for every command)."""
+    cfg = tmp_path / "a.toml"
+    cfg.write_text(f'mode = "static"\nimu = "{rest_record}"\nposition = "34,0,80"\ngrade = "tactical"\n'
+                   'heading_std = 3.0\n')
+    saved = tmp_path / "s.json"
+    assert main(["align", "--config", str(cfg), "--heading-std", "5", "--save-config", str(saved)]) == 0
+    capsys.readouterr()
+    doc = json.loads(saved.read_text())
+    assert doc["options"]["heading_std"] == 5.0 and doc["options"]["grade"] == "tactical", doc["options"]

@@ -57,6 +57,16 @@ conventions and the SINS/vehicle FMU start values, --compensation the compensati
 alone (JSON, TOML, PSINS's 37-value .bin or text). --prior-mean centres the prior on a
 compensation form (a previous calibration, another tool's). --simulate first writes a
 simulated raw record of that path to IMU (its true errors beside it, IMU.truth.json).
+
+    gfins calibrate [poses] [IMU|RECORD] --config run.toml [--save-config FILE.json] [options]
+    gfins calibrate --print-config
+
+--config takes every option from a TOML or YAML file (the record too; options typed here
+override it), --print-config prints its commented template with units and defaults. A run
+writes its effective configuration (every option with its value and unit, the grade and
+filter settings it chose, the input) beside the first of --report, --json,
+--compensation (poses: --output, --report), as R.config.json (with --plot DIR only:
+DIR/calibrate.config.json), or at --save-config; --config R.config.json repeats the run.
 """
 
 
@@ -361,7 +371,10 @@ def _align(sub) -> argparse.ArgumentParser:
     p = sub.add_parser("align", help="initial alignment: static (levelling + gyrocompassing, fine "
                        "alignment), in motion with a speed sensor and forward-backward passes, or "
                        "transfer alignment of a slave IMU against a master INS",
-                       description="Initial alignment of recorded files (docs/alignment.md).")
+                       description="Initial alignment of recorded files (docs/alignment.md). --config FILE "
+                       "(TOML or YAML) gives every option, the mode and files too (options typed here override "
+                       "it); --print-config prints its template; a run writes its effective configuration "
+                       "beside --output (OUT.config.json) or at --save-config, and --config of it repeats the run.")
     p.add_argument("mode", choices=("static", "motion", "transfer"), nargs="?", default=None,
                    help="static, motion or transfer (may come from --config)")
     p.add_argument("imu", type=pathlib.Path, nargs="?", default=None,

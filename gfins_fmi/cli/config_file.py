@@ -43,7 +43,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover - Python 3.9 and 3.10 read TOML with tomli
     import tomli as tomllib
 
-__all__ = ["apply_config", "config_template", "configured", "config_deferred", "effective_config",
+__all__ = ["apply_config", "config_template", "configured", "effective_config",
            "config_beside", "input_file", "recording"]
 
 #: option destinations that are files (relative to the configuration file)
@@ -150,13 +150,6 @@ def apply_config(parser: argparse.ArgumentParser, args, given: set, command: str
     args.filter_settings = dict(filter_settings)
     if has_noise_block and "noise" not in given and "noise_file" not in given and args.noise is None:
         args.noise_file = path
-
-
-def config_deferred(args) -> bool:
-    """A command's parse-time check of its option combinations waits (returns None)
-    while a configuration file is still to be read: :func:`configured` runs it again."""
-    return bool(getattr(args, "print_config", False)) or (
-        getattr(args, "config", None) is not None and not getattr(args, "config_applied", False))
 
 
 def _typed(parser: argparse.ArgumentParser, tokens: list) -> set:

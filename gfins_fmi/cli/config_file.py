@@ -43,7 +43,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover - Python 3.9 and 3.10 read TOML with tomli
     import tomli as tomllib
 
-__all__ = ["apply_config", "config_template", "configured", "effective_config",
+__all__ = ["apply_config", "config_template", "configured", "effective_config", "option_units",
            "config_beside", "input_file", "recording"]
 
 #: option destinations that are files (relative to the configuration file)
@@ -212,19 +212,24 @@ def _recorded(value):
     return value
 
 
+def option_units(parser: argparse.ArgumentParser) -> dict:
+    """The unit of every option that has one (its type's ``.unit``), by destination."""
+    units = {}
+    for a in parser._actions:   # argparse's own list of the options
+        unit = getattr(a.type, "unit", None)
+        if unit and a.dest not in _NOT_SET:
+            units[a.dest] = unit
+    return units
+
+
 def effective_config(parser: argparse.ArgumentParser, args, command: str, inputs=(), resolved=None) -> str:
     """What a run used, as JSON, to read back or repeat it (``--config`` of this file):
     every option with its value (defaults filled in), their units (the option types'
     ``.unit``), the input files (path, size, time), and ``resolved``: the values the run
     chose itself (the grade's defaults, a window), each named with its unit."""
-    units, options = {}, {}
-    for a in parser._actions:   # argparse's own list of the options
-        if a.dest in ("help", *_NOT_SET):
-            continue
-        options[a.dest] = _recorded(getattr(args, a.dest, a.default))
-        unit = getattr(a.type, "unit", None)
-        if unit:
-            units[a.dest] = unit
+    options = {a.dest: _recorded(getattr(args, a.dest, a.default)) for a in parser._actions   # argparse's list
+               if a.dest not in ("help", *_NOT_SET)}
+    units = option_units(parser)
     doc = {"gfins_fmi": __version__, "command": command,
            "repeat": f"gfins {command.split()[0]} --config THIS_FILE (options given on the command line override it)",
            "inputs": {str(p): input_file(p) for p in inputs if p},

@@ -16,9 +16,7 @@ Records that the run could not use (no epoch inside the IMU record) are refused 
 from __future__ import annotations
 
 import dataclasses
-import datetime
 import json
-import os
 import pathlib
 import sys
 import time
@@ -29,7 +27,7 @@ from gfins_fmi import io
 from gfins_fmi._version import __version__
 from gfins_fmi.cli import Failed
 from gfins_fmi.cli.files import cause, compensated, outputs, read_gnss, read_imu, read_optional, read_truth
-from gfins_fmi.cli.config_file import config_template, configured
+from gfins_fmi.cli.config_file import config_template, configured, input_file, option_units
 from gfins_fmi.cli.initial import from_initial_option, record_start_s
 from gfins_fmi.cli.kfgins_config import initial_state as kfgins_initial_state
 from gfins_fmi.cli.kfgins_config import (kfgins_outputs, kfgins_tables, open_kfgins_writers, read_kfgins_config,
@@ -89,25 +87,20 @@ def _write_innovations(outs, path, sol):
     outs.write_table(path, INNOVATION_COLUMNS, _innovation_columns(sol), _INNOVATION_DTYPES, float_format="repr")
 
 
-def _input(path) -> dict | None:
-    if not path:
-        return None
-    st = os.stat(path)
-    return {"path": str(path), "bytes": st.st_size,
-            "modified_utc": datetime.datetime.fromtimestamp(st.st_mtime, datetime.timezone.utc).isoformat()}
-
-
 def _effective_config(args, cfg, init, windows) -> str:
     """What the run used, to read back or rerun it: the inputs (path, size, time), every
     option, the filter's settings (FilterConfig, datasheet units), the initial state and
-    its 1-sigma (as gf_ins_initial_std holds them), the simulated outages."""
+    its 1-sigma (as gf_ins_initial_std holds them), the simulated outages; the options'
+    units; with --kfgins-config how its keys were mapped."""
     nav = init.nav
     doc = {
         "gfins_fmi": __version__, "command": "integrate",
-        "inputs": {k: _input(getattr(args, k)) for k in ("imu", "gnss", "baro", "odometer", "truth",
-                                                             "kfgins_config")},
+        "inputs": {k: input_file(getattr(args, k)) for k in ("imu", "gnss", "baro", "odometer", "truth",
+                                                                 "kfgins_config")},
         "options": {k: (str(v) if isinstance(v, pathlib.Path) else v) for k, v in sorted(vars(args).items())
                     if k not in ("check", "module", "function", "kfgins", "given_options", "config_applied", "argv")},
+        "units": option_units(build_parser()[1]["integrate"]),
+        "kfgins_notes": None if args.kfgins is None else args.kfgins.notes,
         "filter": dataclasses.asdict(cfg),
         "initial": {"t_s": float(nav.t_s), "lat_deg": float(np.degrees(nav.lat_rad)),
                     "lon_deg": float(np.degrees(nav.lon_rad)), "h_m": float(nav.h_m),

@@ -185,3 +185,19 @@ def test_the_command_prints_the_warnings_and_notes(drive, tmp_path, capsys):
     cap = capsys.readouterr()
     assert "gfins integrate: warning: " in cap.err and "imunoise.vrw" in cap.err and "odolever" in cap.err, cap.err
     assert "KF-GINS configuration: initattstd roll 0.003, pitch 0.003 deg" in cap.out, cap.out
+
+
+def test_the_run_records_how_the_keys_were_mapped(drive, tmp_path, capsys):
+    """KF_GINS.config.json, what the run used, holds the mapping notes and the options'
+    units, so a run's record says how KF-GINS's keys were read."""
+    import json
+    folder, d = drive
+    out = tmp_path / "out"
+    out.mkdir()
+    cfg = tmp_path / "k.yaml"
+    cfg.write_text(_yaml(folder, d, out))
+    assert main(["integrate", "--kfgins-config", str(cfg)]) == 0
+    capsys.readouterr()
+    doc = json.loads((out / "KF_GINS.config.json").read_text())
+    assert any(n.startswith("initattstd roll 0.003, pitch 0.003 deg") for n in doc["kfgins_notes"]), doc
+    assert doc["units"]["propagation_interval"] == "s" and doc["inputs"]["imu"]["bytes"] > 0

@@ -27,7 +27,7 @@
 #include "nav/gf_earth.h"
 #include "model.h"
 #include "model_extra.h"   /* kInsSettings: generated from the settings table */
-#include "ins_settings.h"  /* log_bad_config, all_positive, log_step_error */
+#include "ins_settings.h"  /* log_bad_config, all_positive, ins_fmu_step, log_step_error */
 #include "skip_steps.h"
 
 #define N_MEAS_MAX 4   /* GNSS position, GNSS velocity, barometer, odometer */
@@ -609,22 +609,11 @@ FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double 
         publish(d);
         return FMU_OK;
     }
-    const double *gyro = increments ? d->dtheta_rad : d->gyro_rad_s;
-    const double *accel = increments ? d->dv_m_s : d->accel_m_s2;
     gf_ins_innovation entries[LOG_MAX];
     gf_ins_log log = {LOG_MAX, 0, 0, entries};
-    /* The core leaves the filter unchanged on every error but a divergence found after the
-     * mechanization. A failed step puts the instance in the error state (fmu_do_step):
-     * FMI allows no further step then (FMI 2.0 sec. 2.1.3 and FMI 3.0: restore a saved
-     * state or reset), the outputs keep the last good sample (publish is not called), and
-     * the filter is not restored. (It was, from a copy of the whole filter, 29 KB, taken
-     * before every step: 89% of the step's instructions; without it the step went from
-     * 1.16 us to 0.39 us of CPU, bench/bench_cosim.py, docs/benchmarks.md.) */
-    const gf_status st = gf_ins_step(f, t_s, gyro, accel, n_meas, meas, NULL, &log);
-    if (st != GF_OK) {
-        log_step_error(instance, &d->filter, st, t_s, gyro, accel);
+    if (ins_fmu_step(instance, f, t_s, d->dtheta_rad, d->dv_m_s, d->gyro_rad_s, d->accel_m_s2, n_meas,
+                     meas, &log) != GF_OK)
         return FMU_ERROR;
-    }
     for (size_t i = 0; i < log.count; ++i)
         record_update(d, entries[i].type, entries[i].status, entries[i].nis, entries[i].t_s);
     d->started = 1;

@@ -25,7 +25,7 @@
 #include "base/gf_math.h"
 #include "model.h"
 #include "model_extra.h"   /* kInsSettings: generated from the settings table */
-#include "ins_settings.h"  /* log_bad_config, all_positive, log_step_error */
+#include "ins_settings.h"  /* log_bad_config, all_positive, ins_fmu_step */
 #include "skip_steps.h"
 
 #define N_MEAS_MAX 3   /* master velocity, attitude, position */
@@ -255,17 +255,12 @@ FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double 
         publish(d);
         return FMU_OK;
     }
-    const double *gyro = increments ? d->dtheta_rad : d->gyro_rad_s;
-    const double *accel = increments ? d->dv_m_s : d->accel_m_s2;
     gf_ins_innovation entries[LOG_MAX];
     gf_ins_log log = {LOG_MAX, 0, 0, entries};
-    /* a failed step leaves the instance in the FMI error state; the outputs keep the last
-     * good sample (as gfins_ins_gnss, fmu/models/ins_gnss/model.c) */
-    const gf_status st = gf_ins_step(f, t_s, gyro, accel, n_meas, meas, NULL, &log);
-    if (st != GF_OK) {
-        log_step_error(instance, f, st, t_s, gyro, accel);
+    /* a failed step: the FMI error state, the outputs keep the last good sample (ins_fmu_step) */
+    if (ins_fmu_step(instance, f, t_s, d->dtheta_rad, d->dv_m_s, d->gyro_rad_s, d->accel_m_s2, n_meas,
+                     meas, &log) != GF_OK)
         return FMU_ERROR;
-    }
     for (size_t i = 0; i < log.count; ++i)
         record_update(d, entries[i].type, entries[i].status, entries[i].nis);
     d->started = 1;

@@ -24,6 +24,7 @@ import time
 import numpy as np
 
 from gfins_fmi import io
+from gfins_fmi._lib import GfinsError
 from gfins_fmi._version import __version__
 from gfins_fmi.cli import Failed
 from gfins_fmi.cli.files import cause, compensated, outputs, read_gnss, read_imu, read_optional, read_truth
@@ -33,6 +34,7 @@ from gfins_fmi.cli.kfgins_config import initial_state as kfgins_initial_state
 from gfins_fmi.cli.kfgins_config import (kfgins_outputs, kfgins_tables, open_kfgins_writers, read_kfgins_config,
                                          write_kfgins_outputs)
 from gfins_fmi.cli.integrate_stream import STREAM_CHUNK, ImuChunks, Scores, solution_table, time_slice
+from gfins_fmi.cli.integrate_smooth import open_smoother, write_smoothed
 from gfins_fmi.cli.integrate_options import INITIAL_STD_DEFAULTS, check_integrate
 from gfins_fmi.cli.parser import build_parser
 from gfins_fmi.cli.noise import imu_noise
@@ -266,11 +268,16 @@ class _Stage:
                   flush=True)
 
 
+def _streamed(args, kf) -> bool:
+    """A KF-GINS IMU record with a given initial state is read, filtered, smoothed
+    (--smooth) and written in chunks; the rest reads the whole record."""
+    return (args.imu_format == "kfgins" and (kf is not None or args.initial is not None)
+            and not args.plot and not args.imu_errors)
+
+
 def _run(args, outs, inn_path, sm_path, figures) -> int:
     kf = args.kfgins
-    # a KF-GINS IMU record with a given initial state is read, filtered and written in chunks
-    streamed = (args.imu_format == "kfgins" and (kf is not None or args.initial is not None) and not args.smooth
-                and not args.plot and not args.imu_errors)
+    streamed = _streamed(args, kf)
     chunks = None
     with _Stage(args.progress, f"reading {args.imu}" + (" (its first chunk)" if streamed else "")):
         if streamed:
@@ -344,8 +351,8 @@ def _run(args, outs, inn_path, sm_path, figures) -> int:
     config_path = args.output.with_suffix(".config.json") if kf is None else kfgins_outputs(kf.output)["config"]
     outs.write_text(config_path, _effective_config(args, cfg, init, windows))
     if streamed:
-        return _stream(args, outs, nav, chunks, g_used, baro, odo, Scores(gnss, g_used, truth, windows, cfg.gnss_lever_arm_m),
-                       inn_path, cfg)
+        scores = [Scores(gnss, g_used, truth, windows, cfg.gnss_lever_arm_m) for _ in range(1 + args.smooth)]
+        return _stream(args, outs, nav, chunks, g_used, baro, odo, scores, inn_path, sm_path)
     try:
         # checked above, on the whole record ("warn": the alignment may have taken its start)
         sol = nav.run(rec, g_used, baro, odo, smoother=args.smooth, progress=args.progress, checks="warn",
@@ -382,9 +389,21 @@ def _run(args, outs, inn_path, sm_path, figures) -> int:
     return 0
 
 
-def _stream(args, outs, nav, chunks, gnss, baro, odo, scores, inn_path, cfg) -> int:
+def _stream(args, outs, nav, chunks, gnss, baro, odo, scores, inn_path, sm_path) -> int:
     """The run a chunk at a time: each chunk with the measurements of its own span
-    (lo, hi], written and scored as it passes; the memory does not grow with the record."""
+    (lo, hi], written and scored as it passes; the memory does not grow with the record.
+    With --smooth the smoother's epochs and rows go to a temporary folder beside the
+    smoothed output (integrate_smooth), removed whatever happens."""
+    smoother, remove = open_smoother(outs, nav, sm_path, args.progress) if args.smooth else (None, None)
+    try:
+        return _stream_run(args, outs, nav, smoother, chunks, gnss, baro, odo, scores, inn_path, sm_path)
+    finally:
+        if smoother is not None:
+            smoother.close()
+            remove()
+
+
+def _stream_run(args, outs, nav, smoother, chunks, gnss, baro, odo, scores, inn_path, sm_path) -> int:
     kf = args.kfgins
     if kf is None:
         writers = {"ours": None}      # opened with the first chunk: its columns follow the configuration
@@ -393,6 +412,7 @@ def _stream(args, outs, nav, chunks, gnss, baro, odo, scores, inn_path, cfg) -> 
     inn = outs.table(inn_path, INNOVATION_COLUMNS, _INNOVATION_DTYPES, float_format="repr")
     counts = dict.fromkeys(("accepted", "gated", "singular", "stale", "forced"), 0)
     rows, lo = 0, nav.t_s
+    step = nav.run if smoother is None else smoother.run
 
     def write(sol):
         nonlocal rows
@@ -418,7 +438,7 @@ def _stream(args, outs, nav, chunks, gnss, baro, odo, scores, inn_path, cfg) -> 
             hi = float(rec.t_s[-1]) + 1e-9      # the navigator's own cut: measurements up to the last sample
             parts = [time_slice(r, lo, hi) for r in (gnss, baro, odo)]
             try:
-                sol = nav.run(rec, *parts, checks="warn" if k == 0 else "off", state_std=kf is not None)
+                sol = step(rec, *parts, checks="warn" if k == 0 else "off", state_std=kf is not None)
             except FilterError as exc:
                 write(exc.partial)
                 why = cause(exc)
@@ -429,7 +449,7 @@ def _stream(args, outs, nav, chunks, gnss, baro, odo, scores, inn_path, cfg) -> 
                       f"{', '.join(map(str, outs.partial))} ({outs.outcome().split('; ', 1)[1]})", file=sys.stderr)
                 return 1
             write(sol)
-            scores.add(sol)
+            scores[0].add(sol)
             if bar:
                 bar.update(min(round(hi - lo, 3), bar.total - bar.n))
             lo = hi
@@ -442,8 +462,15 @@ def _stream(args, outs, nav, chunks, gnss, baro, odo, scores, inn_path, cfg) -> 
     where = args.output if kf is None else kfgins_outputs(kf.output)["nav"]
     print(f"{rows} samples -> {where} (read, filtered and written in chunks of {STREAM_CHUNK})")
     print(f"updates: {counts} -> {inn_path}")
+    if smoother is not None:
+        try:
+            n = write_smoothed(outs, smoother, sm_path, scores[1], args.all_states, STREAM_CHUNK, args.progress)
+            print(f"{n} samples (smoothed) -> {sm_path} ({smoother.n_epochs} epochs smoothed in blocks of "
+                  f"{smoother.block_epochs}; {smoother.bytes_on_disk / 1e6:.0f} MB of temporary files, removed)")
+        except (ValueError, FilterError, OSError, GfinsError) as exc:   # GfinsError: a block refused in C
+            _failed_after_solution(outs, "the smoother", exc)
     try:
-        for line in scores.lines():
+        for line in [line for s, name in zip(scores, ("filter", "smoother")) for line in s.lines(name)]:
             print(line)
     except (ValueError, TypeError) as exc:
         _failed_after_solution(outs, "the summary", exc)

@@ -16,9 +16,7 @@ Records that the run could not use (no epoch inside the IMU record) are refused 
 from __future__ import annotations
 
 import dataclasses
-import datetime
 import json
-import os
 import pathlib
 import sys
 import time
@@ -26,15 +24,17 @@ import time
 import numpy as np
 
 from gfins_fmi import io
+from gfins_fmi._lib import GfinsError
 from gfins_fmi._version import __version__
 from gfins_fmi.cli import Failed
 from gfins_fmi.cli.files import cause, compensated, outputs, read_gnss, read_imu, read_optional, read_truth
-from gfins_fmi.cli.config_file import apply_config, config_template
+from gfins_fmi.cli.config_file import config_template, configured, input_file, option_units
 from gfins_fmi.cli.initial import from_initial_option, record_start_s
 from gfins_fmi.cli.kfgins_config import initial_state as kfgins_initial_state
 from gfins_fmi.cli.kfgins_config import (kfgins_outputs, kfgins_tables, open_kfgins_writers, read_kfgins_config,
                                          write_kfgins_outputs)
 from gfins_fmi.cli.integrate_stream import STREAM_CHUNK, ImuChunks, Scores, solution_table, time_slice
+from gfins_fmi.cli.integrate_smooth import open_smoother, write_smoothed
 from gfins_fmi.cli.integrate_options import INITIAL_STD_DEFAULTS, check_integrate
 from gfins_fmi.cli.parser import build_parser
 from gfins_fmi.cli.noise import imu_noise
@@ -89,25 +89,20 @@ def _write_innovations(outs, path, sol):
     outs.write_table(path, INNOVATION_COLUMNS, _innovation_columns(sol), _INNOVATION_DTYPES, float_format="repr")
 
 
-def _input(path) -> dict | None:
-    if not path:
-        return None
-    st = os.stat(path)
-    return {"path": str(path), "bytes": st.st_size,
-            "modified_utc": datetime.datetime.fromtimestamp(st.st_mtime, datetime.timezone.utc).isoformat()}
-
-
 def _effective_config(args, cfg, init, windows) -> str:
     """What the run used, to read back or rerun it: the inputs (path, size, time), every
     option, the filter's settings (FilterConfig, datasheet units), the initial state and
-    its 1-sigma (as gf_ins_initial_std holds them), the simulated outages."""
+    its 1-sigma (as gf_ins_initial_std holds them), the simulated outages; the options'
+    units; with --kfgins-config how its keys were mapped."""
     nav = init.nav
     doc = {
         "gfins_fmi": __version__, "command": "integrate",
-        "inputs": {k: _input(getattr(args, k)) for k in ("imu", "gnss", "baro", "odometer", "truth",
-                                                             "kfgins_config")},
+        "inputs": {k: input_file(getattr(args, k)) for k in ("imu", "gnss", "baro", "odometer", "truth",
+                                                                 "kfgins_config")},
         "options": {k: (str(v) if isinstance(v, pathlib.Path) else v) for k, v in sorted(vars(args).items())
-                    if k not in ("check", "module", "function", "kfgins", "given_options", "config_applied")},
+                    if k not in ("check", "module", "function", "kfgins", "given_options", "config_applied", "argv")},
+        "units": option_units(build_parser()[1]["integrate"]),
+        "kfgins_notes": None if args.kfgins is None else args.kfgins.notes,
         "filter": dataclasses.asdict(cfg),
         "initial": {"t_s": float(nav.t_s), "lat_deg": float(np.degrees(nav.lat_rad)),
                     "lon_deg": float(np.degrees(nav.lon_rad)), "h_m": float(nav.h_m),
@@ -183,16 +178,7 @@ def _bias_stds(args) -> dict:
 def _configured(args) -> None:
     """--config: the file's values where the command line gave none, then the checks of
     the combinations (at parse time without a file) on the result."""
-    parser = build_parser()[1]["integrate"]
-    defaults = {a.dest: a.default for a in parser._actions}   # argparse's own list of the options
-    args.given_options = sorted(k for k, v in vars(args).items() if k in defaults and v != defaults[k])
-    args.filter_settings = {}
-    if args.config is not None:
-        apply_config(parser, args, set(args.given_options))
-        args.config_applied = True
-        problem = check_integrate(args)
-        if problem:
-            raise ValueError(problem)
+    configured(args, build_parser()[1]["integrate"], "integrate", check_integrate)
 
 
 def run(args) -> int:
@@ -282,11 +268,16 @@ class _Stage:
                   flush=True)
 
 
+def _streamed(args, kf) -> bool:
+    """A KF-GINS IMU record with a given initial state is read, filtered, smoothed
+    (--smooth) and written in chunks; the rest reads the whole record."""
+    return (args.imu_format == "kfgins" and (kf is not None or args.initial is not None)
+            and not args.plot and not args.imu_errors)
+
+
 def _run(args, outs, inn_path, sm_path, figures) -> int:
     kf = args.kfgins
-    # a KF-GINS IMU record with a given initial state is read, filtered and written in chunks
-    streamed = (args.imu_format == "kfgins" and (kf is not None or args.initial is not None) and not args.smooth
-                and not args.plot and not args.imu_errors)
+    streamed = _streamed(args, kf)
     chunks = None
     with _Stage(args.progress, f"reading {args.imu}" + (" (its first chunk)" if streamed else "")):
         if streamed:
@@ -327,6 +318,8 @@ def _run(args, outs, inn_path, sm_path, figures) -> int:
             t_end = min(t_end, kf.end_s)
         print(f"KF-GINS configuration {args.kfgins_config}: IMU samples from {t0:.10g} s to {t_end:.10g} s, "
               f"GNSS {args.gnss}, outputs in {kf.output}")
+        for note in kf.notes:
+            print(f"KF-GINS configuration: {note}")
         if streamed:
             chunks.keep(t0, kf.end_s)
     elif args.initial:
@@ -358,11 +351,12 @@ def _run(args, outs, inn_path, sm_path, figures) -> int:
     config_path = args.output.with_suffix(".config.json") if kf is None else kfgins_outputs(kf.output)["config"]
     outs.write_text(config_path, _effective_config(args, cfg, init, windows))
     if streamed:
-        return _stream(args, outs, nav, chunks, g_used, baro, odo, Scores(gnss, g_used, truth, windows, cfg.gnss_lever_arm_m),
-                       inn_path, cfg)
+        scores = [Scores(gnss, g_used, truth, windows, cfg.gnss_lever_arm_m) for _ in range(1 + args.smooth)]
+        return _stream(args, outs, nav, chunks, g_used, baro, odo, scores, inn_path, sm_path)
     try:
         # checked above, on the whole record ("warn": the alignment may have taken its start)
-        sol = nav.run(rec, g_used, baro, odo, smoother=args.smooth, progress=args.progress, checks="warn")
+        sol = nav.run(rec, g_used, baro, odo, smoother=args.smooth, progress=args.progress, checks="warn",
+                      state_std=kf is not None)     # KF-GINS's std file: every error state's 1-sigma
     except FilterError as exc:
         sol = exc.partial
         _write_solution(args, outs, sol, quiet=True)
@@ -395,9 +389,21 @@ def _run(args, outs, inn_path, sm_path, figures) -> int:
     return 0
 
 
-def _stream(args, outs, nav, chunks, gnss, baro, odo, scores, inn_path, cfg) -> int:
+def _stream(args, outs, nav, chunks, gnss, baro, odo, scores, inn_path, sm_path) -> int:
     """The run a chunk at a time: each chunk with the measurements of its own span
-    (lo, hi], written and scored as it passes; the memory does not grow with the record."""
+    (lo, hi], written and scored as it passes; the memory does not grow with the record.
+    With --smooth the smoother's epochs and rows go to a temporary folder beside the
+    smoothed output (integrate_smooth), removed whatever happens."""
+    smoother, remove = open_smoother(outs, nav, sm_path, args.progress) if args.smooth else (None, None)
+    try:
+        return _stream_run(args, outs, nav, smoother, chunks, gnss, baro, odo, scores, inn_path, sm_path)
+    finally:
+        if smoother is not None:
+            smoother.close()
+            remove()
+
+
+def _stream_run(args, outs, nav, smoother, chunks, gnss, baro, odo, scores, inn_path, sm_path) -> int:
     kf = args.kfgins
     if kf is None:
         writers = {"ours": None}      # opened with the first chunk: its columns follow the configuration
@@ -406,6 +412,7 @@ def _stream(args, outs, nav, chunks, gnss, baro, odo, scores, inn_path, cfg) -> 
     inn = outs.table(inn_path, INNOVATION_COLUMNS, _INNOVATION_DTYPES, float_format="repr")
     counts = dict.fromkeys(("accepted", "gated", "singular", "stale", "forced"), 0)
     rows, lo = 0, nav.t_s
+    step = nav.run if smoother is None else smoother.run
 
     def write(sol):
         nonlocal rows
@@ -431,7 +438,7 @@ def _stream(args, outs, nav, chunks, gnss, baro, odo, scores, inn_path, cfg) -> 
             hi = float(rec.t_s[-1]) + 1e-9      # the navigator's own cut: measurements up to the last sample
             parts = [time_slice(r, lo, hi) for r in (gnss, baro, odo)]
             try:
-                sol = nav.run(rec, *parts, checks="warn" if k == 0 else "off")
+                sol = step(rec, *parts, checks="warn" if k == 0 else "off", state_std=kf is not None)
             except FilterError as exc:
                 write(exc.partial)
                 why = cause(exc)
@@ -442,7 +449,7 @@ def _stream(args, outs, nav, chunks, gnss, baro, odo, scores, inn_path, cfg) -> 
                       f"{', '.join(map(str, outs.partial))} ({outs.outcome().split('; ', 1)[1]})", file=sys.stderr)
                 return 1
             write(sol)
-            scores.add(sol)
+            scores[0].add(sol)
             if bar:
                 bar.update(min(round(hi - lo, 3), bar.total - bar.n))
             lo = hi
@@ -455,8 +462,15 @@ def _stream(args, outs, nav, chunks, gnss, baro, odo, scores, inn_path, cfg) -> 
     where = args.output if kf is None else kfgins_outputs(kf.output)["nav"]
     print(f"{rows} samples -> {where} (read, filtered and written in chunks of {STREAM_CHUNK})")
     print(f"updates: {counts} -> {inn_path}")
+    if smoother is not None:
+        try:
+            n = write_smoothed(outs, smoother, sm_path, scores[1], args.all_states, STREAM_CHUNK, args.progress)
+            print(f"{n} samples (smoothed) -> {sm_path} ({smoother.n_epochs} epochs smoothed in blocks of "
+                  f"{smoother.block_epochs}; {smoother.bytes_on_disk / 1e6:.0f} MB of temporary files, removed)")
+        except (ValueError, FilterError, OSError, GfinsError) as exc:   # GfinsError: a block refused in C
+            _failed_after_solution(outs, "the smoother", exc)
     try:
-        for line in scores.lines():
+        for line in [line for s, name in zip(scores, ("filter", "smoother")) for line in s.lines(name)]:
             print(line)
     except (ValueError, TypeError) as exc:
         _failed_after_solution(outs, "the summary", exc)

@@ -121,7 +121,8 @@ def integrate_parser(sub, imu_errors_argument, command) -> argparse.ArgumentPars
     imu_errors_argument(p)
     p.add_argument("--filter", choices=("ekf", "ukf"), default="ekf")
     p.add_argument("--smooth", action="store_true", help="also run the RTS smoother (its solution is "
-                   "written to OUT.smoothed.csv)")
+                   "written to OUT.smoothed.csv); it reads the whole IMU record at once (memory grows with the "
+                   "record's length; without --smooth and --plot the run goes in chunks)")
     p.add_argument("--propagation-interval", type=real("s", at_least=0.0), default=0.1,
                    help="covariance propagation interval, s (0: every IMU sample)")
     p.add_argument("--subsamples", type=int, choices=(1, 2, 3, 4), default=1,
@@ -163,7 +164,9 @@ def integrate_parser(sub, imu_errors_argument, command) -> argparse.ArgumentPars
                         "removed fixes at the antenna)")
     p.add_argument("--zupt", action="store_true", help="zero-velocity updates at detected standstill")
     p.add_argument("--nhc", action="store_true", help="non-holonomic constraints (ground vehicles)")
-    p.add_argument("--plot", type=pathlib.Path, default=None, help="folder for figures")
+    p.add_argument("--plot", type=pathlib.Path, default=None,
+                   help="folder for figures; it reads the whole IMU record at once (memory grows with the "
+                        "record's length; without --smooth and --plot the run goes in chunks)")
     p.add_argument("--all-states", action="store_true",
                    help="write every sensor state's column (default: the biases and the states the "
                         "configuration enables; a disabled state's column is all zeros)")

@@ -8,7 +8,11 @@ outputs) and `gfins integrate ... OUT.parquet` timed in a child process under
     python bench/bench_own_data.py --static-hours 10 --folder DIR [--one-core]
 
 ``--static-hours`` also writes the record's KF-GINS binary form (imu.bin) and times the
-Parquet-output run from it as well as from the text.
+Parquet-output run from it as well as from the text. With ``--our-formats`` it converts
+the record to our ImuRecord CSV and Parquet (in ``--work``, the record's folder only read)
+and times each with the default start (static alignment) and with ``--initial``:
+
+    python bench/bench_own_data.py --static-hours 10 --folder /tmp/own10h --work DIR --our-formats --one-core
 
 The machine is shared: say its load with the figures (uptime is printed).
 """
@@ -170,6 +174,26 @@ def write_bin(folder: pathlib.Path) -> pathlib.Path:
     return out
 
 
+def write_ours(folder: pathlib.Path, work: pathlib.Path) -> dict:
+    """The record as our ImuRecord table (increments, body right-front-up): CSV text and
+    Parquet, in ``work``, converted from the KF-GINS file a chunk at a time (the IMU
+    formats `gfins integrate --imu-format csv` reads)."""
+    from gfins_fmi.io.imu_stream import ImuChunks
+    from gfins_fmi.io.table_writer import TableWriter
+    src = folder / "imu.bin" if (folder / "imu.bin").exists() else folder / "imu.txt"
+    names = ["t_s"] + [f"gyro_{x}_rad" for x in "xyz"] + [f"accel_{x}_m_s" for x in "xyz"]
+    out = {}
+    for fmt in ("csv", "parquet"):
+        path = work / f"imu_ours.{fmt}"
+        if not path.exists():
+            with TableWriter(path, names, comments=["gfins_fmi ImuRecord", f"source: {src.name}"], format=fmt) as w:
+                for rec in ImuChunks(src, "kfgins", chunk=1_000_000):
+                    w.write([rec.t_s, *rec.gyro.T, *rec.accel.T])
+                w.commit()
+        out[fmt] = path
+    return out
+
+
 def timed(argv: list[str], one_core: bool = False) -> dict:
     """The command under /usr/bin/time -v (pinned to CPU 0 with ``one_core``): wall s,
     user + system s, peak RSS MiB."""
@@ -184,7 +208,19 @@ def timed(argv: list[str], one_core: bool = False) -> dict:
     wall = field("Elapsed (wall clock) time (h:mm:ss or m:ss)").split(":")
     wall_s = sum(float(x) * 60 ** i for i, x in enumerate(reversed(wall)))
     return {"wall_s": wall_s, "cpu_s": float(field("User time (seconds)")) + float(field("System time (seconds)")),
+            "user_s": float(field("User time (seconds)")), "sys_s": float(field("System time (seconds)")),
             "peak_mib": int(field("Maximum resident set size (kbytes)")) / 1024.0, "stdout": r.stdout}
+
+
+def report(runs: dict, n: int, one_core: bool, work: pathlib.Path) -> None:
+    """Each run timed (:func:`timed`) and printed, its outputs in ``work`` removed after."""
+    for name, argv in runs.items():
+        t = timed(argv, one_core=one_core)
+        print(f"{name}: wall {t['wall_s']:.2f} s, CPU {t['cpu_s']:.2f} s ({t['user_s']:.2f} + {t['sys_s']:.2f}), "
+              f"peak {t['peak_mib']:.0f} MiB, {n / t['cpu_s'] / 1e3:.0f} k samples per CPU second, "
+              f"{n / t['wall_s'] / 1e3:.0f} k per wall second; load {os.getloadavg()[0]:.1f}", flush=True)
+        for f in ("sol.parquet", "sol.npz", "sol.innovations.csv", "sol.config.json"):
+            (work / f).unlink(missing_ok=True)
 
 
 def main() -> None:
@@ -193,41 +229,51 @@ def main() -> None:
     ap.add_argument("--static-hours", type=float, default=None,
                     help="instead: a record at rest of this many hours (memory and throughput on long records)")
     ap.add_argument("--folder", type=pathlib.Path, default=None)
+    ap.add_argument("--work", type=pathlib.Path, default=None,
+                    help="where the conversions and outputs go (default: --folder; the record is only read)")
+    ap.add_argument("--our-formats", action="store_true",
+                    help="with --static-hours: our ImuRecord CSV and Parquet in, with the default start "
+                         "(static alignment) and with --initial, instead of the KF-GINS runs")
     ap.add_argument("--one-core", action="store_true", help="pin each command to CPU 0 (taskset -c 0)")
     args = ap.parse_args()
     folder = args.folder or pathlib.Path(tempfile.mkdtemp(prefix="gfins_own_data_"))
     folder.mkdir(parents=True, exist_ok=True)
+    work = args.work or folder
+    work.mkdir(parents=True, exist_ok=True)
     cfg = folder / "kf-gins.yaml"
     if not cfg.exists():
         cfg = make(folder, args.minutes) if args.static_hours is None else make_static(folder, args.static_hours)
-    if args.static_hours is not None:
-        n = sum(1 for _ in open(folder / "imu.txt"))
-        print(f"{n} IMU samples ({n / 200 / 3600:.2f} h at 200 Hz) in {folder}; load: {os.getloadavg()}")
-        imu_bin = write_bin(folder)
-        parquet = [str(folder / "gnss.txt"), str(folder / "sol.parquet"), "--imu-format", "kfgins", "--gnss-format",
-                   "kfgins", "--grade", "navigation", "--initial", "30,114,20,0,0,0"]
-        for name, argv in (("kfgins-config (.nav, IMU error, std text)", ["integrate", "--kfgins-config", str(cfg)]),
-                           ("IMU text in, Parquet out", ["integrate", str(folder / "imu.txt"), *parquet]),
-                           ("IMU .bin in, Parquet out", ["integrate", str(imu_bin), *parquet])):
-            t = timed(argv, one_core=args.one_core)
-            print(f"{name}: wall {t['wall_s']:.2f} s, CPU {t['cpu_s']:.2f} s, peak {t['peak_mib']:.0f} MiB, "
-                  f"{n / t['cpu_s'] / 1e3:.0f} k samples per CPU second, {n / t['wall_s'] / 1e3:.0f} k per wall second")
-        print(f"load after: {os.getloadavg()}")
-        return
     n = sum(1 for _ in open(folder / "imu.txt"))
-    print(f"{n} IMU samples ({n / 200 / 60:.1f} min at 200 Hz) in {folder}; load: {os.getloadavg()}")
-    runs = {
-        "kfgins-config (.nav, IMU error, std text)": ["integrate", "--kfgins-config", str(cfg)],
-        "CSV in, Parquet out": ["integrate", str(folder / "imu.txt"), str(folder / "gnss.txt"),
-                                str(folder / "sol.parquet"), "--imu-format", "kfgins", "--gnss-format", "kfgins",
-                                "--grade", "navigation", "--lever-arm", ",".join(map(str, LEVER)),
-                                "--initial", "truth", "--truth", str(folder / "truth.nav")],
-        "kfgins-config + --smooth": ["integrate", "--kfgins-config", str(cfg), "--smooth"],
-    }
-    for name, argv in runs.items():
-        t = timed(argv)
-        print(f"{name}: wall {t['wall_s']:.2f} s, CPU {t['cpu_s']:.2f} s, peak {t['peak_mib']:.0f} MiB, "
-              f"{n / t['cpu_s'] / 1e3:.0f} k samples per CPU second, {n / t['wall_s'] / 1e3:.0f} k per wall second")
+    what = f"{n / 200 / 3600:.2f} h" if args.static_hours is not None else f"{n / 200 / 60:.1f} min"
+    print(f"{n} IMU samples ({what} at 200 Hz) in {folder}; load: {os.getloadavg()}")
+    out = str(work / "sol.parquet")
+    if args.static_hours is not None and args.our_formats:
+        ours = write_ours(folder, work)
+        starts = {"default start (static alignment, 5 s)": [], "--initial": ["--initial", "30,114,20,0,0,0"]}
+        runs = {f"our {fmt} IMU in, {suffix} out, {start}": [
+                    "integrate", str(ours[fmt]), str(folder / "gnss.txt"), str(work / f"sol.{suffix}"), "--gnss-format",
+                    "kfgins", "--imu-format", "csv", "--grade", "navigation", *starts[start]]
+                for fmt, suffix, start in (("csv", "parquet", "default start (static alignment, 5 s)"),
+                                           ("csv", "parquet", "--initial"), ("csv", "npz", "--initial"),
+                                           ("parquet", "parquet", "default start (static alignment, 5 s)"),
+                                           ("parquet", "parquet", "--initial"))}
+    elif args.static_hours is not None:
+        imu_bin = write_bin(folder)
+        parquet = [str(folder / "gnss.txt"), out, "--imu-format", "kfgins", "--gnss-format",
+                   "kfgins", "--grade", "navigation", "--initial", "30,114,20,0,0,0"]
+        runs = {"kfgins-config (.nav, IMU error, std text)": ["integrate", "--kfgins-config", str(cfg)],
+                "IMU text in, Parquet out": ["integrate", str(folder / "imu.txt"), *parquet],
+                "IMU .bin in, Parquet out": ["integrate", str(imu_bin), *parquet]}
+    else:
+        runs = {
+            "kfgins-config (.nav, IMU error, std text)": ["integrate", "--kfgins-config", str(cfg)],
+            "CSV in, Parquet out": ["integrate", str(folder / "imu.txt"), str(folder / "gnss.txt"), out,
+                                    "--imu-format", "kfgins", "--gnss-format", "kfgins", "--grade", "navigation",
+                                    "--lever-arm", ",".join(map(str, LEVER)), "--initial", "truth", "--truth",
+                                    str(folder / "truth.nav")],
+            "kfgins-config + --smooth": ["integrate", "--kfgins-config", str(cfg), "--smooth"],
+        }
+    report(runs, n, args.one_core, work)
     print(f"load after: {os.getloadavg()}")
 
 

@@ -183,9 +183,12 @@ class ImuChunks:
                     if len(block) == 0:
                         return
                     yield block.reshape(-1, 7)
-        kw = {"kfgins": dict(whitespace=True, block_bytes=4 << 20), "rtk_walk": dict(block_bytes=4 << 20),
+        # text in 4 MiB blocks: 16 MiB ones (the reader's default, a third faster to parse) cost
+        # ~75 MiB more peak memory in a run (249 against 175 MiB, 30 min of our CSV)
+        kw = {"kfgins": dict(whitespace=True), "rtk_walk": {},
               "csv": dict(header=self.table == "csv",
                           header_hint="a CSV of a record has one header line")}[self.fmt]
+        kw["block_bytes"] = 4 << 20
         with TableReader(self.path, chunk_rows=self.chunk, what=self._what(), **kw) as r:
             if self.fmt == "kfgins" and r.n_columns < 7:
                 raise ValueError(f"{self.path}: {r.n_columns} columns; a KF-GINS IMU file has 7 (time, 3 angle "

@@ -93,8 +93,10 @@ def integrate_parser(sub, imu_errors_argument, command) -> argparse.ArgumentPars
                         "KF-GINS's output files (KF_GINS_Navresult.nav, KF_GINS_IMU_ERR.txt, KF_GINS_STD.txt) "
                         "in its outputpath; no IMU GNSS OUT then")
     p.add_argument("--imu-format", choices=("csv", "kfgins", "rtk_walk"), default="csv",
-                   help="csv: gfins_fmi.io ImuRecord CSV; kfgins: KF-GINS IMU text/.bin (increments, "
-                        "front-right-down); rtk_walk: the rtk_walk CSV (rates in g and rad/s)")
+                   help="csv: gfins_fmi.io ImuRecord CSV, or Parquet (.parquet, .pq) / npz (.npz) of its "
+                        "columns (t_s s, gyro rad or rad/s, accel m/s or m/s^2, body right-front-up); kfgins: "
+                        "KF-GINS IMU text/.bin (increments, front-right-down); rtk_walk: the rtk_walk CSV "
+                        "(rates in g and rad/s). Every format is read in chunks (see --smooth, --plot)")
     p.add_argument("--gnss-format", choices=("pos", "kfgins", "csv"), default="pos",
                    help="pos: RTKLIB .pos; kfgins: KF-GINS GNSS text; csv: GnssRecord CSV")
     p.add_argument("--gps-week", type=int, default=None,

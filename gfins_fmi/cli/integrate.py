@@ -395,8 +395,7 @@ def _run(args, outs, inn_path, sm_path, figures) -> int:
         why = cause(exc)
         outs.keep_partial(f"the filter stopped at IMU sample {exc.index} of {args.imu}: {why}; the "
                           f"{len(sol)} rows here are the solution before it")
-        print(f"error: {why}; the {len(sol)} samples before it are in "
-              f"{', '.join(map(str, outs.partial))} ({outs.outcome().split('; ', 1)[1]})", file=sys.stderr)
+        print(_stopped(outs, why, len(sol)), file=sys.stderr)
         return 1
     with _Stage(args.progress, "writing the solution"):
         _write_solution(args, outs, sol)
@@ -423,20 +422,33 @@ def _run(args, outs, inn_path, sm_path, figures) -> int:
 def _aligned(args, chunks, imu, gnss, cfg):
     """The default start: static alignment over the first --static seconds (default 5),
     the heading from GNSS velocity when gyrocompassing refuses. In chunks the record's
-    head is read up to the window's end (and, for the GNSS heading, up to its epoch)."""
-    window = (imu.t_s[0], imu.t_s[0] + (args.static or 5.0))
+    head is read up to the window's end (and, for the GNSS heading, up to its epoch).
+    Increments: the window ends on a sample's time (an increment covers the interval that
+    ends at its time; a window end a rounding before a sample's time left the next sample
+    an interval of 1e-15 s, which the filter refused as an impossible rate)."""
+    t0, end = imu.t_s[0], imu.t_s[0] + (args.static or 5.0)
+    if chunks is not None and imu.t_s[-1] < end:
+        imu = chunks.head(until_s=end)
+    if imu.kind == "increments":
+        end = imu.t_s[max(int(np.searchsorted(imu.t_s, end, side="right")) - 1, 0)]
+    window = (t0, end)
     kw = dict(gyro_bias_std_rad_s=cfg.noise_si()["gyro_bias_std_rad_s"],
               accel_bias_std_m_s2=max(cfg.noise_si()["accel_bias_std_m_s2"], 1e-4))
-    if chunks is None:
-        return align_static_then_gnss(imu, gnss, window, **kw)
-    head = chunks.head(until_s=window[1]) if imu.t_s[-1] < window[1] else imu
-    sp = align_static_then_gnss(head, gnss, window, **kw)
-    if sp.alignment.heading_method != "gyrocompass":
+    sp = align_static_then_gnss(imu, gnss, window, **kw)
+    if chunks is not None and sp.alignment.heading_method != "gyrocompass":
         # the gyros carry the heading back from the first GNSS epoch in motion
         t_h = heading_from_gnss(gnss, 1.0, t_from_s=float(window[1]))[0]
-        if head.t_s[-1] < t_h:
+        if imu.t_s[-1] < t_h:
             sp = align_static_then_gnss(chunks.head(until_s=t_h), gnss, window, **kw)
     return sp
+
+
+def _stopped(outs, why: str, rows: int) -> str:
+    """The message of a run that stopped: where the rows before it are (none: what was left)."""
+    if outs.partial:
+        return (f"error: {why}; the {rows} samples before it are in {', '.join(map(str, outs.partial))} "
+                f"({outs.outcome().split('; ', 1)[-1]})")
+    return f"error: {why}; no sample was filtered: {outs.outcome()}"
 
 
 def _stream(args, outs, nav, chunks, gnss, baro, odo, scores, inn_path, cfg) -> int:
@@ -472,8 +484,7 @@ def _stream(args, outs, nav, chunks, gnss, baro, odo, scores, inn_path, cfg) -> 
         bar = tqdm(total=round(max(chunks.t_end - lo, 0.0), 3), unit="s", desc="read, filter, write (record seconds)")
     def stopped(why, what):
         outs.keep_partial(f"{what}: {why}; the {rows} rows here are the solution before it")
-        print(f"error: {why}; the {rows} samples before it are in "
-              f"{', '.join(map(str, outs.partial))} ({outs.outcome().split('; ', 1)[1]})", file=sys.stderr)
+        print(_stopped(outs, why, rows), file=sys.stderr)
         return 1
 
     records = grouped(chunks, cfg.subsamples)

@@ -13,24 +13,24 @@ import pytest
 
 from gfins_fmi.cli import main
 
-#: samples per chunk in the runs in chunks: 4800 samples give 19 boundaries
-CHUNK = 257
+#: samples per chunk in the runs in chunks: the drive's 1800 samples give 18 boundaries
+CHUNK = 97
 LEVER = "0.3,1.1,1.5"
 RTK = __import__("pathlib").Path(__file__).parents[1] / "data" / "rtk_walk"
 
 
 @pytest.fixture(scope="module")
 def drive(tmp_path_factory):
-    """A 48 s drive at 100 Hz (tactical IMU, 1 Hz GNSS with velocity) that starts with
-    10 s at rest, as our ImuRecord in CSV, Parquet and npz, a GnssRecord CSV and a
+    """A 36 s drive at 50 Hz (tactical IMU, 1 Hz GNSS with velocity) that starts with
+    8 s at rest, as our ImuRecord in CSV, Parquet and npz, a GnssRecord CSV and a
     TruthRecord CSV."""
     from gfins_fmi import io
     from gfins_fmi.sim.scenarios import TACTICAL, simulate_drive
     from gfins_fmi.sim.vehicle import GnssReceiver, Segment, VehicleProfile
     folder = tmp_path_factory.mktemp("stream_drive")
-    prof = VehicleProfile(segments=[Segment(10.0), Segment(8.0, dspeed_m_s=10.0), Segment(10.0, dheading_rad=1.5),
-                                    Segment(20.0)], lat0_rad=0.6, lon0_rad=2.0, h0_m=30.0, heading0_rad=0.4)
-    d = simulate_drive(prof, 48.0, 0.01, imu=TACTICAL, gnss=GnssReceiver(lever_arm_m=(0.3, 1.1, 1.5)), seed=5)
+    prof = VehicleProfile(segments=[Segment(8.0), Segment(8.0, dspeed_m_s=10.0), Segment(10.0, dheading_rad=1.5),
+                                    Segment(10.0)], lat0_rad=0.6, lon0_rad=2.0, h0_m=30.0, heading0_rad=0.4)
+    d = simulate_drive(prof, 36.0, 0.02, imu=TACTICAL, gnss=GnssReceiver(lever_arm_m=(0.3, 1.1, 1.5)), seed=5)
     d.imu.to_csv(folder / "imu.csv")
     cols = {"t_s": d.imu.t_s, **{f"gyro_{x}_rad": d.imu.gyro[:, j] for j, x in enumerate("xyz")},
             **{f"accel_{x}_m_s": d.imu.accel[:, j] for j, x in enumerate("xyz")}}
@@ -38,6 +38,9 @@ def drive(tmp_path_factory):
     pa = pytest.importorskip("pyarrow")
     import pyarrow.parquet as pq
     pq.write_table(pa.table(cols), folder / "imu.parquet", row_group_size=1000)
+    from gfins_fmi.io.kfgins import KFGINS_IMU_FORMAT, kfgins_imu_table
+    np.savetxt(folder / "imu.txt", kfgins_imu_table(d.imu), fmt=KFGINS_IMU_FORMAT)
+    np.ascontiguousarray(kfgins_imu_table(d.imu), dtype="<f8").tofile(folder / "imu.bin")
     d.gnss.to_csv(folder / "gnss.csv")
     tr = d.truth
     io.TruthRecord(tr.t_s, tr.lat_rad, tr.lon_rad, tr.h_m, tr.v_n_m_s, tr.euler_rad).to_csv(folder / "truth.csv")
@@ -76,27 +79,34 @@ def _same(out):
     assert whole[2] == chunks[2], f"printed lines differ:\n{whole[2]}\n---\n{chunks[2]}"
 
 
-@pytest.mark.parametrize("fmt", ["csv", "parquet", "npz"])
-def test_our_formats_with_the_default_start(fmt, drive, tmp_path, capsys, monkeypatch):
-    """The default start (static alignment over the first 5 s) in chunks of 257 samples:
-    the window read from the head (two chunks hold the 5 s), the rest streamed from the
-    sample after it. Before: CSV read whole, Parquet and npz not read at all."""
+@pytest.mark.parametrize("fmt", ["csv", "parquet", "npz", "txt", "bin"])
+def test_every_format_with_the_default_start(fmt, drive, tmp_path, capsys, monkeypatch):
+    """The default start (static alignment over the first 5 s) in chunks of 97 samples:
+    the window read from the head (three chunks hold the 5 s), the rest streamed from the
+    sample after it; our CSV, Parquet and npz, KF-GINS text and .bin. Before: read whole
+    (Parquet and npz not read at all), and where the window's end t0 + 5 s fell a rounding
+    before a sample's time (our CSV here: 0.02 + 5 < 251 x 0.02) the next increment got an
+    interval of 1e-15 s and the filter refused it (exit 1, "IMU sample 0 exceeds |w|")."""
     folder, d = drive
     out = _both(monkeypatch, capsys, tmp_path, [
-        "integrate", str(folder / f"imu.{fmt}"), str(folder / "gnss.csv"), "--imu-format", "csv",
+        "integrate", str(folder / f"imu.{fmt}"), str(folder / "gnss.csv"),
+        "--imu-format", "kfgins" if fmt in ("txt", "bin") else "csv",
         "--gnss-format", "csv", "--grade", "tactical", f"--lever-arm={LEVER}", "--truth", str(folder / "truth.csv")])
     _same(out)
     assert "alignment:" in out["chunks"][2] and "filter: error to the truth" in out["chunks"][2]
     rows = out["chunks"][0].count(b"\n") - 1
-    # the run starts at the end of the 5 s window: the samples after it
-    assert rows == int(np.sum(d.imu.t_s > d.imu.t_s[0] + 5.0)), rows
+    # the run starts at the end of the 5 s window, on the last sample at or before it (an
+    # increment ends at its time): the samples after that one, the times as the file has them
+    t = np.loadtxt(folder / "imu.txt", usecols=0) if fmt == "txt" else d.imu.t_s   # txt: 9 decimals
+    end = t[t <= t[0] + 5.0][-1]
+    assert rows == int(np.sum(t > end)), rows
 
 
 @pytest.mark.parametrize("extra", [["--subsamples", "2"], ["--imu-errors"], ["--subsamples", "3", "--imu-errors"]])
 @pytest.mark.parametrize("start", ["--initial", "truth"])
 def test_given_starts_in_chunks(start, extra, drive, tmp_path, capsys, monkeypatch):
     """--initial (and the state of the truth file at the record's start), with
-    --imu-errors and --subsamples (groups of samples across chunks of 257), the
+    --imu-errors and --subsamples (groups of samples across chunks of 97), the
     outage protocol's score, in chunks."""
     folder, d = drive
     errs = tmp_path / "errors.toml"
@@ -107,7 +117,7 @@ def test_given_starts_in_chunks(start, extra, drive, tmp_path, capsys, monkeypat
     out = _both(monkeypatch, capsys, tmp_path, [
         "integrate", str(folder / "imu.parquet"), str(folder / "gnss.csv"), "--imu-format", "csv",
         "--gnss-format", "csv", "--grade", "tactical", f"--lever-arm={LEVER}", *init, *extra,
-        "--outages", "5,15,12"])
+        "--outages", "4,10,8"])
     _same(out)
     assert "outage protocol (3 outages" in out["chunks"][2], out["chunks"][2]
 
@@ -150,7 +160,7 @@ def test_a_bad_sample_past_the_first_chunk(defect, drive, tmp_path, capsys, monk
     folder, d = drive
     lines = (folder / "imu.csv").read_text().splitlines(keepends=True)
     head = sum(1 for x in lines if x.startswith("#")) + 1
-    row = 8 * CHUNK + 100
+    row = 8 * CHUNK + 50
     fields = lines[head + row].split(",")
     if defect == "time":
         fields[0] = repr(float(d.imu.t_s[row - 2]))
@@ -182,7 +192,8 @@ def test_parquet_and_npz_records_equal_the_csv(drive, tmp_path):
             assert np.array_equal(a, b)
         assert rec.kind == "increments"
         ch = ImuChunks(folder / f"imu.{fmt}", chunk=CHUNK)
-        assert ch.t_end == d.imu.t_s[-1] and len(ch.first) == CHUNK
+        # the head: whole chunks up to 101 samples at least
+        assert ch.t_end == d.imu.t_s[-1] and len(ch.first) == -(-101 // CHUNK) * CHUNK
         assert sum(len(r) for r in ch) == len(d.imu)
     np.savez(tmp_path / "x.npz", t=d.imu.t_s, gx=d.imu.gyro[:, 0])
     with pytest.raises(FileFormatError, match="the column names 't,gx' are not a ImuRecord layout"):

@@ -14,23 +14,17 @@ import gfins_fmi as gf
 from gfins_fmi.nav import earth
 from gfins_fmi.estimation import FilterConfig, InitialState, IntegratedNavigator, integrate
 from gfins_fmi.estimation.evaluation import navigation_errors
-from gfins_fmi.sim.scenarios import TACTICAL, simulate_drive, town_drive
-from gfins_fmi.sim.vehicle import GnssReceiver, simulate_vehicle
+from gfins_fmi.sim.scenarios import TACTICAL, simulate_drive
+from gfins_fmi.sim.vehicle import GnssReceiver
+from support.drives import drive_start, town_drive_with_outage
 
 
 @pytest.fixture(scope="module")
 def drive():
-    T = 420.0
-    prof = town_drive(T)
-    rx = GnssReceiver(rate_hz=1.0, offset_s=0.37, pos_std_m=(1.0, 1.0, 2.0), vel_std_m_s=(0.05, 0.05, 0.1),
-                      outages_s=((200.0, 260.0),))
-    truth = simulate_vehicle(prof, T, 0.01)
-    return prof, T, rx, truth
+    return town_drive_with_outage()
 
 
-def _init(d, **kw):
-    return InitialState(d.initial, position_std_m=(1.0, 1.0, 2.0), velocity_std_m_s=0.1,
-                        attitude_std_rad=(0.005, 0.005, 0.02), **kw)
+_init = drive_start
 
 
 def test_smoother_and_ukf(drive):

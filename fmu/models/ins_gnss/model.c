@@ -27,7 +27,7 @@
 #include "nav/gf_earth.h"
 #include "model.h"
 #include "model_extra.h"   /* kInsSettings: generated from the settings table */
-#include "ins_settings.h"  /* log_bad_config, all_positive */
+#include "ins_settings.h"  /* log_bad_config, all_positive, ins_fmu_step, log_step_error */
 #include "skip_steps.h"
 
 #define N_MEAS_MAX 4   /* GNSS position, GNSS velocity, barometer, odometer */
@@ -371,8 +371,6 @@ static FmuStatus align_step(FmuInstance *instance, ModelData *d, double t_s, siz
  * the heading 1-sigma sqrt(align_travel_std^2 + s^2), s = the direction 1-sigma of the
  * GNSS velocity, sqrt(vN^2 sE^2 + vE^2 sN^2) / (vE^2 + vN^2). The epoch is used up by the
  * start (not applied as an update). A failure there restores d (one copy per run). */
-static void log_step_error(FmuInstance *instance, const ModelData *d, gf_status st, double t_s,
-                           const double *gyro, const double *accel);
 
 /* The filter's step without measurements (NHC / ZUPT, if configured, are heading-free). */
 static FmuStatus mechanize(FmuInstance *instance, ModelData *d, double t_s)
@@ -384,7 +382,7 @@ static FmuStatus mechanize(FmuInstance *instance, ModelData *d, double t_s)
     gf_ins_log log = {LOG_MAX, 0, 0, entries};
     const gf_status st = gf_ins_step(&d->filter, t_s, gyro, accel, 0, NULL, NULL, &log);
     if (st != GF_OK) {
-        log_step_error(instance, d, st, t_s, gyro, accel);
+        log_step_error(instance, &d->filter, st, t_s, gyro, accel);
         return FMU_ERROR;
     }
     for (size_t i = 0; i < log.count; ++i)
@@ -587,39 +585,6 @@ static int gather(FmuInstance *instance, const ModelData *d, double t_s, gf_ins_
     return 1;
 }
 
-static void log_step_error(FmuInstance *instance, const ModelData *d, gf_status st, double t_s,
-                           const double *gyro, const double *accel)
-{
-    const gf_ins_filter *f = &d->filter;
-    const int increments = f->cfg.input == GF_SINS_INPUT_INCREMENTS;
-    const char *g = increments ? "dtheta" : "gyro_rate", *a = increments ? "dv" : "specific_force";
-    switch (st) {
-    case GF_ERR_NONFINITE_INPUT:
-        fmu_log_error(instance, "t = %.9g s: input %s = [%g, %g, %g] or %s = [%g, %g, %g] is not "
-                      "finite; the outputs keep the last good sample", t_s, g, gyro[0], gyro[1],
-                      gyro[2], a, accel[0], accel[1], accel[2]);
-        break;
-    case GF_ERR_OUT_OF_RANGE:
-        fmu_log_error(instance, "t = %.9g s: input %s = [%g, %g, %g] / %s = [%g, %g, %g] exceeds "
-                      "max_rate = %g rad/s or max_specific_force = %g m/s2", t_s, g, gyro[0],
-                      gyro[1], gyro[2], a, accel[0], accel[1], accel[2], f->cfg.max_rate_rad_s,
-                      f->cfg.max_specific_force_m_s2);
-        break;
-    case GF_ERR_BAD_TIME:
-        fmu_log_error(instance, "t = %.9g s: the IMU interval since the previous sample at %.9g s "
-                      "is not in (0, max_imu_gap = %g s]", t_s, f->t_s, f->cfg.max_imu_gap_s);
-        break;
-    case GF_ERR_DIVERGED:
-        fmu_log_error(instance, "t = %.9g s: the filter diverged (navigation state left its "
-                      "domain or the covariance lost positive definiteness); the outputs keep "
-                      "the last good sample", t_s);
-        break;
-    default:
-        fmu_log_error(instance, "t = %.9g s: filter step failed: %s", t_s, gf_status_string(st));
-        break;
-    }
-}
-
 FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double h_s)
 {
     FmuStatus skipped;
@@ -644,22 +609,11 @@ FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double 
         publish(d);
         return FMU_OK;
     }
-    const double *gyro = increments ? d->dtheta_rad : d->gyro_rad_s;
-    const double *accel = increments ? d->dv_m_s : d->accel_m_s2;
     gf_ins_innovation entries[LOG_MAX];
     gf_ins_log log = {LOG_MAX, 0, 0, entries};
-    /* The core leaves the filter unchanged on every error but a divergence found after the
-     * mechanization. A failed step puts the instance in the error state (fmu_do_step):
-     * FMI allows no further step then (FMI 2.0 sec. 2.1.3 and FMI 3.0: restore a saved
-     * state or reset), the outputs keep the last good sample (publish is not called), and
-     * the filter is not restored. (It was, from a copy of the whole filter, 29 KB, taken
-     * before every step: 89% of the step's instructions; without it the step went from
-     * 1.16 us to 0.39 us of CPU, bench/bench_cosim.py, docs/benchmarks.md.) */
-    const gf_status st = gf_ins_step(f, t_s, gyro, accel, n_meas, meas, NULL, &log);
-    if (st != GF_OK) {
-        log_step_error(instance, d, st, t_s, gyro, accel);
+    if (ins_fmu_step(instance, f, t_s, d->dtheta_rad, d->dv_m_s, d->gyro_rad_s, d->accel_m_s2, n_meas,
+                     meas, &log) != GF_OK)
         return FMU_ERROR;
-    }
     for (size_t i = 0; i < log.count; ++i)
         record_update(d, entries[i].type, entries[i].status, entries[i].nis, entries[i].t_s);
     d->started = 1;

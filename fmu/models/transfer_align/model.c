@@ -25,7 +25,7 @@
 #include "base/gf_math.h"
 #include "model.h"
 #include "model_extra.h"   /* kInsSettings: generated from the settings table */
-#include "ins_settings.h"  /* log_bad_config, all_positive */
+#include "ins_settings.h"  /* log_bad_config, all_positive, ins_fmu_step */
 #include "skip_steps.h"
 
 #define N_MEAS_MAX 3   /* master velocity, attitude, position */
@@ -235,33 +235,6 @@ static int gather(FmuInstance *instance, ModelData *d, double t_s, gf_ins_meas *
     return 1;
 }
 
-static void log_step_error(FmuInstance *instance, const ModelData *d, gf_status st, double t_s)
-{
-    const gf_ins_filter *f = &d->filter;
-    switch (st) {
-    case GF_ERR_NONFINITE_INPUT:
-        fmu_log_error(instance, "t = %.9g s: an IMU input is not finite; the outputs keep the last "
-                      "good sample", t_s);
-        break;
-    case GF_ERR_OUT_OF_RANGE:
-        fmu_log_error(instance, "t = %.9g s: the IMU sample exceeds max_rate = %g rad/s or "
-                      "max_specific_force = %g m/s2", t_s, f->cfg.max_rate_rad_s,
-                      f->cfg.max_specific_force_m_s2);
-        break;
-    case GF_ERR_BAD_TIME:
-        fmu_log_error(instance, "t = %.9g s: the IMU interval since the previous sample at %.9g s is "
-                      "not in (0, max_imu_gap = %g s]", t_s, f->t_s, f->cfg.max_imu_gap_s);
-        break;
-    case GF_ERR_DIVERGED:
-        fmu_log_error(instance, "t = %.9g s: the filter diverged; the outputs keep the last good "
-                      "sample", t_s);
-        break;
-    default:
-        fmu_log_error(instance, "t = %.9g s: filter step failed: %s", t_s, gf_status_string(st));
-        break;
-    }
-}
-
 FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double h_s)
 {
     FmuStatus skipped;
@@ -282,17 +255,12 @@ FmuStatus model_do_step(FmuInstance *instance, ModelData *d, double t_s, double 
         publish(d);
         return FMU_OK;
     }
-    const double *gyro = increments ? d->dtheta_rad : d->gyro_rad_s;
-    const double *accel = increments ? d->dv_m_s : d->accel_m_s2;
     gf_ins_innovation entries[LOG_MAX];
     gf_ins_log log = {LOG_MAX, 0, 0, entries};
-    /* a failed step leaves the instance in the FMI error state; the outputs keep the last
-     * good sample (as gfins_ins_gnss, fmu/models/ins_gnss/model.c) */
-    const gf_status st = gf_ins_step(f, t_s, gyro, accel, n_meas, meas, NULL, &log);
-    if (st != GF_OK) {
-        log_step_error(instance, d, st, t_s);
+    /* a failed step: the FMI error state, the outputs keep the last good sample (ins_fmu_step) */
+    if (ins_fmu_step(instance, f, t_s, d->dtheta_rad, d->dv_m_s, d->gyro_rad_s, d->accel_m_s2, n_meas,
+                     meas, &log) != GF_OK)
         return FMU_ERROR;
-    }
     for (size_t i = 0; i < log.count; ++i)
         record_update(d, entries[i].type, entries[i].status, entries[i].nis);
     d->started = 1;

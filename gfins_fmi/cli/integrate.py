@@ -508,6 +508,8 @@ def _stream(args, outs, nav, chunks, gnss, baro, odo, scores, inn_path, cfg) -> 
                 return stopped(cause(exc), f"the filter stopped at IMU sample {where} of {args.imu}")
             write(sol)
             scores.add(sol)
+            # not held while the next chunk is read and filtered: one chunk's solution at a time
+            del sol, rec, parts
             if bar:
                 bar.update(min(round(hi - lo, 3), bar.total - bar.n))
             lo = hi

@@ -88,7 +88,9 @@ def _outputs_note(exc) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     parser, parsers = build_parser()
-    args = parser.parse_args(_negative_values_joined(sys.argv[1:] if argv is None else list(argv)))
+    tokens = _negative_values_joined(sys.argv[1:] if argv is None else list(argv))
+    args = parser.parse_args(tokens)
+    args.argv = tokens      # what was typed: --config tells the options given from the defaults by it
     problem = args.check(args) if args.check else None
     if problem:   # a combination of options: refused at parse time too
         parsers[args.command].error(problem)

@@ -1,5 +1,7 @@
 """``gfins align``: initial alignment of recorded IMU files from the shell (issue 13).
 
+    gfins align --print-config                    # a commented template of the configuration file
+    gfins align [MODE IMU ...] --config FILE.toml [options]   # settings from a file; options override it
     gfins align static IMU --position LAT,LON,H [--window T0,T1] [--grade G] [--disturbed]
                        [--heading DEG [--heading-std DEG]] [--fine [--fine-end T1]]
     gfins align motion IMU SPEED --initial LAT,LON,H,HEADING,PITCH,ROLL [--depth DEPTH]
@@ -26,6 +28,11 @@ sigma), writes the estimates over time and the convergence figure. Exit status 0
 aligned, 1 when the alignment reports that it has not converged (motion: its verdict;
 transfer: the mounting's 1-sigma above --tolerance; the outputs are written all the
 same), 2 on bad input.
+
+Every run that writes a file writes its effective configuration beside it
+(``OUT.config.json``: every option with its value and unit, the grade and bias 1-sigma
+and the window the run chose, the inputs), or where ``--save-config FILE`` says; ``gfins
+align --config OUT.config.json`` repeats the run (gfins_fmi.cli.config_file).
 """
 from __future__ import annotations
 
@@ -39,9 +46,11 @@ import warnings
 import numpy as np
 
 from gfins_fmi import io
+from gfins_fmi.cli.config_file import config_beside, config_template, configured, recording
 from gfins_fmi.cli.files import compensated, outputs, run_writing
 from gfins_fmi.cli.initial import from_initial_option, record_start_s
 from gfins_fmi.cli.noise import imu_noise
+from gfins_fmi.cli.parser import build_parser, check_align
 from gfins_fmi.estimation.alignment import coarse_align, coarse_align_inertial
 from gfins_fmi.estimation.config import UG, FilterConfig, InitialState
 from gfins_fmi.estimation.fine_alignment import align_in_motion, fine_align
@@ -87,12 +96,28 @@ def _given_heading(co, args):
 
 
 def run(args) -> int:
+    parser = build_parser()[1]["align"]
+    if args.print_config:
+        print(config_template(parser, "align"), end="")
+        return 0
+    configured(args, parser, "align", check_align)
+    args.resolved = {}
+    saved = config_beside(args, (args.output, args.plot), command="align")
     if args.mode == "transfer":
         if args.simulate is not None:
             _simulate(args)
-        return run_writing(_transfer, args, inputs=(args.imu, args.speed, args.truth, args.truth_json),
-                           files=(args.output, args.plot))
-    return run_writing(_run, args, inputs=(args.imu, args.speed, args.depth), files=(args.output,))
+        inputs = (args.imu, args.speed, args.truth, args.truth_json, args.imu_errors)
+        return run_writing(recording(_transfer, parser, "align", saved, inputs), args, inputs=inputs,
+                           files=(args.output, args.plot, saved))
+    inputs = (args.imu, args.speed, args.depth, args.imu_errors)
+    return run_writing(recording(_run, parser, "align", saved, inputs), args, inputs=inputs,
+                       files=(args.output, saved))
+
+
+def _resolved_biases(args, grade: str, gb: float, ab: float) -> None:
+    """The grade and turn-on bias 1-sigma the run used, for its effective configuration."""
+    args.resolved.update({"grade": grade, "gyro_bias_1sigma_deg_h": gb * 180.0 / math.pi * 3600.0,
+                          "accel_bias_1sigma_ug": ab / UG})
 
 
 def _run(args, outs) -> int:
@@ -102,10 +127,12 @@ def _run(args, outs) -> int:
     if args.imu_errors:
         imu = compensated(imu, read_imu_errors(args.imu_errors))
     gb, ab = _biases(args, noise)
+    _resolved_biases(args, args.grade or "navigation", gb, ab)
     if args.mode == "static":
         lat, lon, h = args.position
         span = 300.0 if args.disturbed else 60.0
         t0, t1 = args.window if args.window else (imu.t_s[0] - 1e-9, imu.t_s[0] + span)
+        args.resolved["window_s"] = [float(t0), float(t1)]
         align = coarse_align_inertial if args.disturbed else coarse_align
         co = align(imu, t0, t1, lat * deg, gyro_bias_std_rad_s=gb, accel_bias_std_m_s2=ab)
         if not args.disturbed:
@@ -226,6 +253,7 @@ def _transfer(args, outs) -> int:
     else:
         master, rates = read_navigation(args.speed)
     gb, ab = _biases(args, noise)
+    _resolved_biases(args, args.grade or "consumer", gb, ab)
     flex = args.flexure is not None
     cfg = FilterConfig(imu=noise, input=imu.kind, master_mount=args.matching == "velocity+attitude",
                        master_lever="lever" not in args.fix, master_time_offset="offset" not in args.fix,

@@ -2,7 +2,11 @@
 (usage: ``gfins calibrate --help``, :data:`gfins_fmi.cli.parser.CALIBRATE_DESCRIPTION`):
 prints the segments, every parameter with its 1-sigma and its shift against the prior,
 the checks and warnings, the compensation form; writes the report, the JSON of both
-conventions and FMU start values, the compensation form, the figures."""
+conventions and FMU start values, the compensation form, the figures, and the effective
+configuration beside them (``R.config.json``: every option with its value and unit, the
+grade and filter settings the run chose, the inputs; ``gfins calibrate --config
+R.config.json`` repeats the run). ``--config FILE`` (TOML or YAML) gives the options from a
+file, ``--print-config`` prints its template (gfins_fmi.cli.config_file)."""
 from __future__ import annotations
 
 import dataclasses
@@ -16,8 +20,10 @@ from gfins_fmi.calibration.segmentation import record_increments, segment_record
 from gfins_fmi.calibration.syscal_filter import (Prior, SyscalConfig, core_gravity_m_s2,
                                                  imu_errors_to_params, param_names, params_to_c)
 from gfins_fmi.calibration.system import calibrate, plot_report, random_params, simulate_record
+from gfins_fmi.cli import calibrate_poses
+from gfins_fmi.cli.config_file import config_beside, config_template, configured, recording
 from gfins_fmi.cli.files import read_imu, run_writing
-from gfins_fmi.cli.parser import RAW_FORMATS
+from gfins_fmi.cli.parser import RAW_FORMATS, build_parser, check_calibrate
 from gfins_fmi.io import read_raw_imu
 from gfins_fmi.nav.imu_errors import ImuNoise
 from gfins_fmi.sim import rotation as rot
@@ -105,15 +111,27 @@ def _prior_mean(args, config: SyscalConfig):
 
 
 def run(args) -> int:
+    parser = build_parser()[1]["calibrate"]
+    if args.print_config:
+        print(config_template(parser, "calibrate"), end="")
+        return 0
+    configured(args, parser, "calibrate", check_calibrate)
+    if args.module == "calibrate_poses":      # `calibrate poses RECORD` given by the configuration file
+        return calibrate_poses.run(args)
     if args.simulate:
         _simulate(args)
-    return run_writing(_calibrate, args, inputs=(args.imu, args.prior_mean),
-                       files=(args.report, args.json, args.compensation), folder=args.plot)
+    args.resolved = {}
+    saved = config_beside(args, (args.report, args.json, args.compensation), args.plot, "calibrate")
+    inputs = (args.imu, args.prior_mean)
+    return run_writing(recording(_calibrate, parser, "calibrate", saved, inputs), args, inputs=inputs,
+                       files=(args.report, args.json, args.compensation, saved), folder=args.plot)
 
 
 def _calibrate(args, outs) -> int:
     imu = _read(args)
     config, grade_name, figures = _config(args, imu)
+    # what the run chose itself (the grade read from the record, its priors and noise): recorded with it
+    args.resolved = {"grade": grade_name, "grade_figures": figures, "syscal_config": dataclasses.asdict(config)}
     rep = calibrate(imu, np.radians(args.lat), args.height, lon_rad=np.radians(args.lon),
                     config=config, passes=args.passes, params0=_prior_mean(args, config),
                     gravity_m_s2=args.gravity, widen_priors=args.widen_priors,

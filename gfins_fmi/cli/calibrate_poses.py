@@ -11,7 +11,9 @@ from gfins_fmi.calibration.poses import calibrate_poses
 from gfins_fmi.calibration.poses_report import (UNITS, parameter_table, plot_pose_calibration, pose_rows,
                                                 turn_rows)
 from gfins_fmi.calibration.still import StillDetector
+from gfins_fmi.cli.config_file import config_beside, recording
 from gfins_fmi.cli.files import read_imu, run_writing
+from gfins_fmi.cli.parser import build_parser
 from gfins_fmi.estimation.noise_file import imu_errors_text
 from gfins_fmi.io.records import ImuRecord
 from gfins_fmi.io.tables import TableReader
@@ -45,7 +47,10 @@ def _tables(args):
 
 def run(args) -> int:
     tables = [path for _, path in _tables(args)] if args.table else []
-    return run_writing(_run, args, [args.record], [args.report, args.output, *tables], args.plot)
+    saved = config_beside(args, (args.output, args.report, *tables), args.plot, "calibrate")
+    inputs = [args.record]
+    return run_writing(recording(_run, build_parser()[1]["calibrate"], "calibrate", saved, inputs), args, inputs,
+                       [args.report, args.output, *tables, saved], args.plot)
 
 
 def _run(args, outs) -> int:

@@ -18,10 +18,8 @@ The IMU record (any format, any start) is read, filtered and written in chunks
 from __future__ import annotations
 
 import dataclasses
-import datetime
 import itertools
 import json
-import os
 import pathlib
 import sys
 import time
@@ -33,7 +31,7 @@ from gfins_fmi._version import __version__
 from gfins_fmi.cli import Failed
 from gfins_fmi.cli.files import (cause, compensated, compensated_block, outputs, read_gnss, read_imu,
                                  read_optional, read_truth)
-from gfins_fmi.cli.config_file import apply_config, config_template
+from gfins_fmi.cli.config_file import config_template, configured, input_file, option_units
 from gfins_fmi.cli.initial import from_initial_option, record_start_s
 from gfins_fmi.cli.kfgins_config import initial_state as kfgins_initial_state
 from gfins_fmi.cli.kfgins_config import (kfgins_outputs, kfgins_tables, open_kfgins_writers, read_kfgins_config,
@@ -94,25 +92,20 @@ def _write_innovations(outs, path, sol):
     outs.write_table(path, INNOVATION_COLUMNS, _innovation_columns(sol), _INNOVATION_DTYPES, float_format="repr")
 
 
-def _input(path) -> dict | None:
-    if not path:
-        return None
-    st = os.stat(path)
-    return {"path": str(path), "bytes": st.st_size,
-            "modified_utc": datetime.datetime.fromtimestamp(st.st_mtime, datetime.timezone.utc).isoformat()}
-
-
 def _effective_config(args, cfg, init, windows) -> str:
     """What the run used, to read back or rerun it: the inputs (path, size, time), every
     option, the filter's settings (FilterConfig, datasheet units), the initial state and
-    its 1-sigma (as gf_ins_initial_std holds them), the simulated outages."""
+    its 1-sigma (as gf_ins_initial_std holds them), the simulated outages; the options'
+    units; with --kfgins-config how its keys were mapped."""
     nav = init.nav
     doc = {
         "gfins_fmi": __version__, "command": "integrate",
-        "inputs": {k: _input(getattr(args, k)) for k in ("imu", "gnss", "baro", "odometer", "truth",
-                                                             "kfgins_config")},
+        "inputs": {k: input_file(getattr(args, k)) for k in ("imu", "gnss", "baro", "odometer", "truth",
+                                                                 "kfgins_config")},
         "options": {k: (str(v) if isinstance(v, pathlib.Path) else v) for k, v in sorted(vars(args).items())
-                    if k not in ("check", "module", "function", "kfgins", "given_options", "config_applied")},
+                    if k not in ("check", "module", "function", "kfgins", "given_options", "config_applied", "argv")},
+        "units": option_units(build_parser()[1]["integrate"]),
+        "kfgins_notes": None if args.kfgins is None else args.kfgins.notes,
         "filter": dataclasses.asdict(cfg),
         "initial": {"t_s": float(nav.t_s), "lat_deg": float(np.degrees(nav.lat_rad)),
                     "lon_deg": float(np.degrees(nav.lon_rad)), "h_m": float(nav.h_m),
@@ -188,16 +181,7 @@ def _bias_stds(args) -> dict:
 def _configured(args) -> None:
     """--config: the file's values where the command line gave none, then the checks of
     the combinations (at parse time without a file) on the result."""
-    parser = build_parser()[1]["integrate"]
-    defaults = {a.dest: a.default for a in parser._actions}   # argparse's own list of the options
-    args.given_options = sorted(k for k, v in vars(args).items() if k in defaults and v != defaults[k])
-    args.filter_settings = {}
-    if args.config is not None:
-        apply_config(parser, args, set(args.given_options))
-        args.config_applied = True
-        problem = check_integrate(args)
-        if problem:
-            raise ValueError(problem)
+    configured(args, build_parser()[1]["integrate"], "integrate", check_integrate)
 
 
 def run(args) -> int:
@@ -352,6 +336,8 @@ def _run(args, outs, inn_path, sm_path, figures) -> int:
             t_end = min(t_end, kf.end_s)
         print(f"KF-GINS configuration {args.kfgins_config}: IMU samples from {t0:.10g} s to {t_end:.10g} s, "
               f"GNSS {args.gnss}, outputs in {kf.output}")
+        for note in kf.notes:
+            print(f"KF-GINS configuration: {note}")
         if streamed:
             chunks.keep(t0, kf.end_s)
     elif args.initial:
@@ -387,7 +373,8 @@ def _run(args, outs, inn_path, sm_path, figures) -> int:
                        inn_path, cfg)
     try:
         # checked above, on the whole record ("warn": the alignment may have taken its start)
-        sol = nav.run(rec, g_used, baro, odo, smoother=args.smooth, progress=args.progress, checks="warn")
+        sol = nav.run(rec, g_used, baro, odo, smoother=args.smooth, progress=args.progress, checks="warn",
+                      state_std=kf is not None)     # KF-GINS's std file: every error state's 1-sigma
     except FilterError as exc:
         sol = exc.partial
         _write_solution(args, outs, sol, quiet=True)
@@ -501,7 +488,7 @@ def _stream(args, outs, nav, chunks, gnss, baro, odo, scores, inn_path, cfg) -> 
             # the first chunk takes the epochs before the start too: the filter logs them as stale
             parts = [time_slice(r, lo if k else -np.inf, hi) for r in (gnss, baro, odo)]
             try:
-                sol = nav.run(rec, *parts, checks="warn" if k == 0 else "off")
+                sol = nav.run(rec, *parts, checks="warn" if k == 0 else "off", state_std=kf is not None)
             except FilterError as exc:
                 write(exc.partial)
                 where = rows - len(exc.partial) + exc.index

@@ -15,19 +15,30 @@ noise block's), ``imunoise`` (``arw`` deg/sqrt(h), ``vrw`` m/s/sqrt(h), ``gbstd`
 ``abstd`` mGal, ``gsstd``/``asstd`` ppm, ``corrtime`` h), ``antlever`` (forward, right,
 down m). KF-GINS estimates the scale factors: so does the run (21 states).
 
+Where the filter differs from KF-GINS the reading says so: ``imunoise``'s six noise values
+are per axis in KF-GINS and one per sensor triad here (the settings table, the C filter,
+the FMU): the largest axis is used, with a warning naming the key, the three values and
+the one used when they differ; the initial biases, scale factors and their 1-sigma stay
+per axis. ``initattstd``'s roll and pitch become one tilt 1-sigma about east and north
+(the larger) and ``imudatarate`` is not needed (the time column gives the interval): both
+stated in :attr:`KfginsRun.notes`. A key that is not KF-GINS's (a fork's odometer noise or
+lever arm, a misspelt key) is named in a warning, never ignored silently.
+
 Outputs in ``outputpath`` (KF-GINS's names and columns, its ``%-15.9lf`` numbers as
 ``%.9f`` with one space between): ``KF_GINS_Navresult.nav`` (week 0, time, lat, lon deg,
 h m, velocity north, east, down m/s, roll, pitch, yaw deg), ``KF_GINS_IMU_ERR.txt`` (time,
 gyro bias deg/h, accelerometer bias mGal, gyro and accelerometer scale ppm, forward, right,
-down axes), ``KF_GINS_STD.txt`` (time, 1-sigma of position and velocity north, east, down,
-attitude north, east, down deg, then the sensor errors' 1-sigma as NaN: the filter's
-output keeps the navigation 1-sigma only), and ``KF_GINS.config.json``, what the run used.
+down axes), ``KF_GINS_STD.txt`` (time, 1-sigma of position m and velocity m/s north, east, down,
+attitude north, east, down deg, gyro bias deg/h, accelerometer bias mGal, gyro and
+accelerometer scale ppm, forward, right, down: KF-GINS's ``writeSTD``), and
+``KF_GINS.config.json``, what the run used.
 """
 from __future__ import annotations
 
 import dataclasses
 import math
 import pathlib
+import warnings
 
 import numpy as np
 import yaml
@@ -38,7 +49,7 @@ from gfins_fmi.nav.earth import deg
 from gfins_fmi.nav.imu_errors import ImuNoise
 from gfins_fmi.nav.strapdown import NavState, euler_to_quat
 
-__all__ = ["KfginsRun", "read_kfgins_config", "initial_state", "kfgins_outputs", "write_kfgins_outputs",
+__all__ = ["KfginsRun", "KFGINS_KEYS", "KFGINS_NOISE_KEYS", "read_kfgins_config", "initial_state", "kfgins_outputs", "write_kfgins_outputs",
            "kfgins_tables", "open_kfgins_writers", "KFGINS_DECIMALS", "KFGINS_TEXT", "KFGINS_COLUMNS"]
 
 #: KF-GINS's text numbers: ``%-15.9lf`` (src/fileio/filesaver.cc)
@@ -70,6 +81,7 @@ class KfginsRun:
     attitude_std_rad: tuple   # tilt E, tilt N, heading
     sensors0: np.ndarray      # SENSOR_NAMES order, the first 12
     sensor_std: dict          # InitialState's bias/scale stds (RFU)
+    notes: list = dataclasses.field(default_factory=list)   # keys that map differently, stated
 
 
 def _vec(doc, key, path, n=3, default=None):
@@ -90,8 +102,54 @@ def _swap(v):
     return (abs(v[1]), abs(v[0]), abs(v[2]))
 
 
+#: every key of KF-GINS's configuration (dataset/kf-gins.yaml, loadConfig in src/kf_gins.cpp)
+KFGINS_KEYS = ("imupath", "gnsspath", "outputpath", "imudatalen", "imudatarate", "starttime", "endtime", "initpos",
+               "initvel", "initatt", "initgyrbias", "initaccbias", "initgyrscale", "initaccscale", "initposstd",
+               "initvelstd", "initattstd", "initbgstd", "initbastd", "initsgstd", "initsastd", "imunoise", "antlever")
+#: the keys of its ``imunoise`` block, with their units
+KFGINS_NOISE_KEYS = {"arw": "deg/sqrt(h)", "vrw": "m/s/sqrt(h)", "gbstd": "deg/h", "abstd": "mGal", "gsstd": "ppm",
+                     "asstd": "ppm", "corrtime": "h"}
+
+
+def _unused_keys(doc: dict, noise: dict, path) -> None:
+    """A warning naming the keys this reading does not use (a KF-GINS fork's odometer
+    settings, a misspelt key): nothing is ignored silently."""
+    unused = [k for k in doc if k not in KFGINS_KEYS]
+    unused += [f"imunoise.{k}" for k in noise if k not in KFGINS_NOISE_KEYS]
+    if not unused:
+        return
+    odo = [k for k in unused if "odo" in k.lower()]
+    hint = (f"; for an odometer ({', '.join(odo)}): give its record with --odometer ODO.csv "
+            "(OdometerRecord: t_s, speed_m_s, std_m_s) and --odometer-mount / --nhc" if odo else "")
+    warnings.warn(f"{path}: not KF-GINS keys, not used by this run: {', '.join(unused)} (KF-GINS's keys: "
+                  f"{', '.join(KFGINS_KEYS)}; imunoise: {', '.join(KFGINS_NOISE_KEYS)}){hint}",
+                  UserWarning, stacklevel=3)
+
+
+def _one_per_triad(key: str, v: list, path) -> float:
+    """The one value per sensor triad the filter takes (FilterConfig's noise): the
+    largest of KF-GINS's three axes, with a warning when they differ."""
+    top = max(v)
+    if min(v) != top:
+        unit = KFGINS_NOISE_KEYS[key]
+        warnings.warn(f"{path}: imunoise.{key} differs between the axes ({', '.join(f'{x:g}' for x in v)} {unit}, "
+                      f"forward, right, down); the filter takes one value per sensor triad: it uses the "
+                      f"largest, {top:g} {unit}, on every axis", UserWarning, stacklevel=3)
+    return top
+
+
 def read_kfgins_config(path) -> KfginsRun:
-    """Read a KF-GINS YAML configuration file (the keys of the module's docstring)."""
+    """Read a KF-GINS YAML configuration file (the keys of the module's docstring).
+
+    Warns (UserWarning) naming a key that is not KF-GINS's (not used by the run) and an
+    ``imunoise`` value whose three axes differ (the filter has one per triad: the
+    largest is used); :attr:`KfginsRun.notes` states the keys that map differently.
+
+    Raises
+    ------
+    ValueError
+        The file is missing, not YAML, or a key is missing or malformed (named).
+    """
     path = pathlib.Path(path)
     try:
         doc = yaml.safe_load(path.read_text(encoding="utf-8"))
@@ -105,15 +163,20 @@ def read_kfgins_config(path) -> KfginsRun:
         if not doc.get(key):
             raise ValueError(f"{path}: '{key}' is missing")
     noise = doc.get("imunoise") or {}
+    if not isinstance(noise, dict):
+        raise ValueError(f"{path}: 'imunoise' must be a block of arw, vrw, gbstd, abstd, gsstd, asstd, corrtime")
+    _unused_keys(doc, noise, path)
     arw, vrw, gb, ab, gs, as_ = (_vec(noise, k, f"{path}: imunoise") for k in
                                  ("arw", "vrw", "gbstd", "abstd", "gsstd", "asstd"))
     corr_h = float(noise.get("corrtime", float("nan")))
     if not corr_h > 0:
         raise ValueError(f"{path}: imunoise.corrtime must be > 0 h; got {noise.get('corrtime')!r}")
     tau = corr_h * 3600.0
-    # ImuNoise is one number per triad: the largest axis (KF-GINS's files give three equal ones)
-    imu = ImuNoise(gyro_arw_deg_sqrt_h=max(arw), accel_vrw_ug_sqrt_hz=max(vrw) * math.sqrt(2.0) / 60.0 / UG,
-                   gyro_bias_instability_deg_h=max(gb), accel_bias_instability_ug=max(ab) * MGAL / UG,
+    # ImuNoise is one number per triad: the largest axis, warned of when they differ
+    top = {k: _one_per_triad(k, v, path) for k, v in
+           (("arw", arw), ("vrw", vrw), ("gbstd", gb), ("abstd", ab), ("gsstd", gs), ("asstd", as_))}
+    imu = ImuNoise(gyro_arw_deg_sqrt_h=top["arw"], accel_vrw_ug_sqrt_hz=top["vrw"] * math.sqrt(2.0) / 60.0 / UG,
+                   gyro_bias_instability_deg_h=top["gbstd"], accel_bias_instability_ug=top["abstd"] * MGAL / UG,
                    gyro_correlation_time_s=tau, accel_correlation_time_s=tau)
     pos, vel, att = _vec(doc, "initpos", path), _vec(doc, "initvel", path), _vec(doc, "initatt", path)
     euler = rpy_frd_ned_to_euler_rfu_enu(np.array([att[0] * deg]), np.array([att[1] * deg]),
@@ -129,18 +192,27 @@ def read_kfgins_config(path) -> KfginsRun:
                      [sa0[1] * 1e-6, sa0[0] * 1e-6, sa0[2] * 1e-6]]
     bgs, bas, sgs, sas = (_vec(doc, k, path, default=d) for k, d in
                           (("initbgstd", gb), ("initbastd", ab), ("initsgstd", gs), ("initsastd", as_)))
+    # the initial 1-sigma is per axis in the filter too (gf_ins_initial_std)
     sensor_std = {"gyro_bias_std_rad_s": tuple(x * DEG_H for x in _swap(bgs)),
                   "accel_bias_std_m_s2": tuple(x * MGAL for x in _swap(bas)),
-                  "gyro_scale_std": max(sgs) * 1e-6, "accel_scale_std": max(sas) * 1e-6}
+                  "gyro_scale_std": tuple(x * 1e-6 for x in _swap(sgs)),
+                  "accel_scale_std": tuple(x * 1e-6 for x in _swap(sas))}
     lever = _vec(doc, "antlever", path)
     end = float(doc.get("endtime", -1))
+    notes = [f"initattstd roll {astd[0]:g}, pitch {astd[1]:g} deg -> the tilt 1-sigma about east and north "
+             f"{max(astd[0], astd[1]):g} deg each (the larger: our attitude error is a tilt about east and "
+             f"north, not roll and pitch); yaw {astd[2]:g} deg -> the heading 1-sigma"]
+    if "imudatarate" in doc:
+        notes.append(f"imudatarate {doc['imudatarate']} Hz: not needed, the sample interval comes from the "
+                     "IMU file's time column")
     return KfginsRun(imu=pathlib.Path(doc["imupath"]), gnss=pathlib.Path(doc["gnsspath"]),
                      output=pathlib.Path(doc["outputpath"]), imu_columns=int(doc.get("imudatalen", 7)),
                      start_s=float(doc.get("starttime", 0.0)), end_s=None if end < 0 else end,
-                     noise=imu, scale_std=(max(gs) * 1e-6, max(as_) * 1e-6), correlation_s=tau,
+                     noise=imu, scale_std=(top["gsstd"] * 1e-6, top["asstd"] * 1e-6), correlation_s=tau,
                      lever_arm_m=(lever[1], lever[0], -lever[2]), nav0=nav0,
                      position_std_m=(pstd[1], pstd[0], pstd[2]), velocity_std_m_s=(vstd[1], vstd[0], vstd[2]),
-                     attitude_std_rad=(tilt, tilt, astd[2] * deg), sensors0=sensors0, sensor_std=sensor_std)
+                     attitude_std_rad=(tilt, tilt, astd[2] * deg), sensors0=sensors0, sensor_std=sensor_std,
+                     notes=notes)
 
 
 def initial_state(run: KfginsRun, t_s: float, n_sensors: int) -> InitialState:
@@ -183,10 +255,33 @@ def kfgins_tables(sol) -> dict:
     sg, sa = s[:, [7, 6, 8]] * 1e6, s[:, [10, 9, 11]] * 1e6
     err = [sol.t_s, *bg.T, *ba.T, *sg.T, *sa.T]
     st = sol.std
-    nan = np.full(len(sol), np.nan)
     std = [sol.t_s, st[:, 4], st[:, 3], st[:, 5], st[:, 1], st[:, 0], st[:, 2],
-           *(np.degrees(st[:, i]) for i in (7, 6, 8)), *([nan] * 12)]
+           *(np.degrees(st[:, i]) for i in (7, 6, 8)), *_sensor_std(sol)]
     return {"nav": nav, "imu_err": err, "std": std}
+
+
+#: KF-GINS's sensor-error blocks in its std file (src/kf_gins.cpp writeSTD): our layout's
+#: block, the factor from SI to its unit (deg/h, mGal, ppm, ppm)
+_STD_BLOCKS = (("idx_bg", 1.0 / DEG_H), ("idx_ba", 1.0 / MGAL), ("idx_sg", 1e6), ("idx_sa", 1e6))
+
+
+def _sensor_std(sol) -> list:
+    """The 12 sensor-error 1-sigma columns of KF_GINS_STD.txt from the solution's
+    ``state_std`` (the filter's 1-sigma of every error state): gyro bias deg/h,
+    accelerometer bias mGal, gyro and accelerometer scale ppm, each forward, right, down
+    (our right, front, up: y, x, z; a 1-sigma has no sign)."""
+    if sol.state_std is None:
+        raise ValueError("KF_GINS_STD.txt needs the 1-sigma of every error state: run the filter with "
+                         "state_std=True")
+    lay = sol.config.layout()
+    cols = []
+    for block, factor in _STD_BLOCKS:
+        i = int(getattr(lay, block))
+        if i < 0:
+            raise ValueError(f"KF_GINS_STD.txt needs the {block[4:]} states (the KF-GINS run estimates biases and "
+                             "scale factors: scale_factors=True)")
+        cols += [sol.state_std[:, i + 1] * factor, sol.state_std[:, i] * factor, sol.state_std[:, i + 2] * factor]
+    return cols
 
 
 def open_kfgins_writers(outs, files: dict) -> dict:

@@ -19,7 +19,8 @@ GRADES = ("consumer", "tactical", "navigation")
 
 def real(unit: str, **bounds):
     """A finite number in ``unit`` within ``bounds`` (``above``, ``at_least``, ``below``,
-    ``at_most``, as :func:`gfins_fmi._lib.as_scalar`)."""
+    ``at_most``, as :func:`gfins_fmi._lib.as_scalar`). Every type of this family carries
+    its unit as ``.unit`` (a vector: what it holds, with units)."""
     def parse(text: str) -> float:
         try:
             x = float(text)
@@ -29,6 +30,7 @@ def real(unit: str, **bounds):
             return as_scalar("value", x, unit, **bounds)
         except ValueError as exc:
             raise argparse.ArgumentTypeError(str(exc).removeprefix("value ")) from None
+    parse.unit = unit      # named in a run's effective configuration
     return parse
 
 
@@ -42,6 +44,7 @@ def count(at_least: int):
         if k is None or k < at_least:
             raise argparse.ArgumentTypeError(f"must be an integer >= {at_least}; got {text!r}")
         return k
+    parse.unit = "count"
     return parse
 
 
@@ -56,6 +59,7 @@ def vector(n: int, what: str):
             raise argparse.ArgumentTypeError(f"expected {n} comma-separated finite numbers ({what}); "
                                              f"got {text!r}")
         return v
+    parse.unit = what
     return parse
 
 

@@ -17,7 +17,7 @@ from gfins_fmi.gyrofree.array import MIN_LEVER_ARM_M
 from gfins_fmi.nav.earth import WGS84
 
 __all__ = ["build_parser", "executor_arguments", "record_arguments", "state_arguments", "imu_errors_argument",
-           "ANALYZE_CONFIGS"]
+           "config_arguments", "check_align", "check_calibrate", "ANALYZE_CONFIGS"]
 
 #: ``gfins analyze --config``: the scenarios of gfins_fmi.analysis.error_report.CONFIGS (named
 #: here so that the parser does not import the analysis; a test checks that they agree)
@@ -57,6 +57,16 @@ conventions and the SINS/vehicle FMU start values, --compensation the compensati
 alone (JSON, TOML, PSINS's 37-value .bin or text). --prior-mean centres the prior on a
 compensation form (a previous calibration, another tool's). --simulate first writes a
 simulated raw record of that path to IMU (its true errors beside it, IMU.truth.json).
+
+    gfins calibrate [poses] [IMU|RECORD] --config run.toml [--save-config FILE.json] [options]
+    gfins calibrate --print-config
+
+--config takes every option from a TOML or YAML file (the record too; options typed here
+override it), --print-config prints its commented template with units and defaults. A run
+writes its effective configuration (every option with its value and unit, the grade and
+filter settings it chose, the input) beside the first of --report, --json,
+--compensation (poses: --output, --report), as R.config.json (with --plot DIR only:
+DIR/calibrate.config.json), or at --save-config; --config R.config.json repeats the run.
 """
 
 
@@ -89,7 +99,13 @@ def _check_cosim(args) -> str | None:
     return None
 
 
-def _check_align(args) -> str | None:
+def check_align(args) -> str | None:
+    """``gfins align``'s combinations of options (with --config: checked once the file is read)."""
+    if _deferred(args):
+        return None
+    if args.mode is None or args.imu is None:
+        return ("the following arguments are required: mode (static, motion or transfer) and IMU (or --config "
+                "FILE giving them)")
     if args.mode == "static" and args.position is None:
         return "static alignment needs --position LAT,LON,H"
     if args.mode == "motion" and (args.speed is None or args.initial is None):
@@ -138,6 +154,28 @@ def record_arguments(p, what: str) -> None:
     p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                    help="progress bar over reading, solving and writing (default: on for "
                         "inputs of 10^6 samples, or 64 MiB of text, or more)")
+
+
+def config_arguments(p, command: str, written: str) -> None:
+    """``--config FILE``, ``--print-config`` and ``--save-config FILE`` of ``gfins align``
+    and ``gfins calibrate`` (gfins_fmi.cli.config_file; ``written``: where the effective
+    configuration goes by default)."""
+    p.add_argument("--config", type=pathlib.Path, default=None, metavar="FILE.toml",
+                   help="the run's settings from a file (TOML, YAML, or a run's .config.json to repeat it): "
+                        "the options by name (positionals too); options given here override it "
+                        f"(gfins {command} --print-config prints a template)")
+    p.add_argument("--print-config", action="store_true",
+                   help="print a commented template of the configuration file (every option, its units and "
+                        "default) and exit")
+    p.add_argument("--save-config", type=pathlib.Path, default=None, metavar="FILE.json",
+                   help="write the effective configuration (every option with its value and unit, the values "
+                        "the run chose, the inputs) here; by default it goes " + written +
+                        "; --config FILE.json repeats the run")
+
+
+def _deferred(args) -> bool:
+    """The combinations are checked once the --config file is read (gfins_fmi.cli.config_file.configured)."""
+    return bool(args.print_config) or (args.config is not None and not getattr(args, "config_applied", False))
 
 
 def imu_errors_argument(p) -> None:
@@ -204,8 +242,9 @@ def _calibrate(sub) -> argparse.ArgumentParser:
     p = sub.add_parser("calibrate", help="system-level calibration (the full lever-arm model or seed "
                        "001's 36 states) of a raw multi-position record", description=CALIBRATE_DESCRIPTION,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("imu", type=pathlib.Path, help="raw IMU record (IMU frame), starting at rest; or the "
-                   "word poses followed by RECORD for the calibration at unknown poses")
+    p.add_argument("imu", type=pathlib.Path, nargs="?", default=None,
+                   help="raw IMU record (IMU frame), starting at rest; or the word poses followed by RECORD for "
+                        "the calibration at unknown poses (may come from --config)")
     p.add_argument("record", type=pathlib.Path, nargs="?", default=None,
                    help="(gfins calibrate poses RECORD) the hand-turned record")
     p.add_argument("--format", choices=("csv", "kfgins", "rtk_walk") + tuple(RAW_FORMATS), default="csv",
@@ -294,13 +333,20 @@ def _calibrate(sub) -> argparse.ArgumentParser:
                    help="write [imu_errors] (for gfins integrate --imu-errors)")
     q.add_argument("--table", type=pathlib.Path, default=None, metavar="PREFIX",
                    help="write PREFIX.poses.csv and PREFIX.turns.csv (residuals before and after)")
-    _command(p, "calibrate", check=_check_calibrate)
+    config_arguments(p, "calibrate", "beside the first of --report, --json, --compensation (R.config.json), "
+                     "else in --plot DIR (calibrate.config.json)")
+    _command(p, "calibrate", check=check_calibrate)
     return p
 
 
-def _check_calibrate(args) -> str | None:
+def check_calibrate(args) -> str | None:
     """``gfins calibrate poses RECORD`` runs cli/calibrate_poses.py; ``gfins calibrate IMU``
-    the system-level calibration, which needs the site."""
+    the system-level calibration, which needs the site (with --config: checked once the
+    file is read)."""
+    if _deferred(args):
+        return None
+    if args.imu is None:
+        return "the following arguments are required: IMU (or --config FILE giving it)"
     if args.record is not None:
         if str(args.imu) != "poses":
             return f"one record: gfins calibrate IMU ..., or gfins calibrate poses RECORD (got {args.imu} {args.record})"
@@ -325,10 +371,14 @@ def _align(sub) -> argparse.ArgumentParser:
     p = sub.add_parser("align", help="initial alignment: static (levelling + gyrocompassing, fine "
                        "alignment), in motion with a speed sensor and forward-backward passes, or "
                        "transfer alignment of a slave IMU against a master INS",
-                       description="Initial alignment of recorded files (docs/alignment.md).")
-    p.add_argument("mode", choices=("static", "motion", "transfer"))
-    p.add_argument("imu", type=pathlib.Path, help="IMU file (ImuRecord CSV / npz / parquet); transfer: "
-                   "the slave's")
+                       description="Initial alignment of recorded files (docs/alignment.md). --config FILE "
+                       "(TOML or YAML) gives every option, the mode and files too (options typed here override "
+                       "it); --print-config prints its template; a run writes its effective configuration "
+                       "beside --output (OUT.config.json) or at --save-config, and --config of it repeats the run.")
+    p.add_argument("mode", choices=("static", "motion", "transfer"), nargs="?", default=None,
+                   help="static, motion or transfer (may come from --config)")
+    p.add_argument("imu", type=pathlib.Path, nargs="?", default=None,
+                   help="IMU file (ImuRecord CSV / npz / parquet); transfer: the slave's (may come from --config)")
     imu_errors_argument(p)
     p.add_argument("speed", type=pathlib.Path, nargs="?", default=None, metavar="SPEED|MASTER_NAV",
                    help="motion: speed record (OdometerRecord: t_s, speed_m_s, std_m_s); transfer: the "
@@ -370,7 +420,8 @@ def _align(sub) -> argparse.ArgumentParser:
                         "their 1-sigma over time")
     p.add_argument("--progress", action="store_true", help="report the passes as they run")
     transfer_arguments(p)
-    _command(p, "align", check=_check_align)
+    config_arguments(p, "align", "beside --output (OUT.config.json; with --plot only: FIG.config.json)")
+    _command(p, "align", check=check_align)
     return p
 
 

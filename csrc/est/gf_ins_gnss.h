@@ -667,6 +667,18 @@ gf_status gf_ins_propagate_error(const gf_ins_filter *f, const double *dx0,
  * epochs->P_post) the smoothed covariance. */
 gf_status gf_ins_smooth(size_t n_states, const gf_ins_epochs *epochs, double *xs, double *Ps);
 
+/* The same backward pass over one block of epochs, for a record whose epochs do not fit
+ * in memory (smoothed from its end, a block at a time): epochs holds the block's epochs
+ * and, as its last row (count - 1), the first epoch after the block, whose smoothed error
+ * xs[count-1] (n) and covariance Ps[count-1] (n(n+1)/2, packed) the caller gives — from
+ * the previous block's call, or 0 and the epoch's P_post for the record's last epoch —
+ * and fills rows 0..count-2 of xs and Ps. Blocks that overlap by that one epoch give
+ * gf_ins_smooth's result bit for bit (one recursion). Errors: GF_ERR_NULL_POINTER,
+ * GF_ERR_BAD_SIZE (n out of 1..40, count 0 or > capacity), GF_ERR_NONFINITE_INPUT (the
+ * given row), GF_ERR_BAD_PARAMETER (a negative variance in it), and gf_kalman_rts_step's
+ * (a prior covariance not positive definite). */
+gf_status gf_ins_smooth_block(size_t n_states, const gf_ins_epochs *epochs, double *xs, double *Ps);
+
 /* Applies smoothed errors to the forward solution's rows (t_s n; q_bn n x 4, v n x 3,
  * pos n x 3 and sensors n x GF_INS_N_SENSORS (may be NULL), all in place): a row at an
  * epoch's time takes that epoch's xs; a row between epochs j and j+1 the linear

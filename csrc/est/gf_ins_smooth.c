@@ -88,18 +88,14 @@ gf_status gf_ins_epochs_begin(gf_ins_filter *f, gf_ins_epochs *epochs)
     return ins_epoch_open(f, epochs, NULL);
 }
 
-gf_status gf_ins_smooth(size_t n, const gf_ins_epochs *ep, double *xs, double *Ps)
+/* The RTS recursion (Rauch, Tung & Striebel 1965, docs/references.md) over epochs
+ * 0..count-2 of *ep, from the smoothed error and covariance of its last epoch, given in
+ * xs and Ps: x^s_e = G_e (x^s_e+1 + dx_e+1), P^s_e = P+_e + G_e (P^s_e+1 - P-_e+1) G_e^T,
+ * G_e = P+_e Phi_e+1^T (P-_e+1)^-1 (gf_kalman_rts_step). The one loop of both entry
+ * points: a pass in blocks is the one-call pass, bit for bit. */
+static gf_status smooth_back(size_t n, const gf_ins_epochs *ep, double *xs, double *Ps)
 {
-    if (!ep || !xs || !Ps || !ep->P_post || !ep->P_prior || !ep->Phi || !ep->dx)
-        return GF_ERR_NULL_POINTER;
-    if (n == 0 || n > NMAX)
-        return GF_ERR_BAD_SIZE;
     const size_t E = ep->count, tri = n * (n + 1) / 2;
-    if (E == 0)
-        return GF_OK;
-    memset(xs + n * (E - 1), 0, n * sizeof *xs);
-    if (Ps != ep->P_post)
-        memcpy(Ps + tri * (E - 1), ep->P_post + tri * (E - 1), tri * sizeof *Ps);
     double Ppost[NMAX * NMAX], Pprior[NMAX * NMAX], Psn[NMAX * NMAX], Pk[NMAX * NMAX];
     double xnext[NMAX];
     for (size_t e = E - 1; e-- > 0;) {
@@ -116,6 +112,50 @@ gf_status gf_ins_smooth(size_t n, const gf_ins_epochs *ep, double *xs, double *P
         pack_upper(n, Pk, Ps + tri * e);
     }
     return GF_OK;
+}
+
+static gf_status smooth_args(size_t n, const gf_ins_epochs *ep, const double *xs, const double *Ps)
+{
+    if (!ep || !xs || !Ps || !ep->P_post || !ep->P_prior || !ep->Phi || !ep->dx)
+        return GF_ERR_NULL_POINTER;
+    if (n == 0 || n > NMAX || ep->count > ep->capacity)
+        return GF_ERR_BAD_SIZE;
+    return GF_OK;
+}
+
+gf_status gf_ins_smooth(size_t n, const gf_ins_epochs *ep, double *xs, double *Ps)
+{
+    const gf_status st = smooth_args(n, ep, xs, Ps);
+    if (st != GF_OK)
+        return st;
+    const size_t E = ep->count, tri = n * (n + 1) / 2;
+    if (E == 0)
+        return GF_OK;
+    memset(xs + n * (E - 1), 0, n * sizeof *xs);
+    if (Ps != ep->P_post)
+        memcpy(Ps + tri * (E - 1), ep->P_post + tri * (E - 1), tri * sizeof *Ps);
+    return smooth_back(n, ep, xs, Ps);
+}
+
+gf_status gf_ins_smooth_block(size_t n, const gf_ins_epochs *ep, double *xs, double *Ps)
+{
+    const gf_status st = smooth_args(n, ep, xs, Ps);
+    if (st != GF_OK)
+        return st;
+    const size_t E = ep->count, tri = n * (n + 1) / 2;
+    if (E == 0)
+        return GF_ERR_BAD_SIZE;
+    /* the given smoothed epoch: finite, its variances >= 0 */
+    for (size_t i = 0; i < n; ++i)
+        if (!isfinite(xs[n * (E - 1) + i]))
+            return GF_ERR_NONFINITE_INPUT;
+    for (size_t k = 0; k < tri; ++k)
+        if (!isfinite(Ps[tri * (E - 1) + k]))
+            return GF_ERR_NONFINITE_INPUT;
+    for (size_t i = 0, k = 0; i < n; k += n - i, ++i)
+        if (Ps[tri * (E - 1) + k] < 0.0)
+            return GF_ERR_BAD_PARAMETER;
+    return smooth_back(n, ep, xs, Ps);
 }
 
 gf_status gf_ins_smooth_apply(const gf_ins_filter *f, size_t n_epochs, const double *epoch_t,

@@ -27,6 +27,7 @@ import time
 import numpy as np
 
 from gfins_fmi import io
+from gfins_fmi._lib import GfinsError
 from gfins_fmi._version import __version__
 from gfins_fmi.cli import Failed
 from gfins_fmi.cli.files import (cause, compensated, compensated_block, outputs, read_gnss, read_imu,
@@ -37,6 +38,7 @@ from gfins_fmi.cli.kfgins_config import initial_state as kfgins_initial_state
 from gfins_fmi.cli.kfgins_config import (kfgins_outputs, kfgins_tables, open_kfgins_writers, read_kfgins_config,
                                          write_kfgins_outputs)
 from gfins_fmi.cli.integrate_stream import STREAM_CHUNK, Scores, grouped, solution_table, time_slice
+from gfins_fmi.cli.integrate_smooth import open_smoother, write_smoothed
 from gfins_fmi.cli.integrate_options import INITIAL_STD_DEFAULTS, check_integrate
 from gfins_fmi.cli.parser import build_parser
 from gfins_fmi.cli.noise import imu_noise
@@ -273,9 +275,9 @@ class _Stage:
 
 def _streamed(args) -> bool:
     """Whether the run goes in chunks (memory independent of the record's length): every
-    IMU format and every start; only what needs the whole solution at once (--smooth,
-    --plot) reads the record whole."""
-    return not args.smooth and not args.plot
+    IMU format and every start, --smooth included (integrate_smooth); only --plot, which
+    needs the whole solution at once, reads the record whole."""
+    return not args.plot
 
 
 def _compensation(errors):
@@ -369,8 +371,8 @@ def _run(args, outs, inn_path, sm_path, figures) -> int:
     config_path = args.output.with_suffix(".config.json") if kf is None else kfgins_outputs(kf.output)["config"]
     outs.write_text(config_path, _effective_config(args, cfg, init, windows))
     if streamed:
-        return _stream(args, outs, nav, chunks, g_used, baro, odo, Scores(gnss, g_used, truth, windows, cfg.gnss_lever_arm_m),
-                       inn_path, cfg)
+        scores = [Scores(gnss, g_used, truth, windows, cfg.gnss_lever_arm_m) for _ in range(1 + args.smooth)]
+        return _stream(args, outs, nav, chunks, g_used, baro, odo, scores, inn_path, sm_path)
     try:
         # checked above, on the whole record ("warn": the alignment may have taken its start)
         sol = nav.run(rec, g_used, baro, odo, smoother=args.smooth, progress=args.progress, checks="warn",
@@ -438,9 +440,21 @@ def _stopped(outs, why: str, rows: int) -> str:
     return f"error: {why}; no sample was filtered: {outs.outcome()}"
 
 
-def _stream(args, outs, nav, chunks, gnss, baro, odo, scores, inn_path, cfg) -> int:
+def _stream(args, outs, nav, chunks, gnss, baro, odo, scores, inn_path, sm_path) -> int:
     """The run a chunk at a time: each chunk with the measurements of its own span
-    (lo, hi], written and scored as it passes; the memory does not grow with the record."""
+    (lo, hi], written and scored as it passes; the memory does not grow with the record.
+    With --smooth the smoother's epochs and rows go to a temporary folder beside the
+    smoothed output (integrate_smooth), removed whatever happens."""
+    smoother, remove = open_smoother(outs, nav, sm_path, args.progress) if args.smooth else (None, None)
+    try:
+        return _stream_run(args, outs, nav, smoother, chunks, gnss, baro, odo, scores, inn_path, sm_path)
+    finally:
+        if smoother is not None:
+            smoother.close()
+            remove()
+
+
+def _stream_run(args, outs, nav, smoother, chunks, gnss, baro, odo, scores, inn_path, sm_path) -> int:
     kf = args.kfgins
     if kf is None:
         writers = {"ours": None}      # opened with the first chunk: its columns follow the configuration
@@ -449,6 +463,7 @@ def _stream(args, outs, nav, chunks, gnss, baro, odo, scores, inn_path, cfg) -> 
     inn = outs.table(inn_path, INNOVATION_COLUMNS, _INNOVATION_DTYPES, float_format="repr")
     counts = dict.fromkeys(("accepted", "gated", "singular", "stale", "forced"), 0)
     rows, lo = 0, nav.t_s
+    step = nav.run if smoother is None else smoother.run
 
     def write(sol):
         nonlocal rows
@@ -474,7 +489,7 @@ def _stream(args, outs, nav, chunks, gnss, baro, odo, scores, inn_path, cfg) -> 
         print(_stopped(outs, why, rows), file=sys.stderr)
         return 1
 
-    records = grouped(chunks, cfg.subsamples)
+    records = grouped(chunks, nav.config.subsamples)
     try:
         for k in itertools.count():
             try:
@@ -488,13 +503,13 @@ def _stream(args, outs, nav, chunks, gnss, baro, odo, scores, inn_path, cfg) -> 
             # the first chunk takes the epochs before the start too: the filter logs them as stale
             parts = [time_slice(r, lo if k else -np.inf, hi) for r in (gnss, baro, odo)]
             try:
-                sol = nav.run(rec, *parts, checks="warn" if k == 0 else "off", state_std=kf is not None)
+                sol = step(rec, *parts, checks="warn" if k == 0 else "off", state_std=kf is not None)
             except FilterError as exc:
                 write(exc.partial)
                 where = rows - len(exc.partial) + exc.index
                 return stopped(cause(exc), f"the filter stopped at IMU sample {where} of {args.imu}")
             write(sol)
-            scores.add(sol)
+            scores[0].add(sol)
             # not held while the next chunk is read and filtered: one chunk's solution at a time
             del sol, rec, parts
             if bar:
@@ -514,8 +529,15 @@ def _stream(args, outs, nav, chunks, gnss, baro, odo, scores, inn_path, cfg) -> 
     if args.progress:
         print(f"gfins integrate: read, filtered and written in chunks of {STREAM_CHUNK} samples", file=sys.stderr)
     print(f"updates: {counts} -> {inn_path}")
+    if smoother is not None:
+        try:
+            n = write_smoothed(outs, smoother, sm_path, scores[1], args.all_states, STREAM_CHUNK, args.progress)
+            print(f"{n} samples (smoothed) -> {sm_path} ({smoother.n_epochs} epochs smoothed in blocks of "
+                  f"{smoother.block_epochs}; {smoother.bytes_on_disk / 1e6:.0f} MB of temporary files, removed)")
+        except (ValueError, FilterError, OSError, GfinsError) as exc:   # GfinsError: a block refused in C
+            _failed_after_solution(outs, "the smoother", exc)
     try:
-        for line in scores.lines():
+        for line in [line for s, name in zip(scores, ("filter", "smoother")) for line in s.lines(name)]:
             print(line)
     except (ValueError, TypeError) as exc:
         _failed_after_solution(outs, "the summary", exc)

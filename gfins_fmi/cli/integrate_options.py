@@ -123,8 +123,11 @@ def integrate_parser(sub, imu_errors_argument, command) -> argparse.ArgumentPars
     imu_errors_argument(p)
     p.add_argument("--filter", choices=("ekf", "ukf"), default="ekf")
     p.add_argument("--smooth", action="store_true", help="also run the RTS smoother (its solution is "
-                   "written to OUT.smoothed.csv); it reads the whole IMU record at once (memory grows with the "
-                   "record's length; without --smooth and --plot the run goes in chunks)")
+                   "written to OUT.smoothed.csv); in the runs in chunks (every run but --plot's) its epochs "
+                   "and the rows go to a temporary folder beside OUT, removed "
+                   "at the end: per hour of record at 200 Hz and the default --propagation-interval 0.1 s, "
+                   "0.31 GB with 15 states, 0.44 GB with 21 (--kfgins-config), +10%% with 1 Hz GNSS fixes "
+                   "between the propagation instants (4.1 or 7.7 kB per epoch, 224 B per row); memory flat")
     p.add_argument("--propagation-interval", type=real("s", at_least=0.0), default=0.1,
                    help="covariance propagation interval, s (0: every IMU sample)")
     p.add_argument("--subsamples", type=int, choices=(1, 2, 3, 4), default=1,

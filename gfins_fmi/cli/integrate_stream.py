@@ -4,8 +4,9 @@ record's length (issue 20). The filter carries its state from one chunk to the n
 (:meth:`~gfins_fmi.estimation.navigator.IntegratedNavigator.run` continues where it
 stopped); each chunk gets the measurements valid in its own span, so the result is the
 whole record's, bit for bit. The summary is accumulated as the chunks pass
-(:class:`Scores`: the same figures as the whole-record summary). Runs that need the
-whole solution at once (``--smooth``, ``--plot``) read the record whole.
+(:class:`Scores`: the same figures as the whole-record summary). ``--smooth`` runs in
+chunks too (:mod:`gfins_fmi.cli.integrate_smooth`); runs that need the whole solution at
+once (``--plot``) read the record whole.
 """
 from __future__ import annotations
 

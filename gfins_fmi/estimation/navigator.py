@@ -142,7 +142,7 @@ class IntegratedNavigator:
     def run(self, imu, gnss=None, baro=None, odometer=None, *, speed=None, gnss_velocity: bool = True,
             master=None, state_std: bool = False, smoother: bool = False, chunk: int = 200_000,
             progress: bool = False, spill_bytes: int = 1 << 30, spill_dir=None,
-            checks: str = "raise") -> IntegratedSolution:
+            checks: str = "raise", epoch_sink=None) -> IntegratedSolution:
         """Process a record.
 
         Parameters
@@ -164,6 +164,11 @@ class IntegratedNavigator:
         smoother : keep what the RTS smoother needs (at the covariance epochs: ~4 kB per
             epoch with 15 states) for :meth:`IntegratedSolution.smooth`; beyond
             ``spill_bytes`` it goes to memory-mapped files in ``spill_dir``.
+        epoch_sink : where the smoother's epochs go instead, run after run (the record fed
+            in pieces): an object with ``reserve(filter, room)`` (a ``gf_ins_epochs *``
+            with room for ``room`` more epochs) and ``flush()`` (after the run), such as
+            :class:`~gfins_fmi.estimation.smoother_stream.StreamingSmoother`'s, which uses
+            it; not with ``smoother=True``.
         chunk : IMU samples per C call (rounded up to a multiple of ``config.subsamples``,
             so that the cut does not change the result).
         progress : a progress bar (tqdm).
@@ -215,12 +220,19 @@ class IntegratedNavigator:
             n_prop = n + 2
         cap_epochs = n_prop + 2 * len(meas) + 4
         epochs = None
+        c_epochs = ffi.NULL
+        if smoother and epoch_sink is not None:
+            raise ValueError("smoother=True keeps the epochs in the solution; epoch_sink sends them elsewhere: "
+                             "give one of them")
+        if epoch_sink is not None:
+            c_epochs = epoch_sink.reserve(self._f, cap_epochs)
         if smoother:
             if self._epochs_started:
                 raise ValueError("the smoother needs the whole record in one run() call")
             epochs = _Epochs(self.n_states, cap_epochs, spill_bytes, spill_dir)
             check_status(lib.gf_ins_epochs_begin(self._f, epochs.c), "gf_ins_epochs_begin")
             self._epochs_started = True
+            c_epochs = epochs.c
         internal = (int(cfg.nhc) + 2 * int(cfg.zupt)) * n_prop
         log_arr = np.zeros(len(meas) + internal + 16, INNOVATION_DTYPE)
         log = ffi.new("gf_ins_log *")
@@ -264,7 +276,7 @@ class IntegratedNavigator:
                 mptr = ptr(sub, len(sub), "gf_ins_meas") if len(sub) else ffi.NULL
                 status = lib.gf_ins_run(self._f, hi - lo, ptr(t[lo:hi], hi - lo), ptr(g[lo:hi], 3 * (hi - lo)),
                                         ptr(a[lo:hi], 3 * (hi - lo)),
-                                        len(sub), mptr, c_out, epochs.c if epochs else ffi.NULL, log,
+                                        len(sub), mptr, c_out, c_epochs, log,
                                         n_done, m_done)
                 j += int(m_done[0])
                 row += int(c_out.n_rows)
@@ -276,6 +288,8 @@ class IntegratedNavigator:
         finally:
             if bar:
                 bar.close()
+            if epoch_sink is not None:
+                epoch_sink.flush()
         if log.n_dropped:
             raise RuntimeError(f"innovation log overflow ({log.n_dropped} entries): please report")
         k = row

@@ -13,7 +13,7 @@ from gfins_fmi.estimation.config import MEAS_TYPES, N_SENSORS, FilterConfig
 from gfins_fmi.nav.earth import radii
 from gfins_fmi.nav.strapdown import quat_to_euler
 
-__all__ = ["IntegratedSolution", "SmoothedSolution", "smooth"]
+__all__ = ["IntegratedSolution", "SmoothedSolution", "smooth", "epoch_std", "smoothing_layout"]
 
 
 @dataclass
@@ -118,15 +118,8 @@ def smooth(sol: IntegratedSolution, progress: bool = False) -> SmoothedSolution:
     q, v = sol.q_bn.copy(), sol.v_n_m_s.copy()
     pos = np.c_[sol.lat_rad, sol.lon_rad, sol.h_m]
     sens = sol.sensors.copy()
-    # gf_ins_smooth_apply reads the state layout of a filter: the C core's for this config
+    f = smoothing_layout(sol.config, n)
     cfg = sol.config
-    lay = cfg.layout()
-    if lay.n_states != n:
-        raise ValueError(f"the solution's epochs hold {n} states, its configuration {lay.n_states}")
-    f = ffi.new("gf_ins_filter *")
-    f.n_states = lay.n_states
-    f.idx_sg, f.idx_sa, f.idx_baro = lay.idx_sg, lay.idx_sa, lay.idx_baro
-    f.idx_odo, f.idx_mount = lay.idx_odo, lay.idx_mount
     et = np.ascontiguousarray(ep["t_s"])
     dx = np.ascontiguousarray(ep["dx"])
     t_rows = np.ascontiguousarray(sol.t_s)
@@ -136,18 +129,39 @@ def smooth(sol: IntegratedSolution, progress: bool = False) -> SmoothedSolution:
                                          ptr(pos, 3 * nr), ptr(sens, N_SENSORS * nr)),
                  "gf_ins_smooth_apply")
     # smoothed std at the epochs, interpolated to the rows
-    tri_idx = np.triu_indices(n)
+    estd = epoch_std(Ps, ep["nav"], n)
+    std = np.column_stack([np.interp(sol.t_s, et, estd[:, i]) for i in range(9)])
+    return SmoothedSolution(sol.t_s.copy(), q, v, pos[:, 0].copy(), pos[:, 1].copy(), pos[:, 2].copy(),
+                            std, sens, sol.standstill.copy(), sol.innovations, cfg, ep,
+                            epoch_t_s=et.copy(), epoch_std=estd)
+
+
+def smoothing_layout(cfg: FilterConfig, n_states: int):
+    """The filter struct ``gf_ins_smooth_apply`` reads (the state layout of ``cfg``), refused
+    when the epochs hold another number of states."""
+    lay = cfg.layout()
+    if lay.n_states != n_states:
+        raise ValueError(f"the solution's epochs hold {n_states} states, its configuration {lay.n_states}")
+    f = ffi.new("gf_ins_filter *")
+    f.n_states = lay.n_states
+    f.idx_sg, f.idx_sa, f.idx_baro = lay.idx_sg, lay.idx_sa, lay.idx_baro
+    f.idx_odo, f.idx_mount = lay.idx_odo, lay.idx_mount
+    return f
+
+
+def epoch_std(Ps: np.ndarray, nav: np.ndarray, n_states: int) -> np.ndarray:
+    """The smoothed 1-sigma at epochs (E, 9: velocity E, N, U m/s, position E, N, U m,
+    attitude E, N, U rad) from their packed smoothed covariances (E, n(n+1)/2) and
+    nominal states (E, 10: q, v, lat, lon, h): row by row, so a block of epochs gives the
+    rows of the whole record's result."""
+    tri_idx = np.triu_indices(n_states)
     diag_pos = np.flatnonzero(tri_idx[0] == tri_idx[1])
     var = Ps[:, diag_pos]
-    nav = ep["nav"]
     RM, RN, _, _ = radii(nav[:, 7])
-    estd = np.empty((E, 9))
+    estd = np.empty((len(Ps), 9))
     estd[:, 0:3] = np.sqrt(var[:, 0:3])
     estd[:, 3] = np.sqrt(var[:, 4]) * (RN + nav[:, 9]) * np.cos(nav[:, 7])
     estd[:, 4] = np.sqrt(var[:, 3]) * (RM + nav[:, 9])
     estd[:, 5] = np.sqrt(var[:, 5])
     estd[:, 6:9] = np.sqrt(var[:, 6:9])
-    std = np.column_stack([np.interp(sol.t_s, et, estd[:, i]) for i in range(9)])
-    return SmoothedSolution(sol.t_s.copy(), q, v, pos[:, 0].copy(), pos[:, 1].copy(), pos[:, 2].copy(),
-                            std, sens, sol.standstill.copy(), sol.innovations, cfg, ep,
-                            epoch_t_s=et.copy(), epoch_std=estd)
+    return estd

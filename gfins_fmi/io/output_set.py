@@ -350,6 +350,20 @@ class OutputSet:
         """A text file of the set (UTF-8)."""
         self.file(path).write_text(text, encoding="utf-8")
 
+    def drop(self, path) -> None:
+        """A file of the set that the run will not finish after all (a stage that failed
+        half way through writing it): what was written is removed, and at :meth:`commit`
+        the file counts as one this run did not write (an earlier one is removed)."""
+        m = self._members.get(_key(pathlib.Path(path)))
+        if m is None:
+            return
+        if m.writer is not None:
+            m.writer.discard()
+            m.writer = None
+        if m.remove is not None:
+            m.remove()
+        m.tmp = m.remove = None
+
     # ---- ending ---------------------------------------------------------------------
     def _folders(self):
         return [_folder(m.dest) for m in self._members.values()] + \

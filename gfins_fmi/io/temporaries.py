@@ -17,7 +17,7 @@ import zipfile
 
 from gfins_fmi.io.tables import pyarrow_module
 
-__all__ = ["PARTIAL_PREFIX", "temporary_beside", "temporary_pattern", "remove_temporary",
+__all__ = ["PARTIAL_PREFIX", "temporary_beside", "temporary_folder_beside", "temporary_pattern", "remove_temporary",
            "sweep_temporaries", "partial_path", "mark_partial"]
 
 #: bytes copied at a time when stamping a partial CSV table
@@ -73,6 +73,23 @@ def temporary_beside(path: pathlib.Path, owner, registry: list | None = None
         except FileExistsError:
             remove.detach()
     raise FileExistsError(f"{path}: no free temporary name beside it")  # pragma: no cover
+
+
+def temporary_folder_beside(path: pathlib.Path, owner) -> tuple[pathlib.Path, weakref.finalize]:
+    """A new empty folder beside ``path`` for a run's working files (the smoother's epochs
+    and rows), ``<stem>.<pid>-<random>.tmp<suffix>.d`` beside its placeholder file (one
+    name: :func:`temporary_beside`), and the finalizer that removes both: call it when
+    done; it also runs when ``owner`` is collected or the interpreter exits (a Ctrl-C
+    included), and a run killed outright leaves them to the next run that claims ``path``
+    (:func:`sweep_temporaries`)."""
+    tmp, remove = temporary_beside(pathlib.Path(path), owner)
+    side = pathlib.Path(str(tmp) + ".d")
+    try:
+        side.mkdir()
+    except BaseException:
+        remove()
+        raise
+    return side, remove
 
 
 def _alive(pid: int) -> bool:

@@ -10,7 +10,10 @@
  *      factorisation inside gf_kalman_rts_step) over the stored epochs reproduces the
  *      smoothed states and covariances at every epoch;
  *   2. every smoothed variance is finite, > 0 and <= the filtered one (P^s = P+ +
- *      G (P^s' - P-') G^T with P^s' <= P-'), state by state and epoch by epoch.
+ *      G (P^s' - P-') G^T with P^s' <= P-'), state by state and epoch by epoch;
+ *   3. the pass in blocks from the end (gf_ins_smooth_block, blocks of 1, 7 and 64 epochs
+ *      overlapping by one, each copied to its own buffers as a reader from disk would)
+ *      equals the one-call pass bit for bit; its refusals.
  * (tests/estimation/test_smoother.py does the same through Python with numpy, adds the
  * consistency of the stored transitions and the NEES of a Monte Carlo.) */
 #include <string.h>
@@ -28,6 +31,7 @@ static double g_t[EMAX], g_nav[EMAX * 10], g_sens[EMAX * GF_INS_N_SENSORS], g_dx
 static double g_Pm[EMAX * TRI], g_Pp[EMAX * TRI], g_Phi[EMAX * NS * NS];
 static double g_xs[EMAX * NS], g_Ps[EMAX * TRI];
 static double g_xr[EMAX * NS], g_Pr[EMAX * NS * NS];
+static double g_bx[EMAX * NS], g_bP[EMAX * TRI];
 static gf_ins_filter g_f;
 
 static void unpack(const double *tri, double *P)
@@ -190,6 +194,9 @@ static size_t forward_run(int filter)
     return ep.count;
 }
 
+static void test_blocks(int filter, size_t E, size_t B);
+static void test_block_refusals(void);
+
 static void test_smoother(int filter)
 {
     const size_t E = forward_run(filter);
@@ -233,6 +240,74 @@ static void test_smoother(int filter)
     CHECK(most > 1.0, "filter %d: largest smoothed correction %.3g sigma", filter, most);
     printf("filter %d: %zu epochs, max |xs - ref| %.3g sigma, max |Ps - ref| %.3g, largest "
            "correction %.3g sigma\n", filter, E, worst_x, worst_P, most);
+    static const size_t blocks[] = {1, 7, 64};
+    for (size_t i = 0; i < sizeof blocks / sizeof *blocks; ++i)
+        test_blocks(filter, E, blocks[i]);
+    test_block_refusals();
+}
+
+/* 3. the block pass: blocks [a, b] (b = the first epoch after the block, smoothed by the
+ * previous call) copied into buffers of their own, smoothed, compared bit for bit */
+static void test_blocks(int filter, size_t E, size_t B)
+{
+    static double t[EMAX], dx[EMAX * NS], Pm[EMAX * TRI], Pp[EMAX * TRI], Phi[EMAX * NS * NS];
+    static double xs[EMAX * NS], Ps[EMAX * TRI];
+    /* the record's last epoch: x^s = 0, P^s = P+ (what gf_ins_smooth starts from) */
+    memset(g_bx + NS * (E - 1), 0, NS * sizeof *g_bx);
+    memcpy(g_bP + TRI * (E - 1), g_Pp + TRI * (E - 1), TRI * sizeof *g_bP);
+    int calls = 0;
+    for (size_t b = E - 1; b > 0;) {
+        const size_t a = b > B ? b - B : 0, m = b - a + 1;
+        memcpy(t, g_t + a, m * sizeof *t);
+        memcpy(dx, g_dx + NS * a, m * NS * sizeof *dx);
+        memcpy(Pm, g_Pm + TRI * a, m * TRI * sizeof *Pm);
+        memcpy(Pp, g_Pp + TRI * a, m * TRI * sizeof *Pp);
+        memcpy(Phi, g_Phi + NS * NS * a, m * NS * NS * sizeof *Phi);
+        memcpy(xs + NS * (m - 1), g_bx + NS * b, NS * sizeof *xs);
+        memcpy(Ps + TRI * (m - 1), g_bP + TRI * b, TRI * sizeof *Ps);
+        const gf_ins_epochs blk = {m, m, t, NULL, NULL, dx, Pm, Pp, Phi};
+        const gf_status st = gf_ins_smooth_block(NS, &blk, xs, Ps);
+        CHECK(st == GF_OK, "filter %d block [%zu, %zu]: %d", filter, a, b, st);
+        if (st != GF_OK)
+            return;
+        memcpy(g_bx + NS * a, xs, (m - 1) * NS * sizeof *xs);
+        memcpy(g_bP + TRI * a, Ps, (m - 1) * TRI * sizeof *Ps);
+        b = a;
+        ++calls;
+    }
+    CHECK(memcmp(g_bx, g_xs, E * NS * sizeof *g_xs) == 0,
+          "filter %d, blocks of %zu: smoothed states differ from the one-call pass", filter, B);
+    CHECK(memcmp(g_bP, g_Ps, E * TRI * sizeof *g_Ps) == 0,
+          "filter %d, blocks of %zu: smoothed covariances differ from the one-call pass", filter, B);
+    printf("filter %d: blocks of %zu epochs (%d calls) = the one-call pass, bit for bit\n", filter, B,
+           calls);
+}
+
+static void test_block_refusals(void)
+{
+    static double xs[2 * NS], Ps[2 * TRI];
+    gf_ins_epochs blk = {2, 2, g_t, NULL, NULL, g_dx, g_Pm, g_Pp, g_Phi};
+    memset(xs, 0, sizeof xs);
+    memcpy(Ps, g_Pp, sizeof Ps);
+    CHECK(gf_ins_smooth_block(NS, NULL, xs, Ps) == GF_ERR_NULL_POINTER, "NULL epochs");
+    CHECK(gf_ins_smooth_block(NS, &blk, NULL, Ps) == GF_ERR_NULL_POINTER, "NULL xs");
+    CHECK(gf_ins_smooth_block(0, &blk, xs, Ps) == GF_ERR_BAD_SIZE, "n = 0");
+    CHECK(gf_ins_smooth_block(GF_INS_MAX_STATES + 1, &blk, xs, Ps) == GF_ERR_BAD_SIZE, "n = 41");
+    blk.count = 3;
+    CHECK(gf_ins_smooth_block(NS, &blk, xs, Ps) == GF_ERR_BAD_SIZE, "count > capacity");
+    blk.count = 0;
+    CHECK(gf_ins_smooth_block(NS, &blk, xs, Ps) == GF_ERR_BAD_SIZE, "count 0");
+    blk.count = 2;
+    xs[NS + 4] = NAN;
+    CHECK(gf_ins_smooth_block(NS, &blk, xs, Ps) == GF_ERR_NONFINITE_INPUT, "NaN in the given x^s");
+    xs[NS + 4] = 0.0;
+    Ps[TRI + 3] = INFINITY;
+    CHECK(gf_ins_smooth_block(NS, &blk, xs, Ps) == GF_ERR_NONFINITE_INPUT, "Inf in the given P^s");
+    Ps[TRI + 3] = g_Pp[TRI + 3];
+    Ps[TRI + NS] = -1.0;    /* row 1's diagonal element in the packed upper triangle */
+    CHECK(gf_ins_smooth_block(NS, &blk, xs, Ps) == GF_ERR_BAD_PARAMETER, "a negative given variance");
+    Ps[TRI + NS] = g_Pp[TRI + NS];
+    CHECK(gf_ins_smooth_block(NS, &blk, xs, Ps) == GF_OK, "the same block, repaired");
 }
 
 int main(void)

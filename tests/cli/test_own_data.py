@@ -380,19 +380,26 @@ def test_kfgins_configuration_runs_unchanged_and_writes_kfgins_files(kf_drive, t
         main(["integrate", "--kfgins-config", str(cfg_path), str(folder / "imu.txt")])
 
 
-def test_progress_covers_reading_and_writing(kf_drive, tmp_path, capsys):
+def test_progress_covers_reading_and_writing(kf_drive, tmp_path, capsys, monkeypatch):
     """Before: --progress covered the filter (0.1-0.3 s) but not reading and writing (over
     80 % of the time). Now a line per stage with its time."""
+    import gfins_fmi.cli.integrate as integrate
     folder, d = kf_drive
-    # the whole record (--smooth): a line per stage
-    assert main(_args(folder, tmp_path / "sol.csv", *_initial(d), "--progress", "--smooth")) == 0
+    # the whole record (the path of the other formats), --smooth: a line per stage
+    with monkeypatch.context() as m:
+        m.setattr(integrate, "_streamed", lambda args: False)
+        assert main(_args(folder, tmp_path / "sol.csv", *_initial(d), "--progress", "--smooth")) == 0
     err = capsys.readouterr().err
     for stage in (f"reading {folder / 'imu.txt'}", "reading the GNSS and the other records", "writing the solution"):
         assert re.search(rf"gfins integrate: {re.escape(stage)}: [\d.]+ s", err), err
-    # in chunks: one bar over reading, filtering and writing, in record seconds
-    assert main(_args(folder, tmp_path / "sol.csv", *_initial(d), "--progress")) == 0
+    # in chunks: one bar over reading, filtering and writing, in record seconds; with
+    # --smooth one over the backward pass (epochs) and one over the smoothed rows
+    assert main(_args(folder, tmp_path / "sol.csv", *_initial(d), "--progress", "--smooth")) == 0
     err = capsys.readouterr().err
-    assert "read, filter, write (record seconds): 100%" in err and "warning" not in err, err
+    for bar in ("read, filter, write (record seconds): 100%", "smoother, backward: 100%",
+                "smoother, applied: 100%"):
+        assert bar in err, err
+    assert "warning" not in err, err
 
 
 def test_chunks_give_the_whole_records_result(kf_drive, tmp_path, capsys, monkeypatch):
@@ -573,3 +580,112 @@ def test_binary_imu_in_chunks_gives_the_texts_result(kf_drive, tmp_path, capsys,
     argv[1] = str(bad)
     assert main(argv) != 0
     assert f"{bad}: {len(table) * 56 - 8} bytes is not a whole number of 56-byte samples" in capsys.readouterr().err
+
+
+# ---- the smoother in chunks ---------------------------------------------------------------------
+
+def _short_drive(kf_drive, tmp_path, seconds=30.0):
+    """The drive's first ``seconds``: KF-GINS IMU and GNSS text, the .nav truth (small and
+    fast; its fixes on whole seconds, as the samples every 5 ms)."""
+    folder, d = kf_drive
+    out = tmp_path / "short"
+    out.mkdir()
+    t_end = float(d.imu.t_s[0]) + seconds
+    for name in ("imu.txt", "gnss.txt", "truth.nav"):
+        lines = (folder / name).read_text().splitlines(keepends=True)
+        (out / name).write_text("".join(x for x in lines if float(x.split()[0]) <= t_end))
+    return out
+
+
+def test_smoother_in_chunks_gives_the_whole_records_result(kf_drive, tmp_path, capsys, monkeypatch):
+    """Before: --smooth held the whole record and the whole solution (619 MiB for 30
+    minutes). Now it runs in chunks (epochs and rows on disk, the backward pass in blocks):
+    the files and the summary are the whole-record run's, bit for bit — chunks of 2001
+    samples (10 s), blocks of 5 epochs, with a truth and outages, then KF-GINS's
+    configuration without a truth (residuals); no temporary file is left."""
+    import gfins_fmi.cli.integrate as integrate
+    import gfins_fmi.cli.integrate_smooth as integrate_smooth
+    _, d = kf_drive
+    short = _short_drive(kf_drive, tmp_path)
+    extra = [*_initial(d), "--truth", str(short / "truth.nav"), "--outages", "10,20,15", "--smooth"]
+    got = {}
+    for name in ("whole", "chunks"):
+        with monkeypatch.context() as m:
+            if name == "whole":
+                m.setattr(integrate, "_streamed", lambda args: False)
+            m.setattr(integrate, "STREAM_CHUNK", 2001)
+            m.setattr(integrate_smooth, "SMOOTH_BLOCK_EPOCHS", 5)
+            out = tmp_path / f"{name}.csv"
+            assert main(_args(short, out, *extra)) == 0
+        text = capsys.readouterr().out
+        got[name] = ([out.with_suffix(s).read_bytes() for s in (".csv", ".innovations.csv", ".smoothed.csv")],
+                     [x for x in text.splitlines() if x.startswith(("filter:", "smoother:"))])
+    assert got["chunks"][0][2] == got["whole"][0][2], "the smoothed solutions differ"
+    assert got["chunks"][0][:2] == got["whole"][0][:2], "the forward solutions differ"
+    assert got["chunks"][1] == got["whole"][1] and len(got["whole"][1]) == 4, got
+    # KF-GINS's configuration, the residuals to GNSS
+    for name in ("whole", "chunks"):
+        res = tmp_path / f"kf_{name}"
+        res.mkdir()
+        cfg_path = tmp_path / f"kf_{name}.yaml"
+        cfg_path.write_text(_kfgins_yaml(short, d, res))
+        with monkeypatch.context() as m:
+            if name == "whole":
+                m.setattr(integrate, "_streamed", lambda args: False)
+            m.setattr(integrate, "STREAM_CHUNK", 2001)
+            m.setattr(integrate_smooth, "SMOOTH_BLOCK_EPOCHS", 5)
+            assert main(["integrate", "--kfgins-config", str(cfg_path), "--smooth"]) == 0
+        text = capsys.readouterr().out
+        got[name] = ({p.name: p.read_bytes() for p in res.iterdir() if p.suffix != ".json"},
+                     [x for x in text.splitlines() if x.startswith(("filter:", "smoother:"))])
+    assert "KF_GINS_Navresult.smoothed.csv" in got["whole"][0]
+    for k in got["whole"][0]:
+        a, b = got["chunks"][0].get(k, b"").splitlines(), got["whole"][0][k].splitlines()
+        # the fix at the start time (before the first increment) logged as stale by both:
+        # the first chunk takes the epochs before the start too
+        assert a == b, (k, len(a), len(b), [(x, y) for x, y in zip(a, b) if x != y][:3])
+    assert got["chunks"][1] == got["whole"][1] and len(got["whole"][1]) == 2, got[1]
+    assert not [p for p in tmp_path.rglob("*") if ".tmp" in p.name], "temporary files left"
+
+
+def test_smoother_in_chunks_keeps_the_solution_and_leaves_nothing_on_failure(kf_drive, tmp_path, capsys,
+                                                                              monkeypatch):
+    """A failure in the smoother (a full disk, a block refused in C) exits 1 with the
+    forward solution kept and no smoothed file; a Ctrl-C in it exits 130 and leaves nothing; a sample the filter
+    refuses leaves the partial tables; none leaves the smoother's temporary folder behind."""
+    import gfins_fmi.estimation.smoother_stream as smoother_stream
+    _, d = kf_drive
+    short = _short_drive(kf_drive, tmp_path, 20.0)
+    real = smoother_stream.StreamingSmoother.solutions
+    from gfins_fmi._lib import GfinsError
+    cases = (("disk", OSError("No space left on device"), 1),
+             ("c", GfinsError("gf_ins_smooth_block (epochs 0 to 5 of 9): not positive definite"), 1),
+             ("ctrl_c", KeyboardInterrupt(), 130))
+    for name, exc, code in cases:
+        def broken(self, *a, **k):
+            it = real(self, *a, **k)
+            yield next(it)
+            raise exc
+        out = tmp_path / f"sol_{name}.csv"
+        with monkeypatch.context() as m:
+            m.setattr(smoother_stream.StreamingSmoother, "solutions", broken)
+            assert main(_args(short, out, *_initial(d), "--smooth")) == code, name
+        err = capsys.readouterr().err
+        left = sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(f"sol_{name}"))
+        if code == 1:
+            assert f"failed: the smoother: {exc}; the solution was kept" in err, err
+            assert left == [f"sol_{name}.config.json", f"sol_{name}.csv", f"sol_{name}.innovations.csv"], left
+        else:
+            assert "interrupted" in err and left == [], (err, left)
+        assert not [p for p in tmp_path.rglob("*") if ".tmp" in p.name], "temporary files left"
+    # a sample the filter refuses (50 rad in one 5 ms increment) in the forward pass: the
+    # rows before it kept as partial tables, nothing smoothed, nothing temporary left
+    lines = (short / "imu.txt").read_text().splitlines(keepends=True)
+    cols = lines[3000].split()
+    lines[3000] = " ".join([cols[0], "50.0", *cols[2:]]) + "\n"
+    (short / "imu.txt").write_text("".join(lines))
+    assert main(_args(short, tmp_path / "bad.csv", *_initial(d), "--smooth")) == 1
+    assert "the 3000 samples before it are in" in capsys.readouterr().err
+    left = sorted(p.name for p in tmp_path.iterdir() if p.name.startswith("bad"))
+    assert left == ["bad.config.partial.json", "bad.innovations.partial.csv", "bad.partial.csv"], left
+    assert not [p for p in tmp_path.rglob("*") if ".tmp" in p.name], "temporary files left"

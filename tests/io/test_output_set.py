@@ -221,6 +221,35 @@ def test_temporaries_of_a_killed_process_are_removed_by_the_next_run(tmp_path):
     assert _names(tmp_path) == [alive.name]
 
 
+def test_a_stage_that_fails_half_way_drops_its_table_and_its_working_folder(tmp_path):
+    """The smoother in chunks (issue 20) writes its table a chunk at a time and keeps its
+    epochs in a working folder beside it: when it fails half way, OutputSet.drop removes
+    what it wrote and the commit treats the table as not produced (an earlier one
+    removed: it belongs to another solution); the working folder goes with its
+    finalizer, and one a killed process left (files inside) goes with the next claim."""
+    from gfins_fmi.io.temporaries import temporary_folder_beside, temporary_pattern
+    sm = tmp_path / "sol.smoothed.csv"
+    sm.write_text("old\n")
+    with OutputSet() as outs:
+        folder, remove = temporary_folder_beside(sm, outs)
+        assert folder.is_dir() and temporary_pattern(sm).match(folder.name), folder.name
+        (folder / "epochs_P_post.f8").write_bytes(b"\0" * 64)
+        w = outs.table(sm, ["t_s", "x_m"])
+        w.write([np.arange(3.0), np.zeros(3)])
+        outs.drop(sm)
+        outs.write_text(tmp_path / "sol.csv", "new\n")
+        outs.commit()
+        remove()
+    assert _names(tmp_path) == ["sol.csv"], _names(tmp_path)
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    left = tmp_path / f"sol.smoothed.{dead.pid}-0123abcd.tmp.csv.d"
+    left.mkdir()
+    (left / "rows.f8").write_bytes(b"\0" * 64)
+    OutputSet().claim(sm)
+    assert _names(tmp_path) == ["sol.csv"], _names(tmp_path)
+
+
 #: a process committing ``rounds`` sets of three files, each naming the round
 _COMMITTER = """
 import pathlib, sys

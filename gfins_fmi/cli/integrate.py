@@ -13,7 +13,8 @@ the errors against it; with --outages the outage protocol's score. The files are
 refused sample the tables before it go to OUT.partial.csv and OUT.innovations.partial.csv.
 Records that the run could not use (no epoch inside the IMU record) are refused before it.
 The IMU record (any format, any start) is read, filtered and written in chunks
-(gfins_fmi.io.imu_stream, cli/integrate_stream.py); --smooth and --plot read it whole.
+(gfins_fmi.io.imu_stream, cli/integrate_stream.py), --smooth too (cli/integrate_smooth.py);
+--plot reads it whole.
 """
 from __future__ import annotations
 

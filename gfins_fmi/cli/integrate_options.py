@@ -96,7 +96,7 @@ def integrate_parser(sub, imu_errors_argument, command) -> argparse.ArgumentPars
                    help="csv: gfins_fmi.io ImuRecord CSV, or Parquet (.parquet, .pq) / npz (.npz) of its "
                         "columns (t_s s, gyro rad or rad/s, accel m/s or m/s^2, body right-front-up); kfgins: "
                         "KF-GINS IMU text/.bin (increments, front-right-down); rtk_walk: the rtk_walk CSV "
-                        "(rates in g and rad/s). Every format is read in chunks (see --smooth, --plot)")
+                        "(rates in g and rad/s). Every format is read in chunks (but with --plot)")
     p.add_argument("--gnss-format", choices=("pos", "kfgins", "csv"), default="pos",
                    help="pos: RTKLIB .pos; kfgins: KF-GINS GNSS text; csv: GnssRecord CSV")
     p.add_argument("--gps-week", type=int, default=None,
@@ -171,7 +171,7 @@ def integrate_parser(sub, imu_errors_argument, command) -> argparse.ArgumentPars
     p.add_argument("--nhc", action="store_true", help="non-holonomic constraints (ground vehicles)")
     p.add_argument("--plot", type=pathlib.Path, default=None,
                    help="folder for figures; it reads the whole IMU record at once (memory grows with the "
-                        "record's length; without --smooth and --plot the run goes in chunks)")
+                        "record's length; without --plot the run goes in chunks)")
     p.add_argument("--all-states", action="store_true",
                    help="write every sensor state's column (default: the biases and the states the "
                         "configuration enables; a disabled state's column is all zeros)")

@@ -80,6 +80,9 @@ def main(argv: list[str]) -> int:
             return inner(*a, **k)
         setattr(owner, attr, wrapper)
 
+    # the study's phases are those of the whole-record run (read, filter, write, smoother,
+    # write, commit one after the other); the run in chunks interleaves them chunk by chunk
+    integrate._streamed = lambda args: False
     wrap(integrate, "read_imu", "read")
     wrap(IntegratedNavigator, "run", "filter")
     wrap(IntegratedSolution, "smooth", "smoother")

@@ -15,6 +15,11 @@ outputs (and the smoother's temporary folder) go there, the record's folder is o
 ``--only TEXT``: the runs whose name holds TEXT. ``--api``: instead, the Python API's
 smoothers on the record (IntegratedSolution.smooth() against StreamingSmoother fed
 pieces of 48 000 samples), each in a child process under /usr/bin/time -v.
+``--our-formats`` (with ``--static-hours``): instead, the record converted to our
+ImuRecord CSV and Parquet (in ``--out``) and each timed with the default start (static
+alignment) and with ``--initial`` (issue 20: every IMU format and start in chunks):
+
+    python bench/bench_own_data.py --static-hours 10 --folder /tmp/own10h --out DIR --our-formats --one-core
 
 The machine is shared: say its load with the figures (uptime is printed).
 """
@@ -252,6 +257,40 @@ def api_runs(folder: pathlib.Path, n: int) -> None:
               flush=True)
 
 
+def write_ours(folder: pathlib.Path, out: pathlib.Path) -> dict:
+    """The record as our ImuRecord table (increments, body right-front-up): CSV text and
+    Parquet, in ``out``, converted from the KF-GINS file a chunk at a time (the IMU
+    formats `gfins integrate --imu-format csv` reads)."""
+    from gfins_fmi.io.imu_stream import ImuChunks
+    from gfins_fmi.io.table_writer import TableWriter
+    src = folder / "imu.bin" if (folder / "imu.bin").exists() else folder / "imu.txt"
+    names = ["t_s"] + [f"gyro_{x}_rad" for x in "xyz"] + [f"accel_{x}_m_s" for x in "xyz"]
+    paths = {}
+    for fmt in ("csv", "parquet"):
+        path = out / f"imu_ours.{fmt}"
+        if not path.exists():
+            with TableWriter(path, names, comments=["gfins_fmi ImuRecord", f"source: {src.name}"], format=fmt) as w:
+                for rec in ImuChunks(src, "kfgins", chunk=1_000_000):
+                    w.write([rec.t_s, *rec.gyro.T, *rec.accel.T])
+                w.commit()
+        paths[fmt] = path
+    return paths
+
+
+def our_runs(folder: pathlib.Path, out: pathlib.Path) -> dict:
+    """Our CSV and Parquet IMU records with the default start and with --initial (the
+    record at rest at 30 N, 114 E, heading north)."""
+    ours = write_ours(folder, out)
+    starts = {"default start (static alignment, 5 s)": [], "--initial": ["--initial", "30,114,20,0,0,0"]}
+    return {f"our {fmt} IMU in, {suffix} out, {start}": [
+                "integrate", str(ours[fmt]), str(folder / "gnss.txt"), str(out / f"sol.{suffix}"), "--gnss-format",
+                "kfgins", "--imu-format", "csv", "--grade", "navigation", *starts[start]]
+            for fmt, suffix, start in (("csv", "parquet", "default start (static alignment, 5 s)"),
+                                       ("csv", "parquet", "--initial"), ("csv", "npz", "--initial"),
+                                       ("parquet", "parquet", "default start (static alignment, 5 s)"),
+                                       ("parquet", "parquet", "--initial"))}
+
+
 def timed(argv: list[str], one_core: bool = False) -> dict:
     """The command under /usr/bin/time -v (pinned to CPU 0 with ``one_core``): wall s,
     user + system s, peak RSS MiB."""
@@ -280,6 +319,9 @@ def main() -> None:
                     help="the outputs go here (default: the record's folder)")
     ap.add_argument("--only", default="", help="the runs whose name holds this text")
     ap.add_argument("--api", action="store_true", help="instead: the Python API's two smoothers")
+    ap.add_argument("--our-formats", action="store_true",
+                    help="with --static-hours, instead: our ImuRecord CSV and Parquet in (converted into --out), "
+                         "with the default start and with --initial")
     args = ap.parse_args()
     folder = args.folder or pathlib.Path(tempfile.mkdtemp(prefix="gfins_own_data_"))
     folder.mkdir(parents=True, exist_ok=True)
@@ -296,6 +338,9 @@ def main() -> None:
         return
     if args.static_hours is not None:
         print(f"{n} IMU samples ({n / 200 / 3600:.2f} h at 200 Hz) in {folder}; load: {os.getloadavg()}")
+    if args.static_hours is not None and args.our_formats:
+        runs = our_runs(folder, out)
+    elif args.static_hours is not None:
         imu_bin = write_bin(folder)
         parquet = [str(folder / "gnss.txt"), str(out / "sol.parquet"), "--imu-format", "kfgins", "--gnss-format",
                    "kfgins", "--grade", "navigation", "--initial", "30,114,20,0,0,0"]

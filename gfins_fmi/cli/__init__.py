@@ -86,7 +86,7 @@ def _outputs_note(exc) -> str:
     return f"; {note}" if note else ""
 
 
-def main(argv: list[str] | None = None) -> int:
+def _parse(argv: list[str] | None):
     parser, parsers = build_parser()
     tokens = _negative_values_joined(sys.argv[1:] if argv is None else list(argv))
     args = parser.parse_args(tokens)
@@ -94,6 +94,15 @@ def main(argv: list[str] | None = None) -> int:
     problem = args.check(args) if args.check else None
     if problem:   # a combination of options: refused at parse time too
         parsers[args.command].error(problem)
+    return args
+
+
+def main(argv: list[str] | None = None) -> int:
+    try:
+        args = _parse(argv)
+    except KeyboardInterrupt:   # Ctrl-C while the options are read: nothing ran, no traceback
+        print("gfins: interrupted before the command started (nothing written)", file=sys.stderr)
+        return 130
     try:
         with _sigterm_raises(), _warnings_as_lines(args.command):
             # the chosen command's module only: importing all of them (and the whole package

@@ -15,6 +15,7 @@ import numpy as np
 
 from gfins_fmi import io
 from gfins_fmi._lib import NonFiniteInputError
+from gfins_fmi.io.imu_stream import read_imu_record
 from gfins_fmi.io.output_set import OutputSet
 from gfins_fmi.io.tables import TableReader
 
@@ -255,14 +256,12 @@ def nav_columns(sol) -> list:
             + [sol.q_bn[:, j] for j in range(4)])
 
 
-def read_imu(path, fmt: str = "csv", gps_week=None):
-    """An IMU record: ``csv`` (our ImuRecord CSV), ``kfgins`` (KF-GINS IMU text/.bin:
-    increments, front-right-down) or ``rtk_walk`` (the rtk_walk CSV, with its mounting)."""
-    if fmt == "csv":
-        return io.ImuRecord.from_csv(path)
-    if fmt == "kfgins":
-        return io.read_kfgins_imu(path, gps_week=gps_week)
-    return io.read_rtk_walk_imu(path, io.rtk_walk_mounting())
+def read_imu(path, fmt: str = "csv", gps_week=None, n_columns: int = 7):
+    """A whole IMU record: ``csv`` (our ImuRecord: CSV text, or Parquet / npz of its
+    columns), ``kfgins`` (KF-GINS IMU text/.bin: increments, front-right-down; ``n_columns``
+    of its text) or ``rtk_walk`` (the rtk_walk CSV, with its mounting)
+    (:func:`gfins_fmi.io.imu_stream.read_imu_record`)."""
+    return read_imu_record(path, fmt, gps_week, n_columns)
 
 
 def read_gnss(path, fmt: str = "pos", gps_week=None):

@@ -12,10 +12,14 @@ the errors against it; with --outages the outage protocol's score. The files are
 (gfins_fmi.io.output_set): they appear together when the run has succeeded; after a
 refused sample the tables before it go to OUT.partial.csv and OUT.innovations.partial.csv.
 Records that the run could not use (no epoch inside the IMU record) are refused before it.
+The IMU record (any format, any start) is read, filtered and written in chunks
+(gfins_fmi.io.imu_stream, cli/integrate_stream.py), --smooth too (cli/integrate_smooth.py);
+--plot reads it whole.
 """
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import json
 import pathlib
 import sys
@@ -27,19 +31,20 @@ from gfins_fmi import io
 from gfins_fmi._lib import GfinsError
 from gfins_fmi._version import __version__
 from gfins_fmi.cli import Failed
-from gfins_fmi.cli.files import cause, compensated, outputs, read_gnss, read_imu, read_optional, read_truth
+from gfins_fmi.cli.files import (cause, compensated, compensated_block, outputs, read_gnss, read_imu,
+                                 read_optional, read_truth)
 from gfins_fmi.cli.config_file import config_template, configured, input_file, option_units
 from gfins_fmi.cli.initial import from_initial_option, record_start_s
 from gfins_fmi.cli.kfgins_config import initial_state as kfgins_initial_state
 from gfins_fmi.cli.kfgins_config import (kfgins_outputs, kfgins_tables, open_kfgins_writers, read_kfgins_config,
                                          write_kfgins_outputs)
-from gfins_fmi.cli.integrate_stream import STREAM_CHUNK, ImuChunks, Scores, solution_table, time_slice
+from gfins_fmi.cli.integrate_stream import STREAM_CHUNK, Scores, grouped, solution_table, time_slice
 from gfins_fmi.cli.integrate_smooth import open_smoother, write_smoothed
 from gfins_fmi.cli.integrate_options import INITIAL_STD_DEFAULTS, check_integrate
 from gfins_fmi.cli.parser import build_parser
 from gfins_fmi.cli.noise import imu_noise
 from gfins_fmi.estimation.noise_file import read_imu_errors
-from gfins_fmi.estimation.alignment import align_static_then_gnss
+from gfins_fmi.estimation.alignment import align_static_then_gnss, heading_from_gnss
 from gfins_fmi.estimation.config import (MEAS_TYPES, SENSOR_NAMES, UPDATE_STATUS, FilterConfig,
                                          FilterError, InitialState)
 from gfins_fmi.estimation.evaluation import (NavErrors, gnss_outage_drift, gnss_residuals, kfgins_outage_windows,
@@ -48,6 +53,7 @@ from gfins_fmi.estimation.evaluation import (NavErrors, gnss_outage_drift, gnss_
 from gfins_fmi.estimation.measurement_checks import unusable_measurements
 from gfins_fmi.estimation.navigator import IntegratedNavigator
 from gfins_fmi.io.columns import INNOVATION_COLUMNS
+from gfins_fmi.io.imu_stream import ImuChunks
 from gfins_fmi.nav.strapdown import NavState, quat_to_euler
 
 __all__ = ["run"]
@@ -268,26 +274,31 @@ class _Stage:
                   flush=True)
 
 
-def _streamed(args, kf) -> bool:
-    """A KF-GINS IMU record with a given initial state is read, filtered, smoothed
-    (--smooth) and written in chunks; the rest reads the whole record."""
-    return (args.imu_format == "kfgins" and (kf is not None or args.initial is not None)
-            and not args.plot and not args.imu_errors)
+def _streamed(args) -> bool:
+    """Whether the run goes in chunks (memory independent of the record's length): every
+    IMU format and every start, --smooth included (integrate_smooth); only --plot, which
+    needs the whole solution at once, reads the record whole."""
+    return not args.plot
+
+
+def _compensation(errors):
+    """--imu-errors on a streamed chunk (the time before it: the first interval)."""
+    def transform(t, gyro, accel, kind, t_before):
+        return compensated_block(errors, t, gyro, accel, kind, t_before)
+    return transform
 
 
 def _run(args, outs, inn_path, sm_path, figures) -> int:
     kf = args.kfgins
-    streamed = _streamed(args, kf)
+    streamed = _streamed(args)
     chunks = None
     with _Stage(args.progress, f"reading {args.imu}" + (" (its first chunk)" if streamed else "")):
         if streamed:
-            chunks = ImuChunks(args.imu, kf.imu_columns if kf else 7, args.gps_week, STREAM_CHUNK)
-            if kf is not None:
-                chunks.start_at(kf.start_s)
+            chunks = ImuChunks(args.imu, args.imu_format, args.gps_week, STREAM_CHUNK,
+                               kf.imu_columns if kf else 7)
             imu, t_end = chunks.first, chunks.t_end
         else:
-            imu = (read_imu(args.imu, args.imu_format, args.gps_week) if kf is None else
-                   io.read_kfgins_imu(args.imu, kf.imu_columns, args.gps_week))
+            imu = read_imu(args.imu, args.imu_format, args.gps_week, kf.imu_columns if kf else 7)
             t_end = float(imu.t_s[-1])
     with _Stage(args.progress, "reading the GNSS and the other records"):
         gnss = read_gnss(args.gnss, args.gnss_format, args.gps_week)
@@ -299,13 +310,23 @@ def _run(args, outs, inn_path, sm_path, figures) -> int:
                                      odometer=odo, truth=truth)
     if problems:
         raise ValueError(f"{problems[0]}; nothing was run")
-    if args.imu_errors:
-        imu = compensated(imu, read_imu_errors(args.imu_errors))
+    errors = read_imu_errors(args.imu_errors) if args.imu_errors else None
+    if errors is not None:
         print(f"IMU record compensated with {args.imu_errors}")
-    if args.subsamples > 1 and imu.kind == "rates":
-        # the multi-sample coning/sculling corrections are formed from increments: the
-        # trapezoid over each interval (what the filter's rate input assumes too)
-        imu = imu.to_increments()
+    # the multi-sample coning/sculling corrections are formed from increments: rates by the
+    # trapezoid over each interval (what the filter's rate input assumes too)
+    to_increments = args.subsamples > 1 and imu.kind == "rates"
+    if streamed:
+        if errors is not None or to_increments:
+            chunks.convert(None if errors is None else _compensation(errors), to_increments)
+        if kf is not None:
+            chunks.start_at(kf.start_s)
+        imu = chunks.first
+    else:
+        if errors is not None:
+            imu = compensated(imu, errors)
+        if to_increments:
+            imu = imu.to_increments()
     noise = imu_noise(args.grade, args.noise, args.noise_file) if kf is None else kf.noise
     scale = {} if kf is None else {"scale_factors": True, "gyro_scale_std": kf.scale_std[0],
                                    "accel_scale_std": kf.scale_std[1], "gyro_scale_tau_s": kf.correlation_s,
@@ -328,22 +349,22 @@ def _run(args, outs, inn_path, sm_path, figures) -> int:
         if streamed:
             chunks.keep(init.nav.t_s, None)
     else:
-        static = args.static or 5.0
-        sp = align_static_then_gnss(imu, gnss, (imu.t_s[0], imu.t_s[0] + static),
-                                    gyro_bias_std_rad_s=cfg.noise_si()["gyro_bias_std_rad_s"],
-                                    accel_bias_std_m_s2=max(cfg.noise_si()["accel_bias_std_m_s2"], 1e-4))
+        sp = _aligned(args, chunks, imu, gnss, cfg)
         for note in sp.notes:
             print("alignment:", note)
         init = InitialState(sp.nav, position_std_m=(0.5, 0.5, 1.0), velocity_std_m_s=0.05,
                             attitude_std_rad=np.maximum(sp.attitude_std_rad, 1e-3), sensors=sp.sensors,
                             **_bias_stds(args))
-        sel = imu.t_s > sp.nav.t_s
-        rec = io.ImuRecord(t_s=imu.t_s[sel], gyro=imu.gyro[sel], accel=imu.accel[sel], kind=imu.kind,
-                           source=imu.source)
+        if streamed:
+            chunks.keep(sp.nav.t_s, None)
+        else:
+            sel = imu.t_s > sp.nav.t_s
+            rec = io.ImuRecord(t_s=imu.t_s[sel], gyro=imu.gyro[sel], accel=imu.accel[sel], kind=imu.kind,
+                               source=imu.source)
     windows = None
     g_used = gnss
     if args.outages:
-        windows = _outage_windows(args, gnss, t_end if rec is None or streamed else float(rec.t_s[-1]))
+        windows = _outage_windows(args, gnss, t_end if streamed else float(rec.t_s[-1]))
         g_used = without_outages(gnss, windows)
         print(f"{len(windows)} simulated GNSS outages of {args.outages[0]:g} s (KF-GINS's protocol: the "
               f"{len(gnss) - len(g_used)} fixes strictly inside them removed)")
@@ -364,8 +385,7 @@ def _run(args, outs, inn_path, sm_path, figures) -> int:
         why = cause(exc)
         outs.keep_partial(f"the filter stopped at IMU sample {exc.index} of {args.imu}: {why}; the "
                           f"{len(sol)} rows here are the solution before it")
-        print(f"error: {why}; the {len(sol)} samples before it are in "
-              f"{', '.join(map(str, outs.partial))} ({outs.outcome().split('; ', 1)[1]})", file=sys.stderr)
+        print(_stopped(outs, why, len(sol)), file=sys.stderr)
         return 1
     with _Stage(args.progress, "writing the solution"):
         _write_solution(args, outs, sol)
@@ -387,6 +407,38 @@ def _run(args, outs, inn_path, sm_path, figures) -> int:
         _failed_after_solution(outs, "the summary", exc)
     outs.commit()
     return 0
+
+
+def _aligned(args, chunks, imu, gnss, cfg):
+    """The default start: static alignment over the first --static seconds (default 5),
+    the heading from GNSS velocity when gyrocompassing refuses. In chunks the record's
+    head is read up to the window's end (and, for the GNSS heading, up to its epoch).
+    Increments: the window ends on a sample's time (an increment covers the interval that
+    ends at its time; a window end a rounding before a sample's time left the next sample
+    an interval of 1e-15 s, which the filter refused as an impossible rate)."""
+    t0, end = imu.t_s[0], imu.t_s[0] + (args.static or 5.0)
+    if chunks is not None and imu.t_s[-1] < end:
+        imu = chunks.head(until_s=end)
+    if imu.kind == "increments":
+        end = imu.t_s[max(int(np.searchsorted(imu.t_s, end, side="right")) - 1, 0)]
+    window = (t0, end)
+    kw = dict(gyro_bias_std_rad_s=cfg.noise_si()["gyro_bias_std_rad_s"],
+              accel_bias_std_m_s2=max(cfg.noise_si()["accel_bias_std_m_s2"], 1e-4))
+    sp = align_static_then_gnss(imu, gnss, window, **kw)
+    if chunks is not None and sp.alignment.heading_method != "gyrocompass":
+        # the gyros carry the heading back from the first GNSS epoch in motion
+        t_h = heading_from_gnss(gnss, 1.0, t_from_s=float(window[1]))[0]
+        if imu.t_s[-1] < t_h:
+            sp = align_static_then_gnss(chunks.head(until_s=t_h), gnss, window, **kw)
+    return sp
+
+
+def _stopped(outs, why: str, rows: int) -> str:
+    """The message of a run that stopped: where the rows before it are (none: what was left)."""
+    if outs.partial:
+        return (f"error: {why}; the {rows} samples before it are in {', '.join(map(str, outs.partial))} "
+                f"({outs.outcome().split('; ', 1)[-1]})")
+    return f"error: {why}; no sample was filtered: {outs.outcome()}"
 
 
 def _stream(args, outs, nav, chunks, gnss, baro, odo, scores, inn_path, sm_path) -> int:
@@ -433,23 +485,34 @@ def _stream_run(args, outs, nav, smoother, chunks, gnss, baro, odo, scores, inn_
     if args.progress:
         from tqdm import tqdm   # lazy: tqdm only with a progress bar
         bar = tqdm(total=round(max(chunks.t_end - lo, 0.0), 3), unit="s", desc="read, filter, write (record seconds)")
+    def stopped(why, what):
+        outs.keep_partial(f"{what}: {why}; the {rows} rows here are the solution before it")
+        print(_stopped(outs, why, rows), file=sys.stderr)
+        return 1
+
+    records = grouped(chunks, nav.config.subsamples)
     try:
-        for k, rec in enumerate(chunks):
+        for k in itertools.count():
+            try:
+                rec = next(records, None)
+            except ValueError as exc:
+                # a line or sample past the first chunk the record refuses: the rows before it kept
+                return stopped(str(exc), f"reading {args.imu} stopped after {rows} samples of the solution")
+            if rec is None:
+                break
             hi = float(rec.t_s[-1]) + 1e-9      # the navigator's own cut: measurements up to the last sample
-            parts = [time_slice(r, lo, hi) for r in (gnss, baro, odo)]
+            # the first chunk takes the epochs before the start too: the filter logs them as stale
+            parts = [time_slice(r, lo if k else -np.inf, hi) for r in (gnss, baro, odo)]
             try:
                 sol = step(rec, *parts, checks="warn" if k == 0 else "off", state_std=kf is not None)
             except FilterError as exc:
                 write(exc.partial)
-                why = cause(exc)
                 where = rows - len(exc.partial) + exc.index
-                outs.keep_partial(f"the filter stopped at IMU sample {where} of {args.imu}: {why}; the "
-                                  f"{rows} rows here are the solution before it")
-                print(f"error: {why}; the {rows} samples before it are in "
-                      f"{', '.join(map(str, outs.partial))} ({outs.outcome().split('; ', 1)[1]})", file=sys.stderr)
-                return 1
+                return stopped(cause(exc), f"the filter stopped at IMU sample {where} of {args.imu}")
             write(sol)
             scores[0].add(sol)
+            # not held while the next chunk is read and filtered: one chunk's solution at a time
+            del sol, rec, parts
             if bar:
                 bar.update(min(round(hi - lo, 3), bar.total - bar.n))
             lo = hi
@@ -459,8 +522,13 @@ def _stream_run(args, outs, nav, smoother, chunks, gnss, baro, odo, scores, inn_
     for w in [*writers.values(), inn]:
         if w is not None:
             w.commit()
-    where = args.output if kf is None else kfgins_outputs(kf.output)["nav"]
-    print(f"{rows} samples -> {where} (read, filtered and written in chunks of {STREAM_CHUNK})")
+    if kf is None:
+        print(f"{rows} samples -> {args.output}")
+    else:
+        files = kfgins_outputs(kf.output)
+        print(f"{rows} samples -> {files['nav']}, {files['imu_err'].name}, {files['std'].name}")
+    if args.progress:
+        print(f"gfins integrate: read, filtered and written in chunks of {STREAM_CHUNK} samples", file=sys.stderr)
     print(f"updates: {counts} -> {inn_path}")
     if smoother is not None:
         try:

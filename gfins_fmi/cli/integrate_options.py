@@ -93,8 +93,10 @@ def integrate_parser(sub, imu_errors_argument, command) -> argparse.ArgumentPars
                         "KF-GINS's output files (KF_GINS_Navresult.nav, KF_GINS_IMU_ERR.txt, KF_GINS_STD.txt) "
                         "in its outputpath; no IMU GNSS OUT then")
     p.add_argument("--imu-format", choices=("csv", "kfgins", "rtk_walk"), default="csv",
-                   help="csv: gfins_fmi.io ImuRecord CSV; kfgins: KF-GINS IMU text/.bin (increments, "
-                        "front-right-down); rtk_walk: the rtk_walk CSV (rates in g and rad/s)")
+                   help="csv: gfins_fmi.io ImuRecord CSV, or Parquet (.parquet, .pq) / npz (.npz) of its "
+                        "columns (t_s s, gyro rad or rad/s, accel m/s or m/s^2, body right-front-up); kfgins: "
+                        "KF-GINS IMU text/.bin (increments, front-right-down); rtk_walk: the rtk_walk CSV "
+                        "(rates in g and rad/s). Every format is read in chunks (but with --plot)")
     p.add_argument("--gnss-format", choices=("pos", "kfgins", "csv"), default="pos",
                    help="pos: RTKLIB .pos; kfgins: KF-GINS GNSS text; csv: GnssRecord CSV")
     p.add_argument("--gps-week", type=int, default=None,
@@ -121,8 +123,8 @@ def integrate_parser(sub, imu_errors_argument, command) -> argparse.ArgumentPars
     imu_errors_argument(p)
     p.add_argument("--filter", choices=("ekf", "ukf"), default="ekf")
     p.add_argument("--smooth", action="store_true", help="also run the RTS smoother (its solution is "
-                   "written to OUT.smoothed.csv); in the runs in chunks (a KF-GINS IMU file with --initial or "
-                   "--kfgins-config) its epochs and the rows go to a temporary folder beside OUT, removed "
+                   "written to OUT.smoothed.csv); in the runs in chunks (every run but --plot's) its epochs "
+                   "and the rows go to a temporary folder beside OUT, removed "
                    "at the end: per hour of record at 200 Hz and the default --propagation-interval 0.1 s, "
                    "0.31 GB with 15 states, 0.44 GB with 21 (--kfgins-config), +10%% with 1 Hz GNSS fixes "
                    "between the propagation instants (4.1 or 7.7 kB per epoch, 224 B per row); memory flat")
@@ -167,7 +169,9 @@ def integrate_parser(sub, imu_errors_argument, command) -> argparse.ArgumentPars
                         "removed fixes at the antenna)")
     p.add_argument("--zupt", action="store_true", help="zero-velocity updates at detected standstill")
     p.add_argument("--nhc", action="store_true", help="non-holonomic constraints (ground vehicles)")
-    p.add_argument("--plot", type=pathlib.Path, default=None, help="folder for figures")
+    p.add_argument("--plot", type=pathlib.Path, default=None,
+                   help="folder for figures; it reads the whole IMU record at once (memory grows with the "
+                        "record's length; without --plot the run goes in chunks)")
     p.add_argument("--all-states", action="store_true",
                    help="write every sensor state's column (default: the biases and the states the "
                         "configuration enables; a disabled state's column is all zeros)")

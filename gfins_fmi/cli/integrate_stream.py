@@ -1,17 +1,16 @@
-"""``gfins integrate`` in chunks: a KF-GINS IMU record (text or ``.bin``) read, filtered
-and written a chunk at a time, so the memory a run needs does not grow with the
+"""``gfins integrate`` in chunks: an IMU record of any format it reads
+(:class:`~gfins_fmi.io.imu_stream.ImuChunks`) read, filtered and written a chunk at a time, so the memory a run needs does not grow with the
 record's length (issue 20). The filter carries its state from one chunk to the next
 (:meth:`~gfins_fmi.estimation.navigator.IntegratedNavigator.run` continues where it
 stopped); each chunk gets the measurements valid in its own span, so the result is the
 whole record's, bit for bit. The summary is accumulated as the chunks pass
 (:class:`Scores`: the same figures as the whole-record summary). ``--smooth`` runs in
 chunks too (:mod:`gfins_fmi.cli.integrate_smooth`); runs that need the whole solution at
-once (``--plot``) and the other formats read the record whole.
+once (``--plot``) read the record whole.
 """
 from __future__ import annotations
 
 import dataclasses
-import pathlib
 import types
 
 import numpy as np
@@ -20,10 +19,8 @@ from gfins_fmi import io
 from gfins_fmi.estimation.config import SENSOR_NAMES
 from gfins_fmi.estimation.evaluation import gnss_residuals, navigation_errors
 from gfins_fmi.io.columns import integrated_columns
-from gfins_fmi.io.conventions import frd_to_rfu
-from gfins_fmi.io.tables import TableReader
 
-__all__ = ["ImuChunks", "time_slice", "Scores", "sensor_columns", "solution_table", "STREAM_CHUNK"]
+__all__ = ["grouped", "time_slice", "Scores", "sensor_columns", "solution_table", "STREAM_CHUNK"]
 
 #: IMU samples per chunk, a multiple of every --subsamples (a cut changes nothing: the result
 #: is the whole record's); 4.8e4 samples make ~15 MB of solution and ~25 MB of text a chunk
@@ -52,6 +49,28 @@ def solution_table(sol, all_states: bool) -> tuple:
     return integrated_columns([SENSOR_NAMES[k] for k in keep]), cols
 
 
+def grouped(records, n: int):
+    """ImuRecords regrouped so that each holds a multiple of ``n`` samples (the last
+    excepted): the C core groups ``--subsamples`` samples on the grid of its sample count,
+    so a call that ends inside a group would process it as the whole record does not. The
+    samples left over from one record start the next."""
+    rest = None
+    for rec in records:
+        if rest is not None:
+            rec = io.ImuRecord(np.r_[rest.t_s, rec.t_s], np.vstack([rest.gyro, rec.gyro]),
+                               np.vstack([rest.accel, rec.accel]), rec.kind, rec.source)
+            rest = None
+        m = len(rec) - len(rec) % n
+        if m < len(rec):
+            rest = io.ImuRecord(rec.t_s[m:], rec.gyro[m:], rec.accel[m:], rec.kind, rec.source)
+            if m == 0:
+                continue
+            rec = io.ImuRecord(rec.t_s[:m], rec.gyro[:m], rec.accel[:m], rec.kind, rec.source)
+        yield rec
+    if rest is not None:
+        yield rest
+
+
 def time_slice(rec, lo: float, hi: float):
     """The rows of a measurement record with lo < t <= hi (None when none or no record)."""
     if rec is None:
@@ -65,98 +84,6 @@ def time_slice(rec, lo: float, hi: float):
     out = {k: (np.asarray(v)[sel] if isinstance(v, np.ndarray) and v.ndim >= 1 and len(v) == n else v)
            for k, v in rows.items()}
     return type(rec)(**out)
-
-
-def _last_time(path: pathlib.Path, n_columns: int) -> float:
-    """The time of a KF-GINS IMU file's last sample (its tail read)."""
-    if path.suffix.lower() == ".bin":
-        with open(path, "rb") as f:
-            f.seek(-56, 2)
-            return float(np.frombuffer(f.read(8), "<f8")[0])
-    with open(path, "rb") as f:
-        f.seek(0, 2)
-        size = f.tell()
-        f.seek(max(0, size - 4096))
-        lines = [x for x in f.read().split(b"\n") if x.strip() and not x.strip().startswith(b"#")]
-    return float(lines[-1].replace(b",", b" ").split()[0])
-
-
-class ImuChunks:
-    """A KF-GINS IMU file as ImuRecords of ``chunk`` samples (increments, body RFU):
-    ``first`` (the first chunk, for the initial state's time and the checks), ``t_end``
-    (the last sample's time, from the file's tail), then iteration from the start.
-    ``keep(t0, t_end)`` limits the samples to t0 < t <= t_end (KF-GINS's span)."""
-
-    def __init__(self, path, n_columns: int = 7, gps_week=None, chunk: int = STREAM_CHUNK):
-        self.path, self.n_columns, self.gps_week, self.chunk = pathlib.Path(path), n_columns, gps_week, chunk
-        self.lo, self.hi = -np.inf, np.inf
-        if self.path.suffix.lower() == ".bin" and self.path.is_file():
-            size = self.path.stat().st_size
-            if size == 0 or size % 56:
-                raise io.FileFormatError(self.path, None, f"{size} bytes is not a whole number of 56-byte samples "
-                                         "(seven float64: time, 3 angle and 3 velocity increments)")
-        self.t_end = _last_time(self.path, n_columns) + (0 if gps_week is None else int(gps_week) * 604800)
-        gen = self._raw()
-        try:
-            self.first = next(gen)
-        finally:
-            gen.close()       # its file closed now, not when collected
-
-    def start_at(self, start_s: float) -> None:
-        """``first`` := the first chunk that reaches ``start_s`` (KF-GINS's starttime may
-        lie minutes into the file)."""
-        if self.first.t_s[-1] >= start_s:
-            return
-        gen = self._raw()
-        try:
-            for rec in gen:
-                if rec.t_s[-1] >= start_s:
-                    self.first = rec
-                    return
-        finally:
-            gen.close()
-        raise ValueError(f"starttime {start_s:.10g} s is not before the IMU record's end ({self.t_end:.10g} s)")
-
-    def keep(self, lo: float, hi: float | None) -> None:
-        self.lo, self.hi = lo, (np.inf if hi is None else hi)
-
-    def _blocks(self):
-        if self.path.suffix.lower() == ".bin":
-            # read, not mapped: a map's pages stay resident (and count in the peak) as the
-            # record passes: 541 MiB for 10 h at 200 Hz where a chunk is 2.7 MB
-            with open(self.path, "rb") as f:
-                while True:
-                    block = np.fromfile(f, dtype="<f8", count=7 * self.chunk)
-                    if len(block) == 0:
-                        return
-                    yield block.reshape(-1, 7)
-        with TableReader(self.path, chunk_rows=self.chunk, what="KF-GINS IMU", whitespace=True,
-                         block_bytes=4 << 20) as r:
-            if r.n_columns < 7:
-                raise ValueError(f"{self.path}: {r.n_columns} columns; a KF-GINS IMU file has 7 (time, 3 angle "
-                                 "and 3 velocity increments, forward-right-down) or more")
-            for _, block in r:
-                yield block
-
-    def _raw(self):
-        for block in self._blocks():
-            t = block[:, 0] if self.gps_week is None else block[:, 0] + int(self.gps_week) * 604800
-            yield io.ImuRecord(t, frd_to_rfu(block[:, 1:4]), frd_to_rfu(block[:, 4:7]), "increments",
-                               f"KF-GINS IMU file {self.path.name}: increments, FRD -> RFU (in chunks)")
-
-    def __iter__(self):
-        for rec in self._raw():
-            t = rec.t_s
-            if t[-1] <= self.lo:
-                continue
-            if t[0] > self.hi:
-                return
-            sel = (t > self.lo) & (t <= self.hi)
-            if not np.all(sel):
-                if not np.any(sel):
-                    continue
-                rec = io.ImuRecord(t[sel], rec.gyro[sel], rec.accel[sel], rec.kind, rec.source)
-            yield rec
 
 
 class Scores:

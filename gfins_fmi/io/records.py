@@ -20,6 +20,7 @@ import dataclasses
 import itertools
 import math
 import pathlib
+import re
 from dataclasses import dataclass
 from typing import ClassVar, Iterable, NamedTuple, Sequence
 
@@ -31,7 +32,7 @@ from gfins_fmi.io.tables import TableReader
 from gfins_fmi.io.errors import FileFormatError, RecordError, not_a_file
 
 __all__ = ["ImuRecord", "GnssRecord", "BaroRecord", "OdometerRecord", "TruthRecord",
-           "SamplingStats", "Gap", "QUALITY_NAMES", "IMU_KINDS"]
+           "SamplingStats", "Gap", "QUALITY_NAMES", "IMU_KINDS", "csv_line_of"]
 
 #: RTKLIB's solution quality flag Q, kept in GnssRecord.quality
 QUALITY_NAMES = {0: "unknown", 1: "fix", 2: "float", 3: "SBAS", 4: "DGPS", 5: "single", 6: "PPP"}
@@ -259,53 +260,97 @@ class _Record:
             return w.commit()
 
     @classmethod
-    def from_csv(cls, path):
-        """Read a record written by :meth:`to_csv` (the column names must be one of the
-        type's layouts; the ``# gfins_fmi`` line, if present, must name this type)."""
+    def csv_head(cls, path) -> tuple[tuple[str, ...], str, int]:
+        """The head of a record's CSV, checked: its column names (one of the type's
+        layouts), its ``# source:`` and the 1-based line of the names. Read line by line
+        up to the names (a record of any length). A ``# gfins_fmi`` line, if present, must
+        name this type."""
         path = pathlib.Path(path)
         if not path.is_file():
             raise not_a_file(path, f"{cls.__name__} CSV")
         source, header_line, names = "", None, None
         try:
             with open(path, encoding="utf-8") as f:
-                lines = f.readlines()
+                for i, line in enumerate(f):
+                    text = line.strip()
+                    if text.startswith("#"):
+                        body = text[1:].strip()
+                        if body.startswith("gfins_fmi "):
+                            kind = body.split()[1] if len(body.split()) > 1 else ""
+                            if kind != cls.__name__:
+                                raise FileFormatError(path, i + 1, f"the file holds a {kind}: read it "
+                                                      f"with {kind}.from_csv")
+                        elif body.startswith("source:"):
+                            source = body[len("source:"):].strip()
+                        continue
+                    if text:
+                        header_line, names = i + 1, tuple(n.strip() for n in text.split(","))
+                        break
         except UnicodeDecodeError as exc:   # found by fuzzing: it escaped as is
             raise FileFormatError(path, None, f"not a text file: a {cls.__name__} CSV is "
                                   f"UTF-8 text ({exc.reason} at byte {exc.start})") from exc
-        for i, line in enumerate(lines):
-            text = line.strip()
-            if text.startswith("#"):
-                body = text[1:].strip()
-                if body.startswith("gfins_fmi "):
-                    kind = body.split()[1] if len(body.split()) > 1 else ""
-                    if kind != cls.__name__:
-                        raise FileFormatError(path, i + 1, f"the file holds a {kind}: read it "
-                                              f"with {kind}.from_csv")
-                elif body.startswith("source:"):
-                    source = body[len("source:"):].strip()
-                continue
-            if text:
-                header_line, names = i + 1, tuple(n.strip() for n in text.split(","))
-                break
-        layouts = cls._csv_layouts()
         if names is None:
             raise FileFormatError(path, None, f"the file is empty: a {cls.__name__} CSV starts "
                                   "with a line of column names")
-        if names not in layouts:
+        cls.check_layout(path, names, header_line)
+        return names, source, header_line
+
+    @classmethod
+    def check_layout(cls, path, names: tuple[str, ...], line: int | None = None) -> None:
+        """Refuse column names that are not one of the type's layouts (naming them)."""
+        layouts = cls._csv_layouts()
+        if tuple(names) not in layouts:
             expected = "\n  ".join(",".join(layout) for layout in layouts)
-            raise FileFormatError(path, header_line, f"the column names {','.join(names)!r} are "
+            raise FileFormatError(path, line, f"the column names {','.join(names)!r} are "
                                   f"not a {cls.__name__} layout; expected one of\n  {expected}")
+
+    @classmethod
+    def from_csv(cls, path):
+        """Read a record written by :meth:`to_csv` (the column names must be one of the
+        type's layouts; the ``# gfins_fmi`` line, if present, must name this type)."""
+        path = pathlib.Path(path)
+        names, source, header_line = cls.csv_head(path)
         what = f"{cls.__name__} CSV"
         reader = TableReader(path, header=True, what=what, format="csv",
                              header_hint="a CSV of a record has one header line")
         table = np.concatenate([block for _, block in reader])
-
-        def line_of(row: int) -> int:
-            with open(path, encoding="utf-8", errors="replace") as f:
-                return next(itertools.islice(data_lines(f, "#", header_line), row, None)) + 1
-
-        with record_errors_at_lines(path, line_of):
+        with record_errors_at_lines(path, csv_line_of(path, header_line)):
             return cls._from_csv_table(names, table, source)
+
+    @classmethod
+    def rows_of(cls, first_row: int, t_before: float | None, *args, **kw):
+        """A record of the rows from ``first_row`` on of a longer record read in chunks,
+        validated as the whole record is, with the whole's messages: its errors name the
+        whole's rows (``t_s[first_row + k]``, ``RecordError.index``), and its first time
+        must follow ``t_before``, the last time of the rows before it (None: none)."""
+        t = np.asarray(kw["t_s"] if "t_s" in kw else args[0])
+        if t_before is not None and t.size and t.dtype.kind in "iuf" and np.isfinite(t).all() \
+                and not t[0] > t_before:
+            k = int(first_row)
+            how = "repeats" if t[0] == t_before else "goes back from"
+            raise RecordError(f"t_s must be strictly increasing: t_s[{k}] = {float(t[0])!r} s {how} "
+                              f"t_s[{k - 1}] = {float(t_before)!r} s; sort the samples by time and drop "
+                              "duplicates (np.unique(t_s, return_index=True) gives both)", "t_s", k)
+        try:
+            return cls(*args, **kw)
+        except RecordError as exc:
+            if not first_row or exc.index is None:
+                raise
+            text = _ROW_INDEX.sub(lambda m: f"{m[1]}[{int(m[2]) + first_row}", str(exc))
+            raise RecordError(text, exc.field, exc.index + int(first_row)) from None
+
+
+#: a row index in a record's message (``t_s[12]``, ``gyro[12, 1]``)
+_ROW_INDEX = re.compile(r"\b([a-z_]+)\[(\d+)")
+
+
+def csv_line_of(path, header_line: int):
+    """Row index of a record's CSV -> its 1-based line in the file (for messages; the
+    file is read only when called)."""
+    def line_of(row: int) -> int:
+        with open(path, encoding="utf-8", errors="replace") as f:
+            return next(itertools.islice(data_lines(f, "#", header_line), row, None)) + 1
+    return line_of
 
 
 _AXES = ("x", "y", "z")

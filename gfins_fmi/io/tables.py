@@ -245,8 +245,10 @@ class _ParquetSource:
     def __init__(self, path: pathlib.Path, chunk_rows: int):
         pa, pq = pyarrow_module()
         try:
-            # no pre-buffering: it reads the whole file ahead (memory = file size)
-            self._pf = pq.ParquetFile(path, pre_buffer=False)
+            # no pre-buffering: it reads the whole file ahead (memory = file size); column
+            # chunks read through a 1 MiB buffer, not whole: a row group of 10^6 rows of 7
+            # columns held 56 MB (a 10 h record read: 174 -> 106 MiB peak, the same CPU)
+            self._pf = pq.ParquetFile(path, pre_buffer=False, buffer_size=1 << 20)
         except (pa.ArrowInvalid, OSError) as exc:
             raise FileFormatError(path, None, f"not a Parquet file ({exc})") from None
         schema = self._pf.schema_arrow

@@ -2,7 +2,7 @@
 process of its own by tests/cli/test_interrupts.py (signals go to this process, not to
 pytest's):
 
-    python tests/support/interrupts.py FOLDER IMU GNSS INITIAL POINTS PAIRS SEED
+    python tests/support/interrupts.py FOLDER IMU GNSS INITIAL POINTS PAIRS SEED [MODE]
 
 In FOLDER, an "old" set of outputs (integrate --grade tactical --smooth) is made, and the
 "new" set (--grade consumer --smooth) once to know its hashes. Then POINTS times the new
@@ -19,6 +19,12 @@ file) and nothing else (no temporary, no partial file); the old set is put back 
 new one won. Then PAIRS times two ``gfins integrate`` processes (old and new options)
 are started together, staggered at random, on the same outputs: both must succeed and
 the folder must hold one whole set.
+
+MODE "whole" (default) runs the whole-record path, whose phases follow one another;
+"chunks" the path every run takes by default, in chunks of 1200 samples (the record is
+several chunks): its reading, filtering, writing and smoothing interleave chunk by chunk,
+so the points are aimed at the four quarters of the run's events instead of at phases
+(the phase hit is still reported), and the smoother's working folder must be gone too.
 
 Prints one JSON object: the outcomes (phase hit, exit status, which set), and the
 failures (an empty list when every check held).
@@ -51,6 +57,7 @@ def _hashes(folder: pathlib.Path) -> dict:
 def main(argv: list[str]) -> int:
     folder, imu, gnss, initial = pathlib.Path(argv[0]), argv[1], argv[2], argv[3]
     points, pairs, seed = int(argv[4]), int(argv[5]), int(argv[6])
+    mode = argv[7] if len(argv) > 7 else "whole"
     rng = random.Random(seed)
 
     import gfins_fmi.cli.integrate as integrate
@@ -80,9 +87,19 @@ def main(argv: list[str]) -> int:
             return inner(*a, **k)
         setattr(owner, attr, wrapper)
 
-    wrap(integrate, "read_imu", "read")
+    if mode == "whole":
+        # the whole-record run's phases (read, filter, write, smoother, write, commit) follow
+        # one another
+        integrate._streamed = lambda args: False
+        wrap(integrate, "read_imu", "read")
+        wrap(IntegratedSolution, "smooth", "smoother")
+    else:
+        # in chunks they interleave: several chunks (a multiple of every --subsamples)
+        import gfins_fmi.cli.integrate_stream as stream
+        from gfins_fmi.estimation.smoother_stream import StreamingSmoother
+        integrate.STREAM_CHUNK = stream.STREAM_CHUNK = 1200
+        wrap(StreamingSmoother, "smooth", "smoother")
     wrap(IntegratedNavigator, "run", "filter")
-    wrap(IntegratedSolution, "smooth", "smoother")
     wrap(OutputSet, "write_table", "write")
     wrap(OutputSet, "commit", "commit")
 
@@ -120,9 +137,16 @@ def main(argv: list[str]) -> int:
     at = {}
     for name, n in marks:
         at.setdefault(name, []).append(n)
-    # read -> filter -> write (solution, log) -> smoother -> write (smoothed) -> commit -> end
-    windows = {"read": (at["read"][0], at["filter"][0]), "filter": (at["filter"][0], at["write"][0]),
-               "smoother": (at["smoother"][0], at["write"][-1]), "write": (at["write"][-1], at["end"][0])}
+    if mode == "whole":
+        # read -> filter -> write (solution, log) -> smoother -> write (smoothed) -> commit -> end
+        windows = {"read": (at["read"][0], at["filter"][0]), "filter": (at["filter"][0], at["write"][0]),
+                   "smoother": (at["smoother"][0], at["write"][-1]),
+                   "write": (at["write"][-1], at["end"][0])}
+    else:
+        if len(at["filter"]) < 3:
+            failures.append(f"the run in chunks filtered {len(at['filter'])} chunks: not several")
+        q = [at["end"][0] * i // 4 for i in range(5)]
+        windows = {f"quarter {i + 1}": (q[i], q[i + 1]) for i in range(4)}
     outcomes = []
     for k in range(points):
         target = list(windows)[k % len(windows)]

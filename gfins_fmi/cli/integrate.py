@@ -39,7 +39,7 @@ from gfins_fmi.cli.kfgins_config import initial_state as kfgins_initial_state
 from gfins_fmi.cli.kfgins_config import (kfgins_outputs, kfgins_tables, open_kfgins_writers, read_kfgins_config,
                                          write_kfgins_outputs)
 from gfins_fmi.cli.integrate_stream import STREAM_CHUNK, Scores, grouped, solution_table, time_slice
-from gfins_fmi.cli.integrate_smooth import open_smoother, write_smoothed
+from gfins_fmi.cli.integrate_smooth import open_smoother, smoothed_path, smoothed_table, write_smoothed
 from gfins_fmi.cli.integrate_options import INITIAL_STD_DEFAULTS, check_integrate
 from gfins_fmi.cli.parser import build_parser
 from gfins_fmi.cli.noise import imu_noise
@@ -200,7 +200,7 @@ def run(args) -> int:
         args.output = kfgins_outputs(kf.output)["nav"]
         args.lever_arm = kf.lever_arm_m
     inn_path = args.output.with_suffix(".innovations.csv")
-    sm_path = args.output.with_suffix(".smoothed.csv")
+    sm_path = smoothed_path(args.output)
     with outputs(args.imu, args.gnss, args.baro, args.odometer, args.truth, args.kfgins_config) as outs:
         # every file of the run claimed before it: inputs, folders, links refused now
         if kf is None:
@@ -398,8 +398,10 @@ def _run(args, outs, inn_path, sm_path, figures) -> int:
         try:
             sm = sol.smooth(progress=args.progress)
             with _Stage(args.progress, "writing the smoothed solution"):
-                _write(outs, sm_path, sm, " (smoothed)", all_states=args.all_states)
-        except (ValueError, FilterError, OSError) as exc:
+                names, cols, kw = smoothed_table(sm, args.kfgins is not None, args.all_states)
+                outs.write_table(sm_path, names, cols, **kw)
+                print(f"{len(sm)} samples (smoothed) -> {sm_path}")
+        except (ValueError, FilterError, OSError, GfinsError) as exc:   # GfinsError: refused in C
             _failed_after_solution(outs, "the smoother", exc)
     try:
         _summary(args, outs, figures, sol, sm, gnss, truth, windows, cfg)
@@ -532,7 +534,8 @@ def _stream_run(args, outs, nav, smoother, chunks, gnss, baro, odo, scores, inn_
     print(f"updates: {counts} -> {inn_path}")
     if smoother is not None:
         try:
-            n = write_smoothed(outs, smoother, sm_path, scores[1], args.all_states, STREAM_CHUNK, args.progress)
+            n = write_smoothed(outs, smoother, sm_path, scores[1], args.all_states, STREAM_CHUNK, args.progress,
+                               kfgins=kf is not None)
             print(f"{n} samples (smoothed) -> {sm_path} ({smoother.n_epochs} epochs smoothed in blocks of "
                   f"{smoother.block_epochs}; {smoother.bytes_on_disk / 1e6:.0f} MB of temporary files, removed)")
         except (ValueError, FilterError, OSError, GfinsError) as exc:   # GfinsError: a block refused in C

@@ -123,7 +123,8 @@ def integrate_parser(sub, imu_errors_argument, command) -> argparse.ArgumentPars
     imu_errors_argument(p)
     p.add_argument("--filter", choices=("ekf", "ukf"), default="ekf")
     p.add_argument("--smooth", action="store_true", help="also run the RTS smoother (its solution is "
-                   "written to OUT.smoothed.csv); in the runs in chunks (every run but --plot's) its epochs "
+                   "written beside OUT in its format: OUT.smoothed.csv, .parquet, .npz; with --kfgins-config "
+                   "KF_GINS_Navresult.smoothed.nav); in the runs in chunks (every run but --plot's) its epochs "
                    "and the rows go to a temporary folder beside OUT, removed "
                    "at the end: per hour of record at 200 Hz and the default --propagation-interval 0.1 s, "
                    "0.31 GB with 15 states, 0.44 GB with 21 (--kfgins-config), +10%% with 1 Hz GNSS fixes "

@@ -15,13 +15,31 @@ import pathlib
 import sys
 
 from gfins_fmi.cli.integrate_stream import Scores, solution_table
+from gfins_fmi.cli.kfgins_config import KFGINS_COLUMNS, KFGINS_TEXT, kfgins_nav_columns
 from gfins_fmi.estimation.smoother_stream import ROW_BYTES, StreamingSmoother, epoch_bytes
 from gfins_fmi.io.temporaries import temporary_folder_beside
 
-__all__ = ["open_smoother", "write_smoothed", "disk_note", "SMOOTH_BLOCK_EPOCHS"]
+__all__ = ["open_smoother", "write_smoothed", "smoothed_path", "smoothed_table", "disk_note", "SMOOTH_BLOCK_EPOCHS"]
 
 #: epochs per block of the backward pass (~16 MB of covariances and transitions with 21 states)
 SMOOTH_BLOCK_EPOCHS = 2048
+
+
+def smoothed_path(output: pathlib.Path) -> pathlib.Path:
+    """Where the smoothed solution goes: beside the forward one, in its format
+    (``OUT.smoothed.parquet`` for ``OUT.parquet``; with --kfgins-config
+    ``KF_GINS_Navresult.smoothed.nav``, KF-GINS's navigation result)."""
+    return output.with_suffix(".smoothed" + output.suffix)
+
+
+def smoothed_table(sm, kfgins: bool, all_states: bool) -> tuple[list, list, dict]:
+    """The smoothed solution's column names, columns and writer keywords: our table, or
+    with --kfgins-config KF-GINS's ``.nav`` columns and number format (its plotting
+    scripts read it as they read the forward one)."""
+    if kfgins:
+        return [f"c{i}" for i in range(KFGINS_COLUMNS["nav"])], kfgins_nav_columns(sm), KFGINS_TEXT
+    names, cols = solution_table(sm, all_states)
+    return names, cols, {}
 
 
 def disk_note(n_states: int, propagation_interval_s: float, rate_hz: float = 200.0) -> str:
@@ -52,18 +70,19 @@ def open_smoother(outs, nav, sm_path: pathlib.Path, progress: bool = False):
 
 
 def write_smoothed(outs, smoother: StreamingSmoother, sm_path: pathlib.Path, scores: Scores,
-                   all_states: bool, rows: int, progress: bool) -> int:
-    """The backward pass, then the smoothed solution written to ``sm_path`` (our table)
-    and scored a chunk of ``rows`` at a time. Returns the rows written. On a failure the
-    smoothed table is dropped from the set (the forward solution stays)."""
+                   all_states: bool, rows: int, progress: bool, kfgins: bool = False) -> int:
+    """The backward pass, then the smoothed solution written to ``sm_path``
+    (:func:`smoothed_table`: our table, or KF-GINS's ``.nav`` with ``kfgins``) and scored
+    a chunk of ``rows`` at a time. Returns the rows written. On a failure the smoothed
+    table is dropped from the set (the forward solution stays)."""
     writer = None
     n = 0
     try:
         smoother.smooth(progress=progress)
         for sm in smoother.solutions(rows, progress=progress):
-            names, cols = solution_table(sm, all_states)
+            names, cols, kw = smoothed_table(sm, kfgins, all_states)
             if writer is None:
-                writer = outs.table(sm_path, names)
+                writer = outs.table(sm_path, names, **kw)
             writer.write(cols)
             scores.add(sm)
             n += len(sm)

@@ -244,12 +244,18 @@ KFGINS_TEXT = {"decimals": KFGINS_DECIMALS, "separator": " ", "header": False}
 KFGINS_COLUMNS = {"nav": 11, "imu_err": 13, "std": 22}
 
 
-def kfgins_tables(sol) -> dict:
-    """The rows of ``sol`` as KF-GINS's three files' columns, by kind."""
+def kfgins_nav_columns(sol) -> list:
+    """The rows of ``sol`` as KF_GINS_Navresult.nav's columns: week 0, time, lat, lon deg,
+    h m, velocity N, E, D m/s, roll, pitch, yaw deg."""
     e = sol.euler_rad
     v = ned_to_enu(sol.v_n_m_s)                       # (N, E, D) from (E, N, U): the same swap
-    nav = [np.zeros(len(sol)), sol.t_s, np.degrees(sol.lat_rad), np.degrees(sol.lon_rad), sol.h_m,
-           v[:, 0], v[:, 1], v[:, 2], np.degrees(e[:, 2]), np.degrees(e[:, 1]), _yaw_deg(e[:, 0])]
+    return [np.zeros(len(sol)), sol.t_s, np.degrees(sol.lat_rad), np.degrees(sol.lon_rad), sol.h_m,
+            v[:, 0], v[:, 1], v[:, 2], np.degrees(e[:, 2]), np.degrees(e[:, 1]), _yaw_deg(e[:, 0])]
+
+
+def kfgins_tables(sol) -> dict:
+    """The rows of ``sol`` as KF-GINS's three files' columns, by kind."""
+    nav = kfgins_nav_columns(sol)
     s = sol.sensors
     bg, ba = frd_to_rfu(s[:, 0:3]) / DEG_H, frd_to_rfu(s[:, 3:6]) / MGAL   # RFU -> FRD: the same swap, z negated
     sg, sa = s[:, [7, 6, 8]] * 1e6, s[:, [10, 9, 11]] * 1e6

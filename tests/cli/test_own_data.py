@@ -638,7 +638,7 @@ def test_smoother_in_chunks_gives_the_whole_records_result(kf_drive, tmp_path, c
         text = capsys.readouterr().out
         got[name] = ({p.name: p.read_bytes() for p in res.iterdir() if p.suffix != ".json"},
                      [x for x in text.splitlines() if x.startswith(("filter:", "smoother:"))])
-    assert "KF_GINS_Navresult.smoothed.csv" in got["whole"][0]
+    assert "KF_GINS_Navresult.smoothed.nav" in got["whole"][0]      # KF-GINS's .nav format
     for k in got["whole"][0]:
         a, b = got["chunks"][0].get(k, b"").splitlines(), got["whole"][0][k].splitlines()
         # the fix at the start time (before the first increment) logged as stale by both:
@@ -689,3 +689,24 @@ def test_smoother_in_chunks_keeps_the_solution_and_leaves_nothing_on_failure(kf_
     left = sorted(p.name for p in tmp_path.iterdir() if p.name.startswith("bad"))
     assert left == ["bad.config.partial.json", "bad.innovations.partial.csv", "bad.partial.csv"], left
     assert not [p for p in tmp_path.rglob("*") if ".tmp" in p.name], "temporary files left"
+
+
+def test_smoothed_solution_in_the_outputs_format(kf_drive, tmp_path, capsys):
+    """Before: the smoothed table was OUT.smoothed.csv whatever OUT's format (a Parquet run
+    of 10 h wrote 3.8 GB of CSV beside it). Now it is OUT.smoothed.parquet for OUT.parquet,
+    with the same numbers as the CSV run's smoothed table (the CSV's shortest round-trip
+    digits read back: equal to the bit)."""
+    import pyarrow.parquet as pq
+    _, d = kf_drive
+    short = _short_drive(kf_drive, tmp_path, seconds=20.0)
+    tables = {}
+    for suffix in (".csv", ".parquet"):
+        out = tmp_path / f"sol{suffix}"
+        assert main(_args(short, out, *_initial(d), "--smooth")) == 0
+        assert f"(smoothed) -> {tmp_path / ('sol.smoothed' + suffix)}" in capsys.readouterr().out
+        tables[suffix] = tmp_path / f"sol.smoothed{suffix}"
+    pq_table = pq.read_table(tables[".parquet"])
+    csv = np.genfromtxt(tables[".csv"], delimiter=",", names=True)
+    assert pq_table.num_rows == len(csv) > 3000
+    for name in ("t_s", "lat_deg", "lon_deg", "h_m", "heading_deg"):
+        np.testing.assert_array_equal(pq_table.column(name).to_numpy(), csv[name], err_msg=name)

@@ -25,7 +25,7 @@ import tempfile
 
 HERE = pathlib.Path(__file__).resolve().parent
 ROOT = HERE.parent
-C_TARGETS = ["fuzz_sins", "fuzz_accel", "fuzz_filters", "fuzz_rotation", "fuzz_ins_fb",
+C_TARGETS = ["fuzz_sins", "fuzz_accel", "fuzz_filters", "fuzz_rotation", "fuzz_ins_fb", "fuzz_text",
              "fuzz_fmu_accel9", "fuzz_fmu_sins", "fuzz_fmu_gfnav_cube6", "fuzz_fmu_gfnav_qin9",
              "fuzz_fmu_gfnav_12", "fuzz_fmu_vehicle", "fuzz_fmu_ins_gnss", "fuzz_fmu_transfer_align",
              "fuzz_fmu_state_sins", "fuzz_fmu_state_gfnav_cube6", "fuzz_fmu_state_gfnav_qin9",

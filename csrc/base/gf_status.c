@@ -12,6 +12,7 @@ const char *gf_status_string(gf_status status)
     case GF_ERR_OUT_OF_RANGE: return "a sample is beyond the stated physical limit";
     case GF_ERR_BAD_TIME: return "sample times are not strictly increasing";
     case GF_ERR_DIVERGED: return "the navigation state left its domain (pole, absurd height)";
+    case GF_ERR_BAD_TEXT: return "a line of text is not a row of numbers of the expected width";
     }
     return "unknown status code";
 }

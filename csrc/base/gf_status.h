@@ -21,7 +21,8 @@ typedef enum gf_status {
     GF_ERR_BAD_SIZE = 5,         /* an array size is zero or above a fixed maximum */
     GF_ERR_OUT_OF_RANGE = 6,     /* a sample is beyond a stated physical limit */
     GF_ERR_BAD_TIME = 7,         /* sample times are not strictly increasing */
-    GF_ERR_DIVERGED = 8          /* the state left its domain (pole reached, absurd height) */
+    GF_ERR_DIVERGED = 8,         /* the state left its domain (pole reached, absurd height) */
+    GF_ERR_BAD_TEXT = 9          /* a line of text is not a row of numbers of the expected width */
 } gf_status;
 
 /* A static, human-readable description of a status code (never NULL). */

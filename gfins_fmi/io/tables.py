@@ -17,19 +17,21 @@ Formats, by the file name's suffix (:func:`table_format`):
     Apache Parquet: named numeric columns, one row group per chunk. Needs pyarrow
     (the optional extra ``gfins_fmi[parquet]``).
 anything else
-    CSV text: comma-separated numbers, one row per line; ``#`` comment lines and blank
-    lines are skipped, spaces and tabs ignored; with ``header=True`` the first other
-    line holds the column names (or, when that line holds numbers, the comment line
-    before it, as numpy's ``savetxt`` writes a header). Numbers in the usual forms,
+    CSV text: comma-separated numbers, one row per line (``whitespace=True``: separated
+    by runs of spaces or tabs, as KF-GINS's files); ``#`` comment lines and blank lines
+    are skipped, spaces and tabs around a field ignored, CRLF line ends taken; with
+    ``header=True`` the first other line holds the column names (or, when that line
+    holds numbers, the comment line before it, as numpy's ``savetxt`` writes a header). Numbers in the usual forms,
     ``nan`` and ``inf`` included; written as the shortest decimal that reads back as
     the same float64 (``0.1``, ``1e-7``, ``0.00002201446582700049``), so every value
     round-trips bit for bit.
 
-CSV parsing and formatting are polars' (Rust; shortest round-trip digits): 40-55 ns
-a value to read and 55-65 ns to write on one core of the development machine, where
-numpy's ``loadtxt`` takes 300 ns and ``savetxt`` 900 ns (docs/io.md, "Why polars";
-docs/benchmarks.md, "Record I/O"). When polars refuses a block of lines, the block is scanned in Python to
-name the line at fault (:func:`gfins_fmi.io._text.diagnose`).
+Text is parsed in C (``gf_text_parse``: 16-30 ns a value, correctly rounded, no polars
+import), straight into the chunks this reader yields; text is written by polars (Rust;
+shortest round-trip digits: 55-65 ns a value) or, with fixed decimals, in C
+(``gf_text_fixed``) (docs/io.md, "Why these parsers"; docs/benchmarks.md). When the
+parser refuses a line, that line alone is diagnosed in Python to name its fault
+(:func:`gfins_fmi.io._text.diagnose`).
 """
 from __future__ import annotations
 
@@ -40,6 +42,7 @@ from typing import Iterator
 
 import numpy as np
 
+from gfins_fmi._lib import check_status, ffi, lib, ptr
 from gfins_fmi.io._text import is_number, diagnose
 from gfins_fmi.io.errors import FileFormatError, not_a_file
 
@@ -52,10 +55,11 @@ FORMATS = ("csv", "parquet", "npz")
 #: of parsing; large enough that per-chunk costs vanish, small enough for a smooth
 #: progress bar and a small memory footprint
 DEFAULT_CHUNK_ROWS = 1 << 18
-#: bytes of text parsed at a time (whole lines): polars' cost per call is about that of
-#: 1 MB of text, so 16 MB blocks parse a third faster than 4 MB (docs/benchmarks.md,
-#: "Record I/O"); the text, its columns and the chunk are 40 MB or so
-_TEXT_BLOCK_BYTES = 16 << 20
+#: bytes of text read at a time: the parser costs nothing per call, so a block only has
+#: to be long against a line (a longer line doubles the buffer)
+_TEXT_BLOCK_BYTES = 4 << 20
+#: rows allocated for a text chunk at first (doubled up to chunk_rows as rows come)
+_FIRST_CHUNK_ROWS = 1 << 16
 
 
 def table_format(path) -> str:
@@ -87,16 +91,18 @@ def _chunk_rows(value) -> int:
 # --- reading ---------------------------------------------------------------------------------
 
 class _TextSource:
-    """CSV text: read in blocks of whole lines, each parsed by polars. The head of the
-    file (comments, the header line, the first data line) is read here to know the
-    columns; the line number of each block's start is counted, so a refused block is
-    diagnosed alone, naming the line."""
+    """CSV or whitespace-separated text: read in blocks, whole lines parsed by the C core
+    (``gf_text_parse``) straight into the chunks the reader yields. The head of the file
+    (comments, the header line, the first data line) is read here to know the columns;
+    the parser counts the lines it consumes, so a refused line is named and diagnosed
+    alone."""
 
     format = "csv"
 
     def __init__(self, path: pathlib.Path, header: bool, what: str, header_hint: str, whitespace: bool = False,
-                 block_bytes: int = _TEXT_BLOCK_BYTES):
+                 block_bytes: int = _TEXT_BLOCK_BYTES, chunk_rows: int = DEFAULT_CHUNK_ROWS):
         self.path, self.what, self.whitespace, self.block_bytes = path, what, whitespace, block_bytes
+        self.chunk_rows = chunk_rows
         self.header_message = ("the first data line holds text ({text}) where numbers were "
                                f"expected: {header_hint}")
         self.n_rows = None
@@ -136,100 +142,85 @@ class _TextSource:
                                   f"names {len(names)} ({','.join(names)})")
         self.position = 0
 
-    def batches(self) -> Iterator[list[np.ndarray]]:
-        offset, rows, rest = self._offset, 0, b""
+    def batches(self) -> Iterator[np.ndarray]:
+        """The table in (m, k) float64 arrays of ``chunk_rows`` rows (the last shorter),
+        each filled by the parser in place."""
+        k, want = self.n_columns, self.chunk_rows
+        sep = lib.GF_TEXT_SEP_WHITESPACE if self.whitespace else lib.GF_TEXT_SEP_COMMA
+        buf = np.empty(max(self.block_bytes, 1), np.uint8)
+        lo = hi = 0                 # buf[lo:hi]: read from the file, not parsed yet
+        final = False               # the file's end is in buf
+        line, rows = self._skip, 0  # lines of the file before buf[lo]; rows before `out`
+        # a chunk's rows: allocated as they come (doubling) up to chunk_rows, so that a
+        # huge chunk_rows (the whole record at once) costs only the rows there are
+        out, filled = np.empty((min(want, _FIRST_CHUNK_ROWS), k)), 0
+        n_rows, n_used, n_lines = ffi.new("size_t *"), ffi.new("size_t *"), ffi.new("size_t *")
+        self.position = self._offset
         with open(self.path, "rb") as f:
-            f.seek(offset)
+            f.seek(self._offset)
             while True:
-                buf = f.read(self.block_bytes)
-                if buf:
-                    cut = buf.rfind(b"\n") + 1
-                    if cut == 0:          # a line longer than a block: read on
-                        rest += buf
-                        continue
-                    # the lines: one copy (none when the block ends a line); the partial
-                    # line after them starts the next block
-                    view = memoryview(buf)
-                    block = b"".join((rest, view[:cut])) if rest or cut < len(buf) else buf
-                    rest = bytes(view[cut:])
-                else:
-                    block, rest = rest, b""
-                if block:
-                    cols = self._parse(block, offset, rows)
-                    self.position = offset = f.tell() - len(rest)
-                    if len(cols[0]):
-                        rows += len(cols[0])
-                        yield cols
-                if not buf:
+                if filled == len(out):      # full below chunk_rows: room for more
+                    grown = np.empty((min(want, 2 * len(out)), k))
+                    grown[:filled] = out
+                    out = grown
+                room = len(out) - filled
+                status = lib.gf_text_parse(ptr(buf[lo:hi], hi - lo, "uint8_t"), hi - lo, int(final), k, sep,
+                                           ptr(out[filled:], room * k), room, n_rows, n_used, n_lines)
+                filled += n_rows[0]
+                lo += n_used[0]
+                line += n_lines[0]
+                self.position += n_used[0]
+                if status == lib.GF_ERR_BAD_TEXT:
+                    raise self._bad_line(buf[lo:hi].tobytes(), line, rows + filled)
+                check_status(status, "gf_text_parse")
+                if filled == want:
+                    yield out
+                    rows += want
+                    out, filled = np.empty((want, k)), 0    # a file that filled one fills more
+                    continue
+                if filled == len(out):      # stopped for room: grow and parse on
+                    continue
+                if final:
                     break
+                # every whole line parsed: the incomplete one to the front, then read on
+                # (a line longer than the buffer doubles it)
+                rest = hi - lo
+                if lo:
+                    buf[:rest] = buf[lo:hi]
+                lo, hi = 0, rest
+                if hi == len(buf):
+                    buf = np.concatenate([buf, np.empty(len(buf), np.uint8)])
+                n = f.readinto(memoryview(buf)[hi:])
+                final = not n
+                hi += n or 0
+        if filled:
+            # the last chunk: copied when most of its rows would be empty
+            yield out[:filled] if 2 * filled > len(out) else out[:filled].copy()
 
-    def _parse(self, block: bytes, offset: int, rows: int) -> list[np.ndarray]:
-        """The columns of a block of whole lines that starts at byte ``offset`` of the
-        file, its first data line row ``rows`` of the table."""
-        import polars as pl   # lazy: polars (~0.1 s) off the start-up path
+    def _bad_line(self, text: bytes, before: int, row: int) -> FileFormatError:
+        """The error for the line at the start of ``text``: line ``before + 1`` of the
+        file, row ``row`` of the table when it were one."""
+        end = text.find(b"\n")
+        body = text[:end if end >= 0 else None].decode("utf-8", errors="replace").rstrip("\r")
         k = self.n_columns
-        if self.whitespace:
-            text = _whitespace_to_commas(block)
-        else:
-            text = block.translate(None, b" \t") if (b" " in block or b"\t" in block) else block
-        # comment lines are looked for only in a block that holds a '#': polars parses
-        # 40 % slower when it must look for them
-        comment = "#" if b"#" in block else None
-        try:
-            df = pl.read_csv(text, has_header=False, schema=self._schema(), comment_prefix=comment,
-                             quote_char=None)
-        except pl.exceptions.PolarsError as exc:
-            err = self._diagnose(block, offset, rows)
-            if err.line is None and not any(_data(x) for x in block.split(b"\n")):
-                return [np.empty(0)] * k          # comments and blank lines only
-            raise (err if err.line is not None else FileFormatError(
-                self.path, None, f"the file could not be read as a {self.what} table ({exc})")) from None
-        if df.null_count().sum_horizontal().item():
-            # a blank line reads as a row of nulls (dropped); a missing or empty field
-            # leaves a null in a row with numbers (refused)
-            blank = df.select(pl.all_horizontal(pl.all().is_null())).to_series()
-            if k > 1 and (df.null_count().sum_horizontal().item() > k * int(blank.sum())):
-                raise self._diagnose(block, offset, rows)
-            df = df.filter(~blank)
-        return [s.to_numpy() for s in df.get_columns()]
-
-    def _schema(self):
-        import polars as pl   # lazy: polars (~0.1 s) off the start-up path
-        return {f"c{j}": pl.Float64 for j in range(self.n_columns)}
-
-    def _diagnose(self, block: bytes, offset: int, rows: int) -> FileFormatError:
-        """The line at fault in a refused block (the lines before it are counted only
-        now: a good file is never scanned in Python)."""
-        line = 0
-        with open(self.path, "rb") as f:
-            while f.tell() < offset:
-                line += f.read(min(_TEXT_BLOCK_BYTES, offset - f.tell())).count(b"\n")
-        lines = block.decode("utf-8", errors="replace").split("\n")
-        # comment lines of another width are comments; one of k fields is a row to polars
-        k = self.n_columns
-        lines = ["" if x.lstrip().startswith("#") and x.count(",") + 1 != k else x for x in lines]
-        return diagnose(self.path, lines, ",", None, 0, [k], self.what, self.header_message,
-                        first_row=rows, line_offset=line)
+        err = diagnose(self.path, [body], None if self.whitespace else ",", None, 0, [k], self.what,
+                       self.header_message, first_row=row, line_offset=before)
+        if err.line is not None:
+            return err
+        # numbers to Python that this reader does not take ("1_000", "0x10" is not one)
+        fields = body.split() if self.whitespace else [x.strip() for x in body.split(",")]
+        bad = next((x for x in fields if not _NUMBER.fullmatch(x)), body.strip())
+        return FileFormatError(self.path, before + 1, f"{bad!r} is not a number in the forms a table "
+                               "takes (digits with an optional '.' and exponent, nan, inf); every "
+                               f"{self.what} field must be numeric")
 
     def close(self) -> None:
         pass
 
 
-_RUNS = re.compile(rb"[ \t]+")
-_EDGES = re.compile(rb"(?m)^,|,(?=\r?$)")
-
-
-def _whitespace_to_commas(block: bytes) -> bytes:
-    """Fields separated by runs of spaces or tabs (KF-GINS's text files) as CSV: single
-    spaces by a byte replacement (fast), anything else by regular expressions."""
-    if b"\t" not in block and b"  " not in block and not block.startswith(b" ") and b"\n " not in block:
-        return block.replace(b" \n", b"\n").replace(b" ", b",")
-    return _EDGES.sub(b"", _RUNS.sub(b",", block))
-
-
-def _data(line: bytes) -> bool:
-    body = line.strip()
-    return bool(body) and not body.startswith(b"#")
+#: the numbers gf_text_parse reads (for the message when Python's float() reads more)
+_NUMBER = re.compile(r"[+-]?(([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]+)?|nan|inf|infinity)",
+                     re.IGNORECASE)
 
 
 def pyarrow_module():
@@ -434,7 +425,8 @@ class TableReader:
         self.format = checked_format(self.path, format)
         if self.format == "csv":
             hint = header_hint or "if it is a line of column names, read it with header=True"
-            self._src = _TextSource(self.path, header, what, hint, whitespace, block_bytes or _TEXT_BLOCK_BYTES)
+            self._src = _TextSource(self.path, header, what, hint, whitespace, block_bytes or _TEXT_BLOCK_BYTES,
+                                    self.chunk_rows)
         elif self.format == "parquet":
             self._src = _ParquetSource(self.path, self.chunk_rows)
         else:
@@ -455,6 +447,13 @@ class TableReader:
         return "B" if self.format == "csv" else "row"
 
     def __iter__(self) -> Iterator[tuple[int, np.ndarray]]:
+        if self.format == "csv":
+            # text: the parser fills chunks of chunk_rows rows in place
+            start = 0
+            for block in self._src.batches():
+                yield start, block
+                start += len(block)
+            return
         k, want = self.n_columns, self.chunk_rows
         pending: list[list[np.ndarray]] = []
         n_pending, start = 0, 0

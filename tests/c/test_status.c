@@ -1,5 +1,5 @@
 /* test_status.c — the status codes (gf_status): the values gf_status.h promises (GF_OK is
- * 0, the errors 1..8 in the documented order, which the Python layer and the FMUs rely
+ * 0, the errors 1..9 in the documented order, which the Python layer and the FMUs rely
  * on), a distinct non-empty message for each, and a message for a value that is no
  * status (a corrupted or future code) instead of NULL. */
 #include <string.h>
@@ -11,7 +11,8 @@ int main(void)
 {
     const gf_status codes[] = {GF_OK, GF_ERR_NULL_POINTER, GF_ERR_NONFINITE_INPUT,
                                GF_ERR_BAD_PARAMETER, GF_ERR_SINGULAR_GEOMETRY, GF_ERR_BAD_SIZE,
-                               GF_ERR_OUT_OF_RANGE, GF_ERR_BAD_TIME, GF_ERR_DIVERGED};
+                               GF_ERR_OUT_OF_RANGE, GF_ERR_BAD_TIME, GF_ERR_DIVERGED,
+                               GF_ERR_BAD_TEXT};
     enum { N = sizeof codes / sizeof codes[0] };
     for (int i = 0; i < N; ++i)
         CHECK((int)codes[i] == i, "status %d has value %d (gf_status.h documents %d)", i, (int)codes[i], i);

@@ -26,7 +26,7 @@ RUNS = 300   # mutations per target after the seed corpus: seconds in all
 # replays the state it found, issue 21); GFINS_FUZZ_ALL=1 adds the other FMU targets
 # (their build costs the test run ~25 s more on two cores)
 ALL = bool(os.environ.get("GFINS_FUZZ_ALL"))
-DEFAULT_C = ["fuzz_sins", "fuzz_accel", "fuzz_filters", "fuzz_rotation", "fuzz_ins_fb", "fuzz_fmu_ins_gnss",
+DEFAULT_C = ["fuzz_sins", "fuzz_accel", "fuzz_filters", "fuzz_rotation", "fuzz_ins_fb", "fuzz_text", "fuzz_fmu_ins_gnss",
              "fuzz_fmu_gfnav_cube6", "fuzz_fmu_state_ins_gnss"]
 
 

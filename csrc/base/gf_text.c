@@ -13,6 +13,43 @@
 #define VALUE_BYTES 40
 
 static const double kPow10[GF_TEXT_MAX_DECIMALS + 1] = {1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9};
+static const uint32_t kPow10u[GF_TEXT_MAX_DECIMALS + 1] = {1u,      10u,      100u,      1000u,      10000u,
+                                                          100000u, 1000000u, 10000000u, 100000000u, 1000000000u};
+
+/* "00" .. "99": two digits a division */
+static const char kDigitPairs[201] = "0001020304050607080910111213141516171819202122232425262728293031323334353637383940414243444546474849"
+                                     "5051525354555657585960616263646566676869707172737475767778798081828384858687888990919293949596979899";
+
+/* v < 10^n written as exactly n digits (leading zeros) */
+static void put_fixed_digits(char *p, uint32_t v, int n) {
+    char *q = p + n;
+    for (; n >= 2; n -= 2) {
+        q -= 2;
+        memcpy(q, kDigitPairs + 2u * (v % 100u), 2);
+        v /= 100u;
+    }
+    if (n) *--q = (char)('0' + v);
+}
+
+/* v in decimal, no leading zeros (at least one digit), written backwards from its last
+ * digit; returns the bytes written */
+static size_t put_digits(char *p, uint64_t v) {
+    size_t n = 1;
+    for (uint64_t t = v; t >= 10u; t /= 10u) ++n;
+    char *q = p + n;
+    while (v >= 100u) {
+        q -= 2;
+        memcpy(q, kDigitPairs + 2u * (v % 100u), 2);
+        v /= 100u;
+    }
+    if (v >= 10u) {
+        q -= 2;
+        memcpy(q, kDigitPairs + 2u * v, 2);
+    } else {
+        *--q = (char)('0' + v);
+    }
+    return n;
+}
 
 /* one value at p (at most VALUE_BYTES bytes); returns the bytes written */
 static size_t put_value(char *p, double x, int decimals) {
@@ -33,37 +70,34 @@ static size_t put_value(char *p, double x, int decimals) {
         int k = snprintf(p, VALUE_BYTES, "%.*f", decimals, x);  /* |x| < GF_TEXT_MAX_ABS: fits */
         return (size_t)k;
     }
-    /* the integer part and the fraction exactly (ax - floor(ax) is exact in binary), then
-     * the fraction scaled and rounded to nearest, an exact tie to even, as printf: off from
-     * printf's exact decimal rounding only when the fraction lies within ~1e-7 of a unit of
-     * the last place of a tie without being one (the scaling's one rounding), by one unit */
-    double ip = floor(ax);
+    /* printf's digits exactly: the exact binary value rounded to `decimals` places, an
+     * exact tie to even. The integer part and the fraction f are exact (ax < 2^53); the
+     * fraction scaled, fs = f 10^d, is rounded once, and err = f 10^d - fs (fma: exact,
+     * the error of a product is a double) holds what the rounding took, so the sign of
+     * (fs - floor(fs) - 1/2) + err (a rounded sum of two doubles is zero, positive or
+     * negative as the exact sum is) says whether the exact remainder is below, at or
+     * above the half. */
+    const int64_t ip = (int64_t)ax;  /* truncation = floor: 0 <= ax < 2^53 */
     uint64_t whole = (uint64_t)ip;
-    double fs = (ax - ip) * kPow10[decimals];
-    double fl = floor(fs);
-    double rem = fs - fl;
-    uint64_t frac = (uint64_t)fl;
-    if (rem > 0.5 || (rem == 0.5 && (((decimals > 0) ? frac : whole) & 1u))) frac += 1u;
-    if (frac >= (uint64_t)kPow10[decimals]) {
-        frac -= (uint64_t)kPow10[decimals];
+    const double f = ax - (double)ip;
+    const double fs = f * kPow10[decimals];
+    const double err = fma(f, kPow10[decimals], -fs);
+    uint32_t frac = (uint32_t)(int64_t)fs;    /* fs < 10^9 < 2^32 */
+    const double half = ((fs - (double)frac) - 0.5) + err;
+    const uint32_t odd = (uint32_t)((decimals > 0) ? frac : (uint32_t)whole) & 1u;
+    /* without branches: the rounding direction is data, not a pattern to predict */
+    frac += (uint32_t)(half > 0.0) | ((uint32_t)(half == 0.0) & odd);
+    if (frac >= kPow10u[decimals]) {
+        frac -= kPow10u[decimals];
         whole += 1u;
     }
-    char digits[32];
-    int nd = 0;
-    for (int i = 0; i < decimals; ++i) {
-        digits[nd++] = (char)('0' + (int)(frac % 10u));
-        frac /= 10u;
-    }
-    do {
-        digits[nd++] = (char)('0' + (int)(whole % 10u));
-        whole /= 10u;
-    } while (whole != 0u);
     size_t n = 0;
     if (signbit(x)) p[n++] = '-';
-    for (int i = nd - 1; i >= decimals; --i) p[n++] = digits[i];
+    n += put_digits(p + n, whole);
     if (decimals > 0) {
         p[n++] = '.';
-        for (int i = decimals - 1; i >= 0; --i) p[n++] = digits[i];
+        put_fixed_digits(p + n, frac, decimals);
+        n += (size_t)decimals;
     }
     return n;
 }

@@ -7,11 +7,11 @@
  * each value with `decimals` digits after the point (0..9), the values separated by `sep`
  * and each line ended by '\n'; NaN as "NaN", +-infinity as "inf"/"-inf". It is the
  * fixed-decimal formats of the navigation programs (KF-GINS's "%-15.9lf", without the
- * padding) at ~20 ns a value, where printf-style formatting takes ~150. The digits are
- * printf's ("%.*f", which rounds the exact binary value, an exact tie to even) except
- * within ~1e-7 of a unit of the last place of a tie without being one, and then by one
- * unit in the last place; |x| >= 2^53 is written by snprintf itself. A negative value
- * that rounds to zero is written "-0.000..." as printf does.
+ * padding) at ~10 ns a value, where printf-style formatting takes ~150. The digits are
+ * printf's ("%.*f", which rounds the exact binary value, an exact tie to even), exactly
+ * (the scaled fraction's rounding error kept by an fma); |x| >= 2^53 is written by
+ * snprintf itself. A negative value that rounds to zero is written "-0.000..." as printf
+ * does.
  * Stateless; the caller owns the buffer (no heap, nothing static). */
 #ifndef GF_TEXT_H
 #define GF_TEXT_H

@@ -19,26 +19,26 @@ def _fixed(table, decimals, sep=b" "):
     return int(status), ffi.buffer(buf, n[0])[:].decode()
 
 
-def _last_digit_units(a: str, b: str, decimals: int) -> int:
-    return abs(round((float(a) - float(b)) * 10 ** decimals))
-
-
 @pytest.mark.parametrize("decimals", [0, 3, 9])
 def test_equals_printf_to_the_last_digit(decimals):
-    """Random magnitudes from 1e-12 to 1e20, both signs, and the edge values: the same
-    text as f"{x:.{d}f}" (exact ties to even, as printf) except, at most, one unit in the
-    last place where the fraction's scaling rounds across a tie: measured 0 of 60000 for
-    each d; allowed 1 in 1000."""
+    """Random magnitudes from 1e-12 to 1e20, both signs, the edge values, and values one
+    ulp either side of a decimal tie (k + 1/2) 10^-d (where a once-rounded scaling of the
+    fraction goes wrong: the formatter before this test took 373 of 2e6 such values at
+    d = 3 and 9 of 2e6 at d = 9 across the tie): the same text as f"{x:.{d}f}" (exact
+    decimal rounding of the binary value, exact ties to even, as printf), every digit."""
     rng = np.random.default_rng(20)
     x = rng.choice([-1.0, 1.0], 60000) * 10.0 ** rng.uniform(-12, 20, 60000)
     x[:12] = [0.0, -0.0, 0.5, -0.5, 1.5, 2.5, 1e-10, -1e-10, 9.999999999, 604799.995, 30.4447873701, 1e20]
+    k = rng.integers(0, 10 ** 6, 30000)
+    ties = (k + 0.5) / 10.0 ** decimals + rng.integers(0, 1000, 30000)
+    near = np.nextafter(ties, np.where(rng.random(30000) < 0.5, np.inf, -np.inf))
+    x = np.r_[x, ties, near * rng.choice([-1.0, 1.0], 30000)]
     status, text = _fixed(x.reshape(-1, 3), decimals)
     assert status == lib.GF_OK
     ours = text.replace("\n", " ").split()
     theirs = [f"{v:.{decimals}f}" for v in x]
-    diff = [(a, b) for a, b in zip(ours, theirs) if a != b]
-    assert all(_last_digit_units(a, b, decimals) <= 1 for a, b in diff), diff[:5]
-    assert len(diff) <= len(x) // 1000, diff[:5]
+    diff = [(v, a, b) for v, a, b in zip(x, ours, theirs) if a != b]
+    assert not diff, diff[:5]
 
 
 def test_special_values_and_refusals():

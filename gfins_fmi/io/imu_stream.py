@@ -23,6 +23,7 @@ from gfins_fmi.io._text import data_lines
 from gfins_fmi.io.conventions import GPS_EPOCH_FROM_1970_S, frd_to_rfu
 from gfins_fmi.io.errors import FileFormatError, RecordError, not_a_file
 from gfins_fmi.io.kfgins import read_kfgins_imu
+from gfins_fmi.io.raw_floats import read_floats
 from gfins_fmi.io.records import ImuRecord, csv_line_of
 from gfins_fmi.io.rtk_walk import STANDARD_GRAVITY_M_S2, read_rtk_walk_imu, rtk_walk_mounting
 from gfins_fmi.io.tables import TableReader, pyarrow_module, table_format
@@ -179,7 +180,7 @@ class ImuChunks:
             # record passes: 541 MiB for 10 h at 200 Hz where a chunk is 2.7 MB
             with open(self.path, "rb") as f:
                 while True:
-                    block = np.fromfile(f, dtype="<f8", count=7 * self.chunk)
+                    block = read_floats(f, 7 * self.chunk, "<f8")
                     if len(block) == 0:
                         return
                     yield block.reshape(-1, 7)

@@ -35,6 +35,7 @@ import tempfile
 
 import numpy as np
 
+from gfins_fmi.cli.kfgins_config import kfgins_config_text, kfgins_noise_block
 from gfins_fmi.io.kfgins import (KFGINS_GNSS_FORMAT, KFGINS_NAV_FORMAT, kfgins_gnss_table, kfgins_imu_table,
                                  kfgins_nav_table)
 from gfins_fmi.io.records import ImuRecord
@@ -62,41 +63,11 @@ def make(folder: pathlib.Path, minutes: float) -> pathlib.Path:
                                                       tr.v_n_m_s[k], tr.euler_rad[k]), fmt=KFGINS_NAV_FORMAT)
     ImuRecord(t_s=d.imu.t_s, gyro=d.imu.gyro, accel=d.imu.accel, kind="increments").to_parquet(folder / "imu.parquet") \
         if hasattr(ImuRecord, "to_parquet") else None
-    e = [float(x) for x in np.degrees(tr.euler_rad[0])]
-    v = [float(x) for x in tr.v_n_m_s[0]]
-    N = NAVIGATION
-    ug = 9.80665e-6
-    vrw = float(N.accel_vrw_ug_sqrt_hz * ug / np.sqrt(2.0) * 60.0)
-    ab = float(N.accel_bias_instability_ug * ug / 1e-5)
     (folder / "out").mkdir(exist_ok=True)
     cfg = folder / "kf-gins.yaml"
-    cfg.write_text(f"""imupath: "{folder / 'imu.txt'}"
-gnsspath: "{folder / 'gnss.txt'}"
-outputpath: "{folder / 'out'}"
-imudatalen: 7
-imudatarate: 200
-starttime: {float(d.imu.t_s[0]) - 0.005!r}
-endtime: -1
-initpos: [ {float(np.degrees(tr.lat_rad[0]))!r}, {float(np.degrees(tr.lon_rad[0]))!r}, {float(tr.h_m[0])!r} ]
-initvel: [ {v[1]!r}, {v[0]!r}, {-v[2]!r} ]
-initatt: [ {e[2]!r}, {e[1]!r}, {e[0]!r} ]
-initgyrbias: [ 0, 0, 0 ]
-initaccbias: [ 0, 0, 0 ]
-initgyrscale: [ 0, 0, 0 ]
-initaccscale: [ 0, 0, 0 ]
-initposstd: [ 0.005, 0.004, 0.008 ]
-initvelstd: [ 0.003, 0.004, 0.004 ]
-initattstd: [ 0.003, 0.003, 0.023 ]
-imunoise:
-  arw: [{N.gyro_arw_deg_sqrt_h}, {N.gyro_arw_deg_sqrt_h}, {N.gyro_arw_deg_sqrt_h}]
-  vrw: [{vrw!r}, {vrw!r}, {vrw!r}]
-  gbstd: [{N.gyro_bias_instability_deg_h}, {N.gyro_bias_instability_deg_h}, {N.gyro_bias_instability_deg_h}]
-  abstd: [{ab!r}, {ab!r}, {ab!r}]
-  gsstd: [300.0, 300.0, 300.0]
-  asstd: [300.0, 300.0, 300.0]
-  corrtime: {N.gyro_correlation_time_s / 3600.0!r}
-antlever: [ {LEVER[1]!r}, {LEVER[0]!r}, {-LEVER[2]!r} ]
-""")
+    cfg.write_text(kfgins_config_text(folder / "imu.txt", folder / "gnss.txt", folder / "out",
+                                      float(d.imu.t_s[0]) - 0.005, tr.lat_rad[0], tr.lon_rad[0], tr.h_m[0],
+                                      tr.v_n_m_s[0], tr.euler_rad[0], LEVER, kfgins_noise_block(NAVIGATION)))
     return cfg
 
 
@@ -132,37 +103,10 @@ def make_static(folder: pathlib.Path, hours: float) -> pathlib.Path:
                           h + du, np.full(k, 0.02), np.full(k, 0.02), np.full(k, 0.04)])
     np.savetxt(folder / "gnss.txt", gn, fmt=KFGINS_GNSS_FORMAT)
     (folder / "out").mkdir(exist_ok=True)
-    N = NAVIGATION
-    vrw_h = float(N.accel_vrw_ug_sqrt_hz * 9.80665e-6 / np.sqrt(2.0) * 60.0)
-    ab = float(N.accel_bias_instability_ug * 9.80665e-6 / 1e-5)
     cfg = folder / "kf-gins.yaml"
-    cfg.write_text(f"""imupath: "{folder / 'imu.txt'}"
-gnsspath: "{folder / 'gnss.txt'}"
-outputpath: "{folder / 'out'}"
-imudatalen: 7
-imudatarate: 200
-starttime: 0.0
-endtime: -1
-initpos: [ 30.0, 114.0, {h} ]
-initvel: [ 0.0, 0.0, 0.0 ]
-initatt: [ 0.0, 0.0, 0.0 ]
-initgyrbias: [ 0, 0, 0 ]
-initaccbias: [ 0, 0, 0 ]
-initgyrscale: [ 0, 0, 0 ]
-initaccscale: [ 0, 0, 0 ]
-initposstd: [ 0.005, 0.004, 0.008 ]
-initvelstd: [ 0.003, 0.004, 0.004 ]
-initattstd: [ 0.003, 0.003, 0.023 ]
-imunoise:
-  arw: [{N.gyro_arw_deg_sqrt_h}, {N.gyro_arw_deg_sqrt_h}, {N.gyro_arw_deg_sqrt_h}]
-  vrw: [{vrw_h!r}, {vrw_h!r}, {vrw_h!r}]
-  gbstd: [{N.gyro_bias_instability_deg_h}, {N.gyro_bias_instability_deg_h}, {N.gyro_bias_instability_deg_h}]
-  abstd: [{ab!r}, {ab!r}, {ab!r}]
-  gsstd: [300.0, 300.0, 300.0]
-  asstd: [300.0, 300.0, 300.0]
-  corrtime: 1.0
-antlever: [ 0.0, 0.0, 0.0 ]
-""")
+    cfg.write_text(kfgins_config_text(folder / "imu.txt", folder / "gnss.txt", folder / "out", 0.0, lat,
+                                      np.radians(114.0), h, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0),
+                                      kfgins_noise_block(NAVIGATION)))
     return cfg
 
 

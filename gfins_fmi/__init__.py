@@ -12,22 +12,60 @@ Monte Carlo), ``fmi`` (FMUs and co-simulation), ``io`` (records and tables), ``c
 (the ``gfins`` command), ``experiments`` (demo, reproductions). The names below are the
 most used ones, re-exported from their homes.
 """
-from gfins_fmi._lib import GfinsError, NonFiniteInputError
+import importlib
+
 from gfins_fmi._version import __version__
-from gfins_fmi.fmi.models import run_accel9_fmu
-from gfins_fmi.fmi.paths import FmuRunError, fmu_path
-from gfins_fmi.gyrofree.array import (FLAG_NEG_OMEGA_SQ, FLAG_SIGN_UNKNOWN, MAX_SENSORS,
-                                      Accel9Solution, Accel9Solver, ArrayGeometry,
-                                      accel9_geometry, forward_model, solve_accel9)
-from gfins_fmi.gyrofree.array_errors import ArraySensorErrors
-from gfins_fmi.gyrofree.geometry import layout
-from gfins_fmi.gyrofree.navigator import GyroFreeNavigator, hermite_increments
-from gfins_fmi.gyrofree.rate_solver import RateSolution, RateSolver
-from gfins_fmi.gyrofree.report import GeometryReport, geometry_report
-from gfins_fmi.nav.imu_errors import ImuErrors, ImuNoise
-from gfins_fmi.nav.plausibility import PlausibilityWarning
-from gfins_fmi.nav.strapdown import (NavSolution, NavState, SampleError, SinsConfig, Strapdown,
-                                     euler_to_quat, quat_to_euler)
+
+#: the most used names, re-exported from their homes: imported when first used (PEP 562),
+#: so that ``import gfins_fmi`` (and every command's start) does not load the FMU
+#: runners, the gyro-free solvers and the strapdown for a command that needs none of them
+_EXPORTS = {
+    "GfinsError": "gfins_fmi._lib",
+    "NonFiniteInputError": "gfins_fmi._lib",
+    "run_accel9_fmu": "gfins_fmi.fmi.models",
+    "FmuRunError": "gfins_fmi.fmi.paths",
+    "fmu_path": "gfins_fmi.fmi.paths",
+    "FLAG_NEG_OMEGA_SQ": "gfins_fmi.gyrofree.array",
+    "FLAG_SIGN_UNKNOWN": "gfins_fmi.gyrofree.array",
+    "MAX_SENSORS": "gfins_fmi.gyrofree.array",
+    "Accel9Solution": "gfins_fmi.gyrofree.array",
+    "Accel9Solver": "gfins_fmi.gyrofree.array",
+    "ArrayGeometry": "gfins_fmi.gyrofree.array",
+    "accel9_geometry": "gfins_fmi.gyrofree.array",
+    "forward_model": "gfins_fmi.gyrofree.array",
+    "solve_accel9": "gfins_fmi.gyrofree.array",
+    "ArraySensorErrors": "gfins_fmi.gyrofree.array_errors",
+    "layout": "gfins_fmi.gyrofree.geometry",
+    "GyroFreeNavigator": "gfins_fmi.gyrofree.navigator",
+    "hermite_increments": "gfins_fmi.gyrofree.navigator",
+    "RateSolution": "gfins_fmi.gyrofree.rate_solver",
+    "RateSolver": "gfins_fmi.gyrofree.rate_solver",
+    "GeometryReport": "gfins_fmi.gyrofree.report",
+    "geometry_report": "gfins_fmi.gyrofree.report",
+    "ImuErrors": "gfins_fmi.nav.imu_errors",
+    "ImuNoise": "gfins_fmi.nav.imu_errors",
+    "PlausibilityWarning": "gfins_fmi.nav.plausibility",
+    "NavSolution": "gfins_fmi.nav.strapdown",
+    "NavState": "gfins_fmi.nav.strapdown",
+    "SampleError": "gfins_fmi.nav.strapdown",
+    "SinsConfig": "gfins_fmi.nav.strapdown",
+    "Strapdown": "gfins_fmi.nav.strapdown",
+    "euler_to_quat": "gfins_fmi.nav.strapdown",
+    "quat_to_euler": "gfins_fmi.nav.strapdown",
+}
+
+
+def __getattr__(name: str):
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'gfins_fmi' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list:
+    return sorted(set(globals()) | set(_EXPORTS))
 
 __all__ = [
     "GfinsError", "NonFiniteInputError", "FmuRunError",

@@ -54,6 +54,7 @@ from gfins_fmi.estimation.measurement_checks import unusable_measurements
 from gfins_fmi.estimation.navigator import IntegratedNavigator
 from gfins_fmi.io.columns import INNOVATION_COLUMNS
 from gfins_fmi.io.imu_stream import ImuChunks
+from gfins_fmi.io.output_set import signals_held
 from gfins_fmi.nav.strapdown import NavState, quat_to_euler
 
 __all__ = ["run"]
@@ -453,8 +454,11 @@ def _stream(args, outs, nav, chunks, gnss, baro, odo, scores, inn_path, sm_path)
         return _stream_run(args, outs, nav, smoother, chunks, gnss, baro, odo, scores, inn_path, sm_path)
     finally:
         if smoother is not None:
-            smoother.close()
-            remove()
+            # a Ctrl-C here would stop the removal half way (the interrupt study found the
+            # folder left): held until it is done, then raised
+            with signals_held():
+                smoother.close()
+                remove()
 
 
 def _stream_run(args, outs, nav, smoother, chunks, gnss, baro, odo, scores, inn_path, sm_path) -> int:

@@ -49,7 +49,7 @@ from gfins_fmi.nav.earth import deg
 from gfins_fmi.nav.imu_errors import ImuNoise
 from gfins_fmi.nav.strapdown import NavState, euler_to_quat
 
-__all__ = ["KfginsRun", "KFGINS_KEYS", "KFGINS_NOISE_KEYS", "read_kfgins_config", "initial_state", "kfgins_outputs", "write_kfgins_outputs",
+__all__ = ["kfgins_config_text", "kfgins_noise_block", "KfginsRun", "KFGINS_KEYS", "KFGINS_NOISE_KEYS", "read_kfgins_config", "initial_state", "kfgins_outputs", "write_kfgins_outputs",
            "kfgins_tables", "open_kfgins_writers", "KFGINS_DECIMALS", "KFGINS_TEXT", "KFGINS_COLUMNS"]
 
 #: KF-GINS's text numbers: ``%-15.9lf`` (src/fileio/filesaver.cc)
@@ -299,3 +299,52 @@ def write_kfgins_outputs(outs, files: dict, sol) -> None:
     """The solution as KF-GINS's three text files, through the run's output set."""
     for k, cols in kfgins_tables(sol).items():
         outs.write_table(files[k], [f"c{i}" for i in range(KFGINS_COLUMNS[k])], cols, **KFGINS_TEXT)
+
+
+def kfgins_noise_block(noise: ImuNoise, scale_ppm: float = 300.0) -> dict:
+    """``imunoise`` in KF-GINS's units from an :class:`ImuNoise` (the same value on the three
+    axes): ``arw`` deg/sqrt(h), ``vrw`` m/s/sqrt(h) (the Allan VRW: the one-sided density
+    / sqrt(2)), ``gbstd`` deg/h, ``abstd`` mGal, ``gsstd``/``asstd`` ppm, ``corrtime`` h (the
+    gyro's correlation time)."""
+    vrw = float(noise.accel_vrw_ug_sqrt_hz * UG / math.sqrt(2.0) * 60.0)
+    ab = float(noise.accel_bias_instability_ug * UG / MGAL)
+    return {"arw": [float(noise.gyro_arw_deg_sqrt_h)] * 3, "vrw": [vrw] * 3,
+            "gbstd": [float(noise.gyro_bias_instability_deg_h)] * 3, "abstd": [ab] * 3,
+            "gsstd": [float(scale_ppm)] * 3, "asstd": [float(scale_ppm)] * 3,
+            "corrtime": float(noise.gyro_correlation_time_s) / 3600.0}
+
+
+def _yaml_vec(v) -> str:
+    return "[ " + ", ".join(repr(float(x)) for x in v) + " ]"
+
+
+def kfgins_config_text(imu, gnss, output, start_s: float, lat_rad: float, lon_rad: float, h_m: float,
+                       v_enu_m_s, euler_rad, lever_arm_m, noise: dict, *,
+                       position_std_m=(0.005, 0.004, 0.008), velocity_std_m_s=(0.003, 0.004, 0.004),
+                       attitude_std_deg=(0.003, 0.003, 0.023), sensor_std: dict | None = None,
+                       extra: str = "") -> str:
+    """A KF-GINS configuration file (the inverse of :func:`read_kfgins_config`): paths, the
+    start time (s), the initial state in our frames and units (position rad, rad, m;
+    velocity east, north, up m/s; heading, pitch, roll rad; lever arm right, front, up m)
+    written in KF-GINS's (north-east-down velocity, roll-pitch-yaw deg, antenna lever arm
+    forward-right-down), ``noise`` in KF-GINS's keys and units (:func:`kfgins_noise_block`),
+    the initial 1-sigma as KF-GINS types them (position and velocity north, east, down;
+    attitude roll, pitch, yaw deg), ``sensor_std`` any of ``initbgstd``, ``initbastd``,
+    ``initsgstd``, ``initsastd`` (KF-GINS's units, forward-right-down), ``extra`` lines
+    appended as they are."""
+    v = [float(x) for x in v_enu_m_s]
+    e = [math.degrees(float(x)) for x in euler_rad]
+    arm = [float(x) for x in lever_arm_m]
+    lines = [f'imupath: "{imu}"', f'gnsspath: "{gnss}"', f'outputpath: "{output}"', "imudatalen: 7",
+             "imudatarate: 200", f"starttime: {float(start_s)!r}", "endtime: -1",
+             f"initpos: {_yaml_vec([math.degrees(lat_rad), math.degrees(lon_rad), h_m])}",
+             f"initvel: {_yaml_vec([v[1], v[0], -v[2]])}", f"initatt: {_yaml_vec([e[2], e[1], e[0]])}",
+             "initgyrbias: [ 0, 0, 0 ]", "initaccbias: [ 0, 0, 0 ]", "initgyrscale: [ 0, 0, 0 ]",
+             "initaccscale: [ 0, 0, 0 ]", f"initposstd: {_yaml_vec(position_std_m)}",
+             f"initvelstd: {_yaml_vec(velocity_std_m_s)}", f"initattstd: {_yaml_vec(attitude_std_deg)}"]
+    lines += [f"{key}: {_yaml_vec(x)}" for key, x in (sensor_std or {}).items()]
+    lines.append("imunoise:")
+    lines += [f"  {key}: {_yaml_vec(x) if key != 'corrtime' else repr(float(x))}" for key, x in noise.items()]
+    lines.append(f"antlever: {_yaml_vec([arm[1], arm[0], -arm[2]])}")
+    return "\n".join(lines) + "\n" + extra
+

@@ -48,6 +48,7 @@ from gfins_fmi.estimation.config import N_SENSORS
 from gfins_fmi.estimation.measurements import INNOVATION_DTYPE
 from gfins_fmi.estimation.navigator import IntegratedNavigator
 from gfins_fmi.estimation.solution import IntegratedSolution, SmoothedSolution, epoch_std, smoothing_layout
+from gfins_fmi.io.raw_floats import append_floats, read_floats
 
 __all__ = ["StreamingSmoother", "epoch_bytes", "ROW_BYTES"]
 
@@ -127,7 +128,7 @@ class _EpochSink:
 
     def _write(self, lo: int, hi: int) -> None:
         for k, fh in self.files.items():
-            self.arrays[k][lo:hi].tofile(fh)
+            append_floats(fh, self.arrays[k][lo:hi])
         self.written += hi - lo
 
     def flush(self) -> None:
@@ -248,14 +249,14 @@ class StreamingSmoother:
         rows[:, 8], rows[:, 9], rows[:, 10] = sol.lat_rad, sol.lon_rad, sol.h_m
         rows[:, 11:11 + N_SENSORS] = sol.sensors
         rows[:, -1] = sol.standstill
-        rows.tofile(self._rows)
+        append_floats(self._rows, rows)
         self.n_rows += n
 
     # ---- 2. backward ----------------------------------------------------------------
     def _read(self, name: str, width: int, lo: int, hi: int) -> np.ndarray:
         with open(self.folder / name, "rb") as fh:
             fh.seek(8 * width * lo)
-            a = np.fromfile(fh, dtype=np.float64, count=width * (hi - lo))
+            a = read_floats(fh, width * (hi - lo))
         if len(a) != width * (hi - lo):
             raise OSError(f"{self.folder / name}: {len(a) // width} of {hi - lo} rows read from row {lo} "
                           "(the smoother's file was cut: was the folder cleaned while it ran?)")
@@ -339,7 +340,7 @@ class StreamingSmoother:
     @staticmethod
     def _put(fh, arr: np.ndarray, row: int, width: int) -> None:
         fh.seek(8 * width * row)
-        np.ascontiguousarray(arr, dtype=np.float64).tofile(fh)
+        append_floats(fh, arr)
 
     # ---- 3. the smoothed rows ---------------------------------------------------------
     def solutions(self, rows: int = 48_000, progress: bool = False) -> Iterator[SmoothedSolution]:
@@ -379,7 +380,7 @@ class StreamingSmoother:
         try:
             with open(self.folder / "rows.f8", "rb") as rf:
                 while True:
-                    blk = np.fromfile(rf, dtype=np.float64, count=rows * _ROW_WIDTH)
+                    blk = read_floats(rf, rows * _ROW_WIDTH)
                     if len(blk) == 0:
                         return
                     blk = blk.reshape(-1, _ROW_WIDTH)
@@ -393,10 +394,10 @@ class StreamingSmoother:
                     win = {k: v[drop:] for k, v in win.items()}
                     while read < E and (len(win["t"]) == 0 or win["t"][-1, 0] <= t_last + 1e-3):
                         m = min(self.block_epochs, E - read)
-                        new = {k: np.fromfile(files[k], dtype=np.float64, count=m * widths[k]).reshape(m, widths[k])
-                               for k in widths}
-                        if any(len(v) != m for v in new.values()):
+                        new = {k: read_floats(files[k], m * widths[k]) for k in widths}
+                        if any(len(v) != m * widths[k] for k, v in new.items()):
                             raise OSError(f"{self.folder}: the smoother's epoch files were cut at epoch {read}")
+                        new = {k: v.reshape(m, widths[k]) for k, v in new.items()}
                         win = {k: np.concatenate([win[k], new[k]]) for k in widths}
                         read += m
                     yield self._apply(f, win, blk, t, no_innovations)

@@ -22,7 +22,8 @@ import numpy as np
 from gfins_fmi.io._text import data_lines
 from gfins_fmi.io.conventions import GPS_EPOCH_FROM_1970_S, frd_to_rfu
 from gfins_fmi.io.errors import FileFormatError, RecordError, not_a_file
-from gfins_fmi.io.kfgins import read_kfgins_imu
+from gfins_fmi.io.kfgins import check_kfgins_imu, read_kfgins_imu
+from gfins_fmi.io.raw_floats import read_floats
 from gfins_fmi.io.records import ImuRecord, csv_line_of
 from gfins_fmi.io.rtk_walk import STANDARD_GRAVITY_M_S2, read_rtk_walk_imu, rtk_walk_mounting
 from gfins_fmi.io.tables import TableReader, pyarrow_module, table_format
@@ -113,17 +114,9 @@ class ImuChunks:
 
     def _open_checks(self) -> None:
         path = self.path
-        if self.fmt == "kfgins" and (isinstance(self.n_columns, bool) or
-                                     not isinstance(self.n_columns, (int, np.integer)) or self.n_columns < 7):
-            raise ValueError(f"n_columns must be an integer >= 7 (time, 3 angle and 3 velocity "
-                             f"increments, then any extra columns); got {self.n_columns!r}")
+        if self.fmt == "kfgins":
+            check_kfgins_imu(path, self.n_columns)
         if self.table == "bin":
-            if not path.is_file():
-                raise not_a_file(path, "KF-GINS binary IMU file")
-            size = path.stat().st_size
-            if size == 0 or size % 56:
-                raise FileFormatError(path, None, f"{size} bytes is not a whole number of 56-byte "
-                                      "samples (seven float64: time, 3 angle and 3 velocity increments)")
             return
         if self.fmt == "csv" and self.table == "csv":
             self.names, self.source_note, header_line = ImuRecord.csv_head(path)
@@ -179,7 +172,7 @@ class ImuChunks:
             # record passes: 541 MiB for 10 h at 200 Hz where a chunk is 2.7 MB
             with open(self.path, "rb") as f:
                 while True:
-                    block = np.fromfile(f, dtype="<f8", count=7 * self.chunk)
+                    block = read_floats(f, 7 * self.chunk, "<f8")
                     if len(block) == 0:
                         return
                     yield block.reshape(-1, 7)

@@ -21,7 +21,7 @@ from gfins_fmi.io.conventions import SECONDS_PER_WEEK, frd_to_rfu, ned_to_enu, r
 from gfins_fmi.io.errors import FileFormatError, not_a_file
 from gfins_fmi.io.records import GnssRecord, ImuRecord, TruthRecord
 
-__all__ = ["read_kfgins_imu", "read_kfgins_gnss", "read_kfgins_nav", "kfgins_imu_table",
+__all__ = ["read_kfgins_imu", "check_kfgins_imu", "read_kfgins_gnss", "read_kfgins_nav", "kfgins_imu_table",
            "kfgins_gnss_table", "kfgins_nav_table", "KFGINS_NAV_FORMAT", "KFGINS_IMU_FORMAT",
            "KFGINS_GNSS_FORMAT"]
 
@@ -56,6 +56,21 @@ def _time(sow: np.ndarray, gps_week: int | None) -> np.ndarray:
     return int(gps_week) * SECONDS_PER_WEEK + sow
 
 
+def check_kfgins_imu(path: pathlib.Path, n_columns) -> None:
+    """The checks of a KF-GINS IMU file before it is read (whole or in chunks):
+    ``n_columns`` an integer >= 7; a ``.bin`` file a whole number of 56-byte samples."""
+    if isinstance(n_columns, bool) or not isinstance(n_columns, (int, np.integer)) or n_columns < 7:
+        raise ValueError(f"n_columns must be an integer >= 7 (time, 3 angle and 3 velocity "
+                         f"increments, then any extra columns); got {n_columns!r}")
+    if path.suffix.lower() == ".bin":
+        if not path.is_file():
+            raise not_a_file(path, "KF-GINS binary IMU file")
+        size = path.stat().st_size
+        if size == 0 or size % 56:
+            raise FileFormatError(path, None, f"{size} bytes is not a whole number of 56-byte "
+                                  "samples (seven float64: time, 3 angle and 3 velocity increments)")
+
+
 def read_kfgins_imu(path, n_columns: int = 7, gps_week: int | None = None) -> ImuRecord:
     """Read a KF-GINS IMU file: text (``*.txt``) or the binary form (``*.bin``, seven
     little-endian float64 per sample, as in awesome-gins-datasets).
@@ -75,17 +90,9 @@ def read_kfgins_imu(path, n_columns: int = 7, gps_week: int | None = None) -> Im
         week (or GPS seconds with ``gps_week``).
     """
     path = pathlib.Path(path)
-    if isinstance(n_columns, bool) or not isinstance(n_columns, (int, np.integer)) or n_columns < 7:
-        raise ValueError(f"n_columns must be an integer >= 7 (time, 3 angle and 3 velocity "
-                         f"increments, then any extra columns); got {n_columns!r}")
+    check_kfgins_imu(path, n_columns)
     line_of = None
     if path.suffix.lower() == ".bin":
-        if not path.is_file():
-            raise not_a_file(path, "KF-GINS binary IMU file")
-        size = path.stat().st_size
-        if size == 0 or size % 56:
-            raise FileFormatError(path, None, f"{size} bytes is not a whole number of 56-byte "
-                                  "samples (seven float64: time, 3 angle and 3 velocity increments)")
         table = np.fromfile(path, dtype="<f8").reshape(-1, 7)
         fmt = "KF-GINS binary IMU"
     else:

@@ -51,7 +51,7 @@ try:
 except ImportError:  # pragma: no cover - not POSIX: commits are not serialised
     fcntl = None
 
-__all__ = ["OutputSet", "OutputError"]
+__all__ = ["OutputSet", "OutputError", "signals_held"]
 
 
 class OutputError(ValueError):
@@ -88,8 +88,9 @@ def _names(paths) -> str:
 
 
 @contextlib.contextmanager
-def _signals_held():
-    """SIGINT and SIGTERM held back while a set is renamed into place: recorded by a
+def signals_held():
+    """SIGINT and SIGTERM held back while a set is renamed into place (or a run's working
+    files are removed, gfins_fmi/cli/integrate.py): recorded by a
     handler of ours and handed to the previous handlers when the block ends (a Python
     handler, not a signal mask: a mask is the calling thread's, and a signal sent to the
     process may be delivered to another thread, e.g. one of polars' pool, whose Python
@@ -384,7 +385,7 @@ class OutputSet:
         removes = [p for p in stale if os.path.lexists(p)]
         removes += [partial_path(p) for p in [m.dest for m in self._members.values()] + stale
                     if os.path.lexists(partial_path(p))]
-        with _signals_held(), _folders_locked(self._folders()):
+        with signals_held(), _folders_locked(self._folders()):
             _replace_all(moves, removes)
             for remove in self.temporaries:
                 remove.detach()
@@ -418,7 +419,7 @@ class OutputSet:
         others = [m.dest for m in self._members.values()] + list(self._stale.values())
         removes = [partial_path(p) for p in others
                    if _key(partial_path(p)) not in kept and os.path.lexists(partial_path(p))]
-        with _signals_held(), _folders_locked(self._folders()):
+        with signals_held(), _folders_locked(self._folders()):
             _replace_all(moves, removes)
             for m in tables:
                 m.remove.detach()

@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 from gfins_fmi.cli import main
+from gfins_fmi.cli.kfgins_config import kfgins_config_text
 
 LEVER = np.array([-0.3, 0.2, 1.2])      # body right, front, up, m
 #: initial 1-sigma per axis as a KF-GINS user types them (forward, right, down)
@@ -37,45 +38,19 @@ def drive(tmp_path_factory):
     return folder, d
 
 
-def _vec(v) -> str:
-    return "[ " + ", ".join(repr(float(x)) for x in v) + " ]"
-
-
 def _yaml(folder, d, out, noise=None, extra=""):
-    """A KF-GINS configuration of the drive (KF-GINS's keys, frames and units)."""
+    """A KF-GINS configuration of the drive (KF-GINS's keys, frames and units): the true
+    initial state, the demo configuration's noise (``noise`` replaces keys), the initial
+    sensor 1-sigma per axis."""
     tr = d.truth
-    e = np.degrees(tr.euler_rad[0])
-    v = tr.v_n_m_s[0]
     n = dict(arw=[0.003] * 3, vrw=[0.03] * 3, gbstd=[0.027] * 3, abstd=[15.0] * 3, gsstd=[300.0] * 3,
              asstd=[300.0] * 3)
     n.update(noise or {})
-    block = "\n".join(f"  {k}: {_vec(x)}" for k, x in n.items())
-    return f"""imupath: "{folder / 'imu.txt'}"
-gnsspath: "{folder / 'gnss.txt'}"
-outputpath: "{out}"
-imudatalen: 7
-imudatarate: 200
-starttime: {float(d.imu.t_s[0]) - 0.005!r}
-endtime: -1
-initpos: {_vec([np.degrees(tr.lat_rad[0]), np.degrees(tr.lon_rad[0]), tr.h_m[0]])}
-initvel: {_vec([v[1], v[0], -v[2]])}
-initatt: {_vec([e[2], e[1], e[0]])}
-initgyrbias: [ 0, 0, 0 ]
-initaccbias: [ 0, 0, 0 ]
-initgyrscale: [ 0, 0, 0 ]
-initaccscale: [ 0, 0, 0 ]
-initposstd: [ 0.005, 0.004, 0.008 ]
-initvelstd: [ 0.003, 0.004, 0.004 ]
-initattstd: [ 0.003, 0.003, 0.023 ]
-initbgstd: {_vec(BG_STD)}
-initbastd: {_vec(BA_STD)}
-initsgstd: {_vec(SG_STD)}
-initsastd: {_vec(SA_STD)}
-imunoise:
-{block}
-  corrtime: 4.0
-antlever: {_vec([LEVER[1], LEVER[0], -LEVER[2]])}
-{extra}"""
+    n["corrtime"] = 4.0
+    return kfgins_config_text(folder / "imu.txt", folder / "gnss.txt", out, float(d.imu.t_s[0]) - 0.005,
+                              tr.lat_rad[0], tr.lon_rad[0], tr.h_m[0], tr.v_n_m_s[0], tr.euler_rad[0], LEVER, n,
+                              sensor_std={"initbgstd": BG_STD, "initbastd": BA_STD, "initsgstd": SG_STD,
+                                          "initsastd": SA_STD}, extra=extra)
 
 
 def _kfgins_std_by_hand(P) -> np.ndarray:
@@ -201,3 +176,26 @@ def test_the_run_records_how_the_keys_were_mapped(drive, tmp_path, capsys):
     doc = json.loads((out / "KF_GINS.config.json").read_text())
     assert any(n.startswith("initattstd roll 0.003, pitch 0.003 deg") for n in doc["kfgins_notes"]), doc
     assert doc["units"]["propagation_interval"] == "s" and doc["inputs"]["imu"]["bytes"] > 0
+
+
+def test_written_configuration_reads_back(tmp_path):
+    """kfgins_config_text (the reader's inverse, used by the tests and the benchmark) and
+    read_kfgins_config agree: the initial state, lever arm and noise read back as written
+    (frames and units converted twice: to round-off, 1e-12 relative)."""
+    from gfins_fmi.cli.kfgins_config import kfgins_noise_block, read_kfgins_config
+    from gfins_fmi.sim.scenarios import NAVIGATION
+    lat, lon, h, v, e = 0.52, 2.0, 31.5, (3.0, -4.0, 0.2), (2.5, 0.03, -0.02)
+    (tmp_path / "out").mkdir()
+    cfg = tmp_path / "kf.yaml"
+    cfg.write_text(kfgins_config_text(tmp_path / "imu.txt", tmp_path / "gnss.txt", tmp_path / "out", 12.5, lat, lon,
+                                      h, v, e, LEVER, kfgins_noise_block(NAVIGATION)))
+    run = read_kfgins_config(cfg)
+    lat2, lon2, h2, v2, e2 = run.nav0
+    np.testing.assert_allclose([lat2, lon2, h2, *v2], [lat, lon, h, *v], rtol=1e-12)
+    # heading 2.5 rad comes back as yaw in (-pi, pi]
+    np.testing.assert_allclose(np.angle(np.exp(1j * np.asarray(e2))), np.angle(np.exp(1j * np.asarray(e))), rtol=1e-12)
+    np.testing.assert_allclose(run.lever_arm_m, LEVER, rtol=1e-12)
+    assert run.start_s == 12.5 and run.end_s is None
+    for name in ("gyro_arw_deg_sqrt_h", "accel_vrw_ug_sqrt_hz", "gyro_bias_instability_deg_h",
+                 "accel_bias_instability_ug", "gyro_correlation_time_s"):
+        assert getattr(run.noise, name) == pytest.approx(getattr(NAVIGATION, name), rel=1e-12), name

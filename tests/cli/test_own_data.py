@@ -292,42 +292,12 @@ def _kfgins_yaml(folder, d, out_folder):
     """A KF-GINS configuration file of the drive, as KF-GINS's own (dataset/kf-gins.yaml): the
     true initial state in its frames (NED velocity; roll, pitch, yaw; antenna lever arm
     forward, right, down) and the navigation grade's noise in its units."""
-    from gfins_fmi.sim.scenarios import NAVIGATION as N
+    from gfins_fmi.cli.kfgins_config import kfgins_config_text, kfgins_noise_block
+    from gfins_fmi.sim.scenarios import NAVIGATION
     tr = d.truth
-    e = [float(x) for x in np.degrees(tr.euler_rad[0])]
-    v = [float(x) for x in tr.v_n_m_s[0]]
-    ug = 9.80665e-6
-    vrw = float(N.accel_vrw_ug_sqrt_hz * ug / np.sqrt(2.0) * 60.0)           # one-sided ug/sqrt(Hz) -> Allan m/s/sqrt(h)
-    ab = float(N.accel_bias_instability_ug * ug / 1e-5)                       # ug -> mGal
-    t0 = float(d.imu.t_s[0])
-    return f"""# KF-GINS configuration file
-imupath: "{folder / 'imu.txt'}"
-gnsspath: "{folder / 'gnss.txt'}"
-outputpath: "{out_folder}"
-imudatalen: 7
-imudatarate: 200
-starttime: {t0 - 0.005!r}
-endtime: -1
-initpos: [ {float(np.degrees(tr.lat_rad[0]))!r}, {float(np.degrees(tr.lon_rad[0]))!r}, {float(tr.h_m[0])!r} ]
-initvel: [ {v[1]!r}, {v[0]!r}, {-v[2]!r} ]
-initatt: [ {e[2]!r}, {e[1]!r}, {e[0]!r} ]
-initgyrbias: [ 0, 0, 0 ]    # [deg/h]
-initaccbias: [ 0, 0, 0 ]    # [mGal]
-initgyrscale: [ 0, 0, 0 ]   # [ppm]
-initaccscale: [ 0, 0, 0 ]   # [ppm]
-initposstd: [ 0.005, 0.004, 0.008 ]
-initvelstd: [ 0.003, 0.004, 0.004 ]
-initattstd: [ 0.003, 0.003, 0.023 ]
-imunoise:
-  arw: [{N.gyro_arw_deg_sqrt_h}, {N.gyro_arw_deg_sqrt_h}, {N.gyro_arw_deg_sqrt_h}]          # [deg/sqrt(hr)]
-  vrw: [{vrw!r}, {vrw!r}, {vrw!r}]          # [m/s/sqrt(hr)]
-  gbstd: [{N.gyro_bias_instability_deg_h}, {N.gyro_bias_instability_deg_h}, {N.gyro_bias_instability_deg_h}]
-  abstd: [{ab!r}, {ab!r}, {ab!r}]     # [mGal]
-  gsstd: [300.0, 300.0, 300.0]  # [ppm]
-  asstd: [300.0, 300.0, 300.0]  # [ppm]
-  corrtime: {N.gyro_correlation_time_s / 3600.0!r}                    # [hr]
-antlever:  [ {float(LEVER[1])!r}, {float(LEVER[0])!r}, {float(-LEVER[2])!r} ]
-"""
+    return "# KF-GINS configuration file\n" + kfgins_config_text(
+        folder / "imu.txt", folder / "gnss.txt", out_folder, float(d.imu.t_s[0]) - 0.005, tr.lat_rad[0],
+        tr.lon_rad[0], tr.h_m[0], tr.v_n_m_s[0], tr.euler_rad[0], LEVER, kfgins_noise_block(NAVIGATION))
 
 
 def test_kfgins_configuration_runs_unchanged_and_writes_kfgins_files(kf_drive, tmp_path, capsys):

@@ -52,7 +52,9 @@ LAZY = {
 #: imports made by name at run time: module -> why. ``gfins`` imports only the command it
 #: runs: with every command module imported, `import gfins_fmi.cli` takes ~112 ms instead
 #: of ~71 ms (measured as above), i.e. `gfins --help` would be ~1.6x slower
-DYNAMIC = {"gfins_fmi.cli": "main() imports gfins_fmi.cli.<command> of the chosen command"}
+DYNAMIC = {"gfins_fmi.cli": "main() imports gfins_fmi.cli.<command> of the chosen command",
+           "gfins_fmi": "the root's re-exports, imported when first used (PEP 562 __getattr__: a "
+                        "command's start does not load what it does not use)"}
 
 MAX_LINES = 600
 #: modules longer than MAX_LINES, and why they read better whole

@@ -24,12 +24,11 @@ static double gravity_of(double s2, double inv_sq, double h_m)
     return g0 * (1.0 - 2.0 / a * (1.0 + f + m - 2.0 * f * s2) * h_m + 3.0 / (a * a) * h_m * h_m);
 }
 
-/* The heights the model takes: above -a/2 (R_N >= a, so R + h > a/2 > 0) and below a/3,
- * where the height expansion of gravity_of (a parabola in h) has its minimum. Found by
- * fuzzing: h = 1.8e308 m gave gravity +Inf with GF_OK. */
+/* The heights the model takes: gf_earth_height_ok (gf_earth.h). Found by fuzzing:
+ * h = 1.8e308 m gave gravity +Inf with GF_OK. */
 static int height_ok(double h_m)
 {
-    return h_m > -0.5 * GF_WGS84_A_M && h_m < GF_WGS84_A_M / 3.0;
+    return gf_earth_height_ok(h_m);
 }
 
 gf_status gf_earth_gravity(double lat_rad, double h_m, double *gravity_m_s2)

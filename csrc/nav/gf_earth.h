@@ -66,6 +66,17 @@ gf_status gf_earth_batch(size_t n, const double *lat_rad, const double *h_m, dou
 void gf_earth_from_sincos(gf_earth *earth, double sin_lat, double cos_lat, double h_m,
                           const double *v_n_m_s, double earth_rate_sign);
 
+/* Internal to the core: the heights the model takes (m), as gf_earth_update checks them:
+ * above -a/2 (R_N >= a, so R + h > a/2 > 0) and below a/3, where the second-order height
+ * expansion of normal gravity (NIMA TR8350.2 eq. 4-3, 1 - 2/a (1 + f + m - 2 f sin^2 L) h
+ * + 3 h^2 / a^2, a parabola in h) has its minimum and beyond which it grows with height.
+ * The mechanization checks its mid-point and new heights with it (gf_sins.c), so that a
+ * step never leaves the range gf_sins_state_check asks of a state. */
+static inline int gf_earth_height_ok(double h_m)
+{
+    return h_m > -0.5 * GF_WGS84_A_M && h_m < GF_WGS84_A_M / 3.0;
+}
+
 /* Derivatives of the radii of curvature with respect to latitude (m/rad), from the
  * filled *earth: dR_N/dL = R_N e^2 sinL cosL / q, dR_M/dL = 3 R_M e^2 sinL cosL / q,
  * q = 1 - e^2 sin^2 L (differentiate R_N = a q^-1/2, R_M = a (1 - e^2) q^-3/2). */

@@ -31,8 +31,7 @@ static int config_is_valid(const gf_sins_config *c)
            (c->vertical >= GF_SINS_VERTICAL_FREE && c->vertical <= GF_SINS_VERTICAL_BARO) &&
            (c->earth == GF_SINS_EARTH_WGS84 || c->earth == GF_SINS_EARTH_FLAT) &&
            c->flat_gravity_m_s2 >= 0.0 && isfinite(c->flat_gravity_m_s2) &&
-           isfinite(c->hold_height_m) && c->hold_height_m > -0.5 * GF_WGS84_A_M &&
-           c->hold_height_m < GF_WGS84_A_M / 3.0 && /* gf_earth's range */
+           gf_earth_height_ok(c->hold_height_m) && /* gf_earth's range */
            c->baro_tau_s > 0.0 && isfinite(c->baro_tau_s) &&
            c->max_rate_rad_s > 0.0 && isfinite(c->max_rate_rad_s) &&
            c->max_specific_force_m_s2 > 0.0 && isfinite(c->max_specific_force_m_s2) &&
@@ -508,7 +507,9 @@ static gf_status nav_update(gf_sins_state *s, const double qb[4], const double d
             s_mid = sin(lat_mid);
             c_mid = cos(lat_mid);
         }
-        if (!(c_mid > 0.0) || !(h_mid > -0.5 * GF_WGS84_A_M) || !v3_finite(v_mid))
+        /* the mid point's height within the Earth model's range (gf_earth_height_ok:
+         * the gravity of NIMA TR8350.2 eq. 4-3 is not evaluated beyond it) */
+        if (!(c_mid > 0.0) || !gf_earth_height_ok(h_mid) || !v3_finite(v_mid))
             return GF_ERR_DIVERGED;
         gf_earth_from_sincos(&e, s_mid, c_mid, h_mid, v_mid, s->earth_rate_sign);
     }
@@ -553,8 +554,14 @@ static gf_status nav_update(gf_sins_state *s, const double qb[4], const double d
     const double vN = 0.5 * (s->v_n_m_s[1] + v_new[1]), vE = 0.5 * (s->v_n_m_s[0] + v_new[0]);
     const double lat_new = s->lat_rad + T * vN / (e.R_M_m + h_mid);
     double lon_new = s->lon_rad + T * vE / ((e.R_N_m + h_mid) * e.cos_lat);
-    if (!(fabs(lat_new) < GF_SINS_LAT_LIMIT_RAD) || !(h_new > -0.5 * GF_WGS84_A_M) ||
-        !isfinite(h_new) || !v3_finite(v_new) || !isfinite(lon_new))
+    /* the new state within the domain gf_sins_state_check asks: the height in the Earth
+     * model's range (-a/2, a/3) (found by fuzzing: a GF_OK step of the BARO loop with an
+     * external height of ~1.6e175 m took h to 4.7e172 m, h' ~ (3/tau) T h_ext, which only
+     * the lower bound and finiteness were checked against, and the state was refused by
+     * gf_sins_state_check), the baro loop's acceleration state finite
+     * (k3 = 1/tau^3 overflows for tau below ~1e-103 s: b_new = Inf or Inf * 0 = NaN) */
+    if (!(fabs(lat_new) < GF_SINS_LAT_LIMIT_RAD) || !gf_earth_height_ok(h_new) ||
+        !v3_finite(v_new) || !isfinite(lon_new) || !isfinite(b_new))
         return GF_ERR_DIVERGED;
     if (lon_new > GF_PI)
         lon_new -= 2.0 * GF_PI;

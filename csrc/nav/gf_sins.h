@@ -175,7 +175,9 @@ gf_status gf_sins_init(gf_sins_state *state, const gf_sins_config *cfg, const do
  * the external height at the new state time for the BARO mode (NaN: none this
  * sample). The state is
  * changed only on GF_OK. Errors: GF_ERR_NONFINITE_INPUT, GF_ERR_OUT_OF_RANGE (|w| or
- * |f| beyond the limits), GF_ERR_BAD_TIME (dt_s <= 0), GF_ERR_DIVERGED,
+ * |f| beyond the limits), GF_ERR_BAD_TIME (dt_s <= 0), GF_ERR_DIVERGED (the step would
+ * leave the state's domain: the latitude limit, a mid-point or new height outside the
+ * Earth model's range (-a/2, a/3), a result not finite),
  * GF_ERR_BAD_PARAMETER (cfg.subsamples > 1: one sample is not an update then; use
  * gf_sins_step_group or gf_sins_run). */
 gf_status gf_sins_step(gf_sins_state *state, const double *gyro, const double *accel,

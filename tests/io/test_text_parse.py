@@ -94,7 +94,10 @@ def test_text_is_read_without_polars(tmp_path):
     code = ("import sys; from gfins_fmi.io.tables import TableReader; "
             f"b = [x for _, x in TableReader({str(p)!r}, whitespace=True)]; "
             "assert b[0].shape == (2, 7); print('polars' in sys.modules)")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    # run outside the checkout: there `import gfins_fmi` would find the sources, not the
+    # installed package with its compiled core (the CI installs it, not in place)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path)
+    assert out.returncode == 0, out.stderr[-2000:]
     assert out.stdout.strip() == "False", "reading text imported polars"
 
 

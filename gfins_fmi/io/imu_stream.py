@@ -158,12 +158,19 @@ class ImuChunks:
             size = f.tell()
             f.seek(max(0, size - 8192))
             lines = [x for x in f.read().split(b"\n") if x.strip() and not x.strip().startswith(b"#")]
+        if not lines:
+            raise FileFormatError(path, None, f"no data line (empty, or comments only): not a {self._what()} file")
         try:
             t = float(lines[-1].replace(b",", b" ").split()[0])
         except (IndexError, ValueError):
             raise FileFormatError(path, None, f"its last line ({lines[-1][:60]!r} ...) is not a row of numbers: "
                                   f"a cut or damaged {self._what()} file") from None
         return t - GPS_EPOCH_FROM_1970_S if self.fmt == "rtk_walk" else t
+
+    def _first_line_has_comma(self) -> bool:
+        with open(self.path, "rb") as f:
+            first = next((line for line in f if line.strip()), b"")
+        return b"," in first
 
     def _blocks(self) -> Iterator[np.ndarray]:
         """The file's rows, ``chunk`` at a time, as read (float64 (m, k))."""
@@ -178,7 +185,9 @@ class ImuChunks:
                     yield block.reshape(-1, 7)
         # text in 4 MiB blocks: 16 MiB ones (the reader's default, a third faster to parse) cost
         # ~75 MiB more peak memory in a run (249 against 175 MiB, 30 min of our CSV)
-        kw = {"kfgins": dict(whitespace=True), "rtk_walk": {},
+        # KF-GINS's own loader splits at spaces, tabs and commas: a file whose first line has
+        # a comma is read as CSV (as the whole-record reader does, io/kfgins.py)
+        kw = {"kfgins": dict(whitespace=not self._first_line_has_comma()), "rtk_walk": {},
               "csv": dict(header=self.table == "csv",
                           header_hint="a CSV of a record has one header line")}[self.fmt]
         kw["block_bytes"] = 4 << 20

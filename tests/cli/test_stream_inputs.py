@@ -198,3 +198,23 @@ def test_parquet_and_npz_records_equal_the_csv(drive, tmp_path):
     np.savez(tmp_path / "x.npz", t=d.imu.t_s, gx=d.imu.gyro[:, 0])
     with pytest.raises(FileFormatError, match="the column names 't,gx' are not a ImuRecord layout"):
         read_imu_record(tmp_path / "x.npz")
+
+
+def test_kfgins_text_with_commas_and_an_empty_file(drive, tmp_path, capsys, monkeypatch):
+    """KF-GINS's own loader splits at commas too, and so does the whole-record reader: in
+    chunks a comma-separated KF-GINS IMU text was refused ("text in a number column")
+    once every run went through the chunked reader; now it gives the whole record's
+    result. An empty IMU file (or comments only) is named, not an IndexError."""
+    folder, d = drive
+    comma = tmp_path / "imu_comma.txt"
+    comma.write_text((folder / "imu.txt").read_text().replace(" ", ","))
+    out = _both(monkeypatch, capsys, tmp_path, [
+        "integrate", str(comma), str(folder / "gnss.csv"), "--imu-format", "kfgins", "--gnss-format", "csv",
+        "--grade", "tactical", f"--lever-arm={LEVER}", *_initial(d)])
+    _same(out)
+    empty = tmp_path / "empty.txt"
+    empty.write_text("# a header comment only\n\n")
+    rc = main(["integrate", str(empty), str(folder / "gnss.csv"), str(tmp_path / "e.csv"), "--imu-format", "kfgins",
+               "--gnss-format", "csv", *_initial(d)])
+    err = capsys.readouterr().err
+    assert rc == 2 and "no data line" in err, err

@@ -223,13 +223,14 @@ static void mul64(uint64_t a, uint64_t b, uint64_t *hi, uint64_t *lo) {
 static int leading_zeros64(uint64_t x) {   /* x != 0 */
 #if defined(__GNUC__) || defined(__clang__)
     return __builtin_clzll(x);
-#endif
+#else
     int n = 0;
     while (!(x & ((uint64_t)1 << 63))) {
         x <<= 1;
         ++n;
     }
     return n;
+#endif
 }
 
 /* m * 10^e10 (m != 0, exact) correctly rounded by Eisel–Lemire (gf_text_pow10.h's

@@ -24,20 +24,14 @@ static double gravity_of(double s2, double inv_sq, double h_m)
     return g0 * (1.0 - 2.0 / a * (1.0 + f + m - 2.0 * f * s2) * h_m + 3.0 / (a * a) * h_m * h_m);
 }
 
-/* The heights the model takes: gf_earth_height_ok (gf_earth.h). Found by fuzzing:
- * h = 1.8e308 m gave gravity +Inf with GF_OK. */
-static int height_ok(double h_m)
-{
-    return gf_earth_height_ok(h_m);
-}
-
 gf_status gf_earth_gravity(double lat_rad, double h_m, double *gravity_m_s2)
 {
     if (!gravity_m_s2)
         return GF_ERR_NULL_POINTER;
     if (!isfinite(lat_rad) || !isfinite(h_m))
         return GF_ERR_NONFINITE_INPUT;
-    if (!(fabs(lat_rad) <= 0.5 * GF_PI) || !height_ok(h_m))
+    /* the heights the model takes (fuzzing: h = 1.8e308 m gave gravity +Inf with GF_OK) */
+    if (!(fabs(lat_rad) <= 0.5 * GF_PI) || !gf_earth_height_ok(h_m))
         return GF_ERR_BAD_PARAMETER;
     const double s = sin(lat_rad), s2 = s * s;
     *gravity_m_s2 = gravity_of(s2, 1.0 / sqrt(1.0 - GF_WGS84_E2 * s2), h_m);
@@ -80,7 +74,7 @@ gf_status gf_earth_update(gf_earth *earth, double lat_rad, double h_m, const dou
         return GF_ERR_NONFINITE_INPUT;
     if (!(fabs(lat_rad) < GF_HALF_PI))
         return GF_ERR_BAD_PARAMETER;
-    if (!height_ok(h_m))
+    if (!gf_earth_height_ok(h_m))
         return GF_ERR_BAD_PARAMETER;
     gf_earth_from_sincos(earth, sin(lat_rad), cos(lat_rad), h_m, v_n_m_s, earth_rate_sign);
     /* a finite but absurd velocity or rate sign (near the pole, v tan L) can overflow */

@@ -332,19 +332,19 @@ def kfgins_config_text(imu, gnss, output, start_s: float, lat_rad: float, lon_ra
     attitude roll, pitch, yaw deg), ``sensor_std`` any of ``initbgstd``, ``initbastd``,
     ``initsgstd``, ``initsastd`` (KF-GINS's units, forward-right-down), ``extra`` lines
     appended as they are."""
-    v = [float(x) for x in v_enu_m_s]
+    v_ned = ned_to_enu(np.array([v_enu_m_s], dtype=float))[0]     # the same swap both ways
     e = [math.degrees(float(x)) for x in euler_rad]
-    arm = [float(x) for x in lever_arm_m]
+    arm_frd = frd_to_rfu(np.array([lever_arm_m], dtype=float))[0]   # likewise
     lines = [f'imupath: "{imu}"', f'gnsspath: "{gnss}"', f'outputpath: "{output}"', "imudatalen: 7",
              "imudatarate: 200", f"starttime: {float(start_s)!r}", "endtime: -1",
              f"initpos: {_yaml_vec([math.degrees(lat_rad), math.degrees(lon_rad), h_m])}",
-             f"initvel: {_yaml_vec([v[1], v[0], -v[2]])}", f"initatt: {_yaml_vec([e[2], e[1], e[0]])}",
+             f"initvel: {_yaml_vec(v_ned)}", f"initatt: {_yaml_vec([e[2], e[1], e[0]])}",
              "initgyrbias: [ 0, 0, 0 ]", "initaccbias: [ 0, 0, 0 ]", "initgyrscale: [ 0, 0, 0 ]",
              "initaccscale: [ 0, 0, 0 ]", f"initposstd: {_yaml_vec(position_std_m)}",
              f"initvelstd: {_yaml_vec(velocity_std_m_s)}", f"initattstd: {_yaml_vec(attitude_std_deg)}"]
     lines += [f"{key}: {_yaml_vec(x)}" for key, x in (sensor_std or {}).items()]
     lines.append("imunoise:")
     lines += [f"  {key}: {_yaml_vec(x) if key != 'corrtime' else repr(float(x))}" for key, x in noise.items()]
-    lines.append(f"antlever: {_yaml_vec([arm[1], arm[0], -arm[2]])}")
+    lines.append(f"antlever: {_yaml_vec(arm_frd)}")
     return "\n".join(lines) + "\n" + extra
 

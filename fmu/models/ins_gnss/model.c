@@ -27,7 +27,7 @@
 #include "nav/gf_earth.h"
 #include "model.h"
 #include "model_extra.h"   /* kInsSettings: generated from the settings table */
-#include "ins_settings.h"  /* log_bad_config, all_positive, ins_fmu_step, log_step_error */
+#include "ins_settings.h"  /* log_bad_config, all_positive, ins_fmu_step */
 #include "skip_steps.h"
 
 #define N_MEAS_MAX 4   /* GNSS position, GNSS velocity, barometer, odometer */
@@ -375,16 +375,11 @@ static FmuStatus align_step(FmuInstance *instance, ModelData *d, double t_s, siz
 /* The filter's step without measurements (NHC / ZUPT, if configured, are heading-free). */
 static FmuStatus mechanize(FmuInstance *instance, ModelData *d, double t_s)
 {
-    const int increments = d->cfg.input == GF_SINS_INPUT_INCREMENTS;
-    const double *gyro = increments ? d->dtheta_rad : d->gyro_rad_s;
-    const double *accel = increments ? d->dv_m_s : d->accel_m_s2;
     gf_ins_innovation entries[LOG_MAX];
     gf_ins_log log = {LOG_MAX, 0, 0, entries};
-    const gf_status st = gf_ins_step(&d->filter, t_s, gyro, accel, 0, NULL, NULL, &log);
-    if (st != GF_OK) {
-        log_step_error(instance, &d->filter, st, t_s, gyro, accel);
+    if (ins_fmu_step(instance, &d->filter, t_s, d->dtheta_rad, d->dv_m_s, d->gyro_rad_s, d->accel_m_s2, 0, NULL,
+                     &log) != GF_OK)
         return FMU_ERROR;
-    }
     for (size_t i = 0; i < log.count; ++i)
         record_update(d, entries[i].type, entries[i].status, entries[i].nis, entries[i].t_s);
     return FMU_OK;

@@ -17,6 +17,7 @@ import pytest
 
 from gfins_fmi.cli import main
 from gfins_fmi.cli.kfgins_config import kfgins_config_text
+from support.drives import kfgins_drive
 
 LEVER = np.array([-0.3, 0.2, 1.2])      # body right, front, up, m
 #: initial 1-sigma per axis as a KF-GINS user types them (forward, right, down)
@@ -26,15 +27,8 @@ R2D = 180.0 / np.pi
 
 @pytest.fixture(scope="module")
 def drive(tmp_path_factory):
-    from gfins_fmi.io.kfgins import KFGINS_GNSS_FORMAT, KFGINS_IMU_FORMAT, kfgins_gnss_table, kfgins_imu_table
-    from gfins_fmi.sim.scenarios import NAVIGATION, simulate_drive, town_drive
-    from gfins_fmi.sim.vehicle import GnssReceiver
     folder = tmp_path_factory.mktemp("kfgins_drive")
-    rx = GnssReceiver(rate_hz=1.0, lever_arm_m=tuple(LEVER), pos_std_m=(0.02, 0.02, 0.04),
-                      vel_std_m_s=(0.01, 0.01, 0.02))
-    d = simulate_drive(town_drive(40.0), 40.0, 0.005, imu=NAVIGATION, gnss=rx, seed=11)
-    np.savetxt(folder / "imu.txt", kfgins_imu_table(d.imu), fmt=KFGINS_IMU_FORMAT)
-    np.savetxt(folder / "gnss.txt", kfgins_gnss_table(d.gnss), fmt=KFGINS_GNSS_FORMAT)
+    d = kfgins_drive(folder, 40.0, 11, LEVER)
     return folder, d
 
 

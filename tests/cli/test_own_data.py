@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from gfins_fmi.cli import main
+from support.drives import kfgins_drive
 
 LEVER = np.array([-0.3, 0.2, 1.2])      # body right, front, up, m
 LEVER_TEXT = "-0.3,0.2,1.2"             # typed as people type it (no '=')
@@ -22,21 +23,8 @@ LEVER_TEXT = "-0.3,0.2,1.2"             # typed as people type it (no '=')
 
 @pytest.fixture(scope="module")
 def kf_drive(tmp_path_factory):
-    from gfins_fmi import io
-    from gfins_fmi.io.kfgins import (KFGINS_GNSS_FORMAT, KFGINS_IMU_FORMAT, KFGINS_NAV_FORMAT,
-                                     kfgins_gnss_table, kfgins_imu_table, kfgins_nav_table)
-    from gfins_fmi.sim.scenarios import NAVIGATION, simulate_drive, town_drive
-    from gfins_fmi.sim.vehicle import GnssReceiver
     folder = tmp_path_factory.mktemp("kf_drive")
-    rx = GnssReceiver(rate_hz=1.0, lever_arm_m=tuple(LEVER), pos_std_m=(0.02, 0.02, 0.04),
-                      vel_std_m_s=(0.01, 0.01, 0.02))
-    d = simulate_drive(town_drive(300.0), 300.0, 0.005, imu=NAVIGATION, gnss=rx, seed=7)
-    np.savetxt(folder / "imu.txt", kfgins_imu_table(d.imu), fmt=KFGINS_IMU_FORMAT)
-    np.savetxt(folder / "gnss.txt", kfgins_gnss_table(d.gnss), fmt=KFGINS_GNSS_FORMAT)
-    tr = d.truth
-    np.savetxt(folder / "truth.nav", kfgins_nav_table(tr.t_s, tr.lat_rad, tr.lon_rad, tr.h_m, tr.v_n_m_s,
-                                                      tr.euler_rad), fmt=KFGINS_NAV_FORMAT)
-    io.TruthRecord(tr.t_s, tr.lat_rad, tr.lon_rad, tr.h_m, tr.v_n_m_s, tr.euler_rad).to_csv(folder / "truth.csv")
+    d = kfgins_drive(folder, 300.0, 7, LEVER, truth=True)
     return folder, d
 
 
@@ -265,7 +253,7 @@ def test_a_record_that_starts_moving(kf_drive, tmp_path, capsys):
     """Before: a record that starts moving could not be processed from the command line
     (--initial meant at rest: every GNSS update gated, a 10 deg heading error). Now
     --initial-velocity (or --initial truth) starts it in motion: no update gated."""
-    from gfins_fmi.io.kfgins import KFGINS_GNSS_FORMAT, KFGINS_IMU_FORMAT, kfgins_gnss_table, kfgins_imu_table
+    from gfins_fmi.io.kfgins import KFGINS_IMU_FORMAT, kfgins_imu_table
     folder, d = kf_drive
     k = int(np.searchsorted(d.truth.t_s, 60.0))        # mid-drive
     speed = float(np.linalg.norm(d.truth.v_n_m_s[k]))

@@ -78,3 +78,26 @@ def drive_start(d, **kw):
     return InitialState(d.initial, position_std_m=(1.0, 1.0, 2.0), velocity_std_m_s=0.1,
                         attitude_std_rad=(0.005, 0.005, 0.02), **kw)
 
+
+def kfgins_drive(folder, seconds: float, seed: int, lever_arm_m=(-0.3, 0.2, 1.2), truth: bool = False):
+    """A seeded town drive of ``seconds`` written in KF-GINS's formats into ``folder``:
+    200 Hz navigation-grade IMU increments (imu.txt), 1 Hz RTK GNSS at the antenna
+    ``lever_arm_m`` (right, front, up m; gnss.txt) and, with ``truth``, the truth as a
+    KF-GINS .nav and a TruthRecord CSV; returns the simulated drive."""
+    from gfins_fmi import io
+    from gfins_fmi.io.kfgins import (KFGINS_GNSS_FORMAT, KFGINS_IMU_FORMAT, KFGINS_NAV_FORMAT,
+                                     kfgins_gnss_table, kfgins_imu_table, kfgins_nav_table)
+    from gfins_fmi.sim.scenarios import NAVIGATION, simulate_drive, town_drive
+    from gfins_fmi.sim.vehicle import GnssReceiver
+    rx = GnssReceiver(rate_hz=1.0, lever_arm_m=tuple(lever_arm_m), pos_std_m=(0.02, 0.02, 0.04),
+                      vel_std_m_s=(0.01, 0.01, 0.02))
+    d = simulate_drive(town_drive(seconds), seconds, 0.005, imu=NAVIGATION, gnss=rx, seed=seed)
+    np.savetxt(folder / "imu.txt", kfgins_imu_table(d.imu), fmt=KFGINS_IMU_FORMAT)
+    np.savetxt(folder / "gnss.txt", kfgins_gnss_table(d.gnss), fmt=KFGINS_GNSS_FORMAT)
+    if truth:
+        tr = d.truth
+        np.savetxt(folder / "truth.nav", kfgins_nav_table(tr.t_s, tr.lat_rad, tr.lon_rad, tr.h_m, tr.v_n_m_s,
+                                                          tr.euler_rad), fmt=KFGINS_NAV_FORMAT)
+        io.TruthRecord(tr.t_s, tr.lat_rad, tr.lon_rad, tr.h_m, tr.v_n_m_s, tr.euler_rad).to_csv(folder / "truth.csv")
+    return d
+
